@@ -1,0 +1,30 @@
+from setuptools import find_packages, setup
+
+package_name = "fsr_bringup"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=[
+        "setuptools", "numpy", "matplotlib", "mcap", "mcap-ros2-support",
+        "fsr_sim", "fsr_control", "fsr_estimation",
+    ],
+    zip_safe=False,
+    maintainer="fsr developers",
+    maintainer_email="fsr@example.org",
+    description="Runner (fsr-fly), MCAP recorder (fsr-record), analysis (fsr-analyze), in-process closed loop",
+    license="Apache-2.0",
+    tests_require=["pytest"],
+    entry_points={
+        "console_scripts": [
+            "fsr-fly = fsr_bringup.cli.fly_cli:main",
+            "fsr-record = fsr_bringup.recording.recorder_node:main",
+            "fsr-analyze = fsr_bringup.cli.analyze_cli:main",
+        ],
+    },
+)

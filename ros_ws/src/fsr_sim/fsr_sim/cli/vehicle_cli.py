@@ -1,0 +1,129 @@
+"""``fsr-vehicle NAME [--json]``: a vehicle's parameters and its allocation matrices.
+
+Markdown by default; ``--json`` prints an object with ``mass``, ``inertia`` (3x3), ``c_f``, ``c_m``,
+``arm_length``, ``rotor_radius``, rotor limits, ``rotors`` (position, spin, tilt axis), ``allocation``
+(6 x n, squared rotor speeds -> body wrench, rows f_x f_y f_z tau_x tau_y tau_z), for a coplanar vehicle
+also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a tilting vehicle
+``allocation_static`` (6 x 2n, SPEC §3.2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+from fsr_sim.config.validation import ConfigError, builtin_names
+from fsr_sim.model.allocation import (
+    octocopter_allocation_4x8,
+    static_tilting_allocation,
+    wrench_from_rotor_speed_sq,
+)
+from fsr_sim.model.vehicle import Vehicle, load_vehicle
+
+WRENCH_ROWS = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
+
+
+def vehicle_summary(vehicle: Vehicle) -> dict:
+    """Everything ``--json`` prints, as plain Python data."""
+    rotors = []
+    for i in range(vehicle.rotor_count):
+        rotors.append(
+            {
+                "index": i + 1,
+                "position": vehicle.positions[i].tolist(),
+                "spin": int(vehicle.spins[i]),
+                "tilt_axis": None if vehicle.tilt_axes is None else vehicle.tilt_axes[i].tolist(),
+            }
+        )
+    summary = {
+        "name": vehicle.name,
+        "description": vehicle.description,
+        "mass": vehicle.mass,
+        "inertia": vehicle.inertia.tolist(),
+        "c_f": vehicle.c_f,
+        "c_m": vehicle.c_m,
+        "arm_length": vehicle.arm_length,
+        "rotor_radius": vehicle.rotor_radius,
+        "rotor_speed_min": vehicle.rotor_speed_min,
+        "rotor_speed_max": vehicle.rotor_speed_max,
+        "hover_rotor_speed": float(np.sqrt(vehicle.weight / (vehicle.rotor_count * vehicle.c_f))),
+        "rotors": rotors,
+        "allocation_rows": list(WRENCH_ROWS),
+        "allocation": wrench_from_rotor_speed_sq(vehicle).tolist(),
+    }
+    if vehicle.is_tilting:
+        summary["tilt_angle_max"] = vehicle.tilt_angle_max
+        summary["allocation_static"] = static_tilting_allocation(vehicle).tolist()
+    else:
+        summary["allocation_4xn"] = octocopter_allocation_4x8(vehicle).tolist()
+    return summary
+
+
+def _markdown_matrix(matrix: np.ndarray, rows: tuple[str, ...], columns: list[str]) -> str:
+    lines = ["| | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
+    for name, row in zip(rows, matrix, strict=True):
+        lines.append(f"| {name} | " + " | ".join(f"{v:.6g}" for v in row) + " |")
+    return "\n".join(lines)
+
+
+def vehicle_markdown(vehicle: Vehicle) -> str:
+    s = vehicle_summary(vehicle)
+    out = [
+        f"# {vehicle.name}",
+        "",
+        vehicle.description,
+        "",
+        "| parameter | value |",
+        "|---|---|",
+        f"| mass | {vehicle.mass} kg |",
+        f"| inertia (body FRD) | {vehicle.inertia.tolist()} kg m^2 |",
+        f"| c_f | {vehicle.c_f:.6g} N/(rad/s)^2 |",
+        f"| c_m | {vehicle.c_m:.6g} N m/(rad/s)^2 |",
+        f"| arm length | {s['arm_length']:.4g} m |",
+        f"| rotor radius | {vehicle.rotor_radius} m |",
+        f"| rotor speed | {vehicle.rotor_speed_min} .. {vehicle.rotor_speed_max} rad/s |",
+        f"| hover rotor speed | {s['hover_rotor_speed']:.1f} rad/s |",
+        "",
+        "| rotor | position [m] | spin k_i | tilt axis |",
+        "|---|---|---|---|",
+    ]
+    for rotor in s["rotors"]:
+        axis = "-" if rotor["tilt_axis"] is None else np.round(rotor["tilt_axis"], 4).tolist()
+        out.append(f"| {rotor['index']} | {np.round(rotor['position'], 4).tolist()} | {rotor['spin']:+d} | {axis} |")
+    n = vehicle.rotor_count
+    out += ["", "Allocation (body wrench from squared rotor speeds u_w,i):", ""]
+    out.append(_markdown_matrix(np.array(s["allocation"]), WRENCH_ROWS, [f"u_w{i + 1}" for i in range(n)]))
+    if vehicle.is_tilting:
+        columns = [f"u_{kind}{i + 1}" for i in range(n) for kind in ("v", "l")]
+        out += ["", "Static allocation (body wrench from u = [u_v1, u_l1, ...], N):", ""]
+        out.append(_markdown_matrix(np.array(s["allocation_static"]), WRENCH_ROWS, columns))
+    else:
+        out += ["", "G_q (rows f_z, tau_x, tau_y, tau_z):", ""]
+        out.append(
+            _markdown_matrix(np.array(s["allocation_4xn"]), WRENCH_ROWS[2:], [f"u_w{i + 1}" for i in range(n)])
+        )
+    return "\n".join(out) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="fsr-vehicle", description=__doc__.split("\n")[0])
+    parser.add_argument("vehicle", help=f"built-in name ({', '.join(builtin_names('vehicles'))}) or YAML path")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of Markdown")
+    args = parser.parse_args(argv)
+    try:
+        vehicle = load_vehicle(args.vehicle)
+    except ConfigError as error:
+        print(f"fsr-vehicle: error: {error}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(vehicle_summary(vehicle), indent=2))
+    else:
+        print(vehicle_markdown(vehicle), end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

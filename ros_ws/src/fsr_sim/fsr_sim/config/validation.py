@@ -1,0 +1,212 @@
+"""Reading and checking configuration values: one error type that names the file, the key and the reason."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+
+class ConfigError(ValueError):
+    """A configuration value (YAML file, ROS parameter or command-line override) was refused.
+
+    The message reads ``<source>: <key>: <reason>``, e.g.
+    ``scenarios/ex4.yaml: vehicle.mass: must be > 0, got -1.0``.
+    """
+
+    def __init__(self, key: str, reason: str, source: str = "") -> None:
+        self.key = key
+        self.reason = reason
+        self.source = source
+        where = f"{source}: " if source else ""
+        super().__init__(f"{where}{key}: {reason}" if key else f"{where}{reason}")
+
+
+def load_yaml_file(path: str | Path) -> dict[str, Any]:
+    """Read a YAML mapping from ``path``; syntax errors and non-mapping documents raise :class:`ConfigError`."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise ConfigError("", f"cannot read file ({error.strerror})", str(path)) from None
+    return parse_yaml_mapping(text, str(path))
+
+
+def parse_yaml_mapping(text: str, source: str) -> dict[str, Any]:
+    """Parse YAML text that must hold a mapping at the top level."""
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(error, "problem", None) or str(error)
+        raise ConfigError("", f"YAML syntax error{where}: {problem}", source) from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError("", f"expected a mapping at the top level, got {type(data).__name__}", source)
+    return data
+
+
+def builtin_config_dir(kind: str) -> Path:
+    """Folder of the built-in ``vehicles`` or ``scenarios`` YAML files shipped as package data."""
+    return Path(str(resources.files("fsr_sim.config").joinpath(kind)))
+
+
+def builtin_names(kind: str) -> list[str]:
+    """Names (file stems) of the built-in configuration files of ``kind``."""
+    return sorted(p.stem for p in builtin_config_dir(kind).glob("*.yaml"))
+
+
+def resolve_config_path(name_or_path: str, kind: str) -> Path:
+    """A built-in name (``quadrotor_ex4``) or a path to a YAML file -> the file's path."""
+    candidate = Path(name_or_path)
+    if candidate.suffix in (".yaml", ".yml") or candidate.exists():
+        if not candidate.is_file():
+            raise ConfigError("", f"no such {kind[:-1]} file", str(candidate))
+        return candidate
+    builtin = builtin_config_dir(kind) / f"{name_or_path}.yaml"
+    if not builtin.is_file():
+        raise ConfigError(
+            "", f"unknown {kind[:-1]} '{name_or_path}' (built-in: {', '.join(builtin_names(kind))})"
+        )
+    return builtin
+
+
+class Section:
+    """Typed, checked access to one mapping of a configuration file.
+
+    Every read records the key; :meth:`reject_unknown` then refuses any key that was not read, so a typo
+    (``duraton``) is an error instead of a silently ignored value.
+    """
+
+    def __init__(self, data: Mapping[str, Any] | None, prefix: str, source: str) -> None:
+        if data is None:
+            data = {}
+        if not isinstance(data, Mapping):
+            raise ConfigError(prefix, f"expected a mapping, got {type(data).__name__}", source)
+        self.data = data
+        self.prefix = prefix
+        self.source = source
+        self._read: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}.{name}" if self.prefix else name
+
+    def error(self, name: str, reason: str) -> ConfigError:
+        return ConfigError(self.key(name), reason, self.source)
+
+    def missing(self, name: str) -> ConfigError:
+        """'is required', pointing at a likely typo among the keys that are not known here."""
+        typos = difflib.get_close_matches(name, [str(k) for k in self.data if k not in self._read], n=1)
+        hint = f" (found unknown key '{typos[0]}': a typo?)" if typos else ""
+        return self.error(name, f"is required{hint}")
+
+    def has(self, name: str) -> bool:
+        self._read.add(name)
+        return name in self.data and self.data[name] is not None
+
+    def raw(self, name: str, default: Any = None) -> Any:
+        self._read.add(name)
+        value = self.data.get(name, default)
+        return default if value is None else value
+
+    def section(self, name: str) -> Section:
+        return Section(self.raw(name, {}), self.key(name), self.source)
+
+    def number(
+        self,
+        name: str,
+        default: float | None = None,
+        *,
+        minimum: float | None = None,
+        maximum: float | None = None,
+        strictly_positive: bool = False,
+    ) -> float:
+        value = self.raw(name, default)
+        if value is None:
+            raise self.missing(name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(name, f"must be a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.error(name, f"must be finite, got {value}")
+        if strictly_positive and value <= 0.0:
+            raise self.error(name, f"must be > 0, got {value}")
+        if minimum is not None and value < minimum:
+            raise self.error(name, f"must be >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise self.error(name, f"must be <= {maximum}, got {value}")
+        return value
+
+    def integer(self, name: str, default: int | None = None, *, minimum: int | None = None) -> int:
+        value = self.raw(name, default)
+        if value is None:
+            raise self.missing(name)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(name, f"must be an integer, got {value!r}")
+        if minimum is not None and value < minimum:
+            raise self.error(name, f"must be >= {minimum}, got {value}")
+        return int(value)
+
+    def boolean(self, name: str, default: bool | None = None) -> bool:
+        value = self.raw(name, default)
+        if not isinstance(value, bool):
+            raise self.error(name, f"must be true or false, got {value!r}")
+        return value
+
+    def string(self, name: str, default: str | None = None, *, choices: tuple[str, ...] | None = None) -> str:
+        value = self.raw(name, default)
+        if value is None:
+            raise self.missing(name)
+        if not isinstance(value, str):
+            raise self.error(name, f"must be a string, got {value!r}")
+        if choices is not None and value not in choices:
+            raise self.error(name, f"must be one of {', '.join(choices)}; got '{value}'")
+        return value
+
+    def vector(self, name: str, size: int, default: Any = None) -> np.ndarray:
+        value = self.raw(name, default)
+        if value is None:
+            raise self.missing(name)
+        return checked_array(value, (size,), self.key(name), self.source)
+
+    def reject_unknown(self) -> None:
+        unknown = sorted(str(k) for k in self.data if k not in self._read)
+        if unknown:
+            raise self.error(unknown[0], f"unknown key (known here: {', '.join(sorted(self._read))})")
+
+
+def checked_array(value: Any, shape: tuple[int, ...], key: str, source: str = "") -> np.ndarray:
+    """``value`` as a finite float array of ``shape``, or :class:`ConfigError` naming ``key``."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(key, f"must be numbers of shape {shape}, got {value!r}", source) from None
+    if array.shape != shape:
+        raise ConfigError(key, f"expected shape {shape}, got {array.shape} ({value!r})", source)
+    if not np.all(np.isfinite(array)):
+        raise ConfigError(key, f"must be finite, got {value!r}", source)
+    return array
+
+
+def diagonal_or_matrix(value: Any, key: str, source: str = "") -> np.ndarray:
+    """A 3-vector (the diagonal) or a 3x3 matrix -> 3x3 float matrix."""
+    array = np.asarray(value, dtype=float) if _is_numeric_list(value) else None
+    if array is not None and array.shape == (3,):
+        return np.diag(checked_array(value, (3,), key, source))
+    return checked_array(value, (3, 3), key, source)
+
+
+def _is_numeric_list(value: Any) -> bool:
+    try:
+        np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True

@@ -1,0 +1,173 @@
+"""Control allocation built from rotor geometry (SPEC §3.2): never a hand-typed matrix.
+
+Per rotor ``i`` with position ``p_i`` (body FRD), spin ``k_i``, axis ``z_i = Rot(a_i, alpha_i) [0,0,-1]``
+and signed squared speed ``u_w,i = |w_i| w_i`` [(rad/s)^2]:
+
+    f_b   = sum_i c_f u_w,i z_i                                   [N, body FRD]
+    tau_b = sum_i u_w,i (c_f p_i x z_i - k_i c_m z_i)             [N m, body FRD]
+
+so ``[f_b; tau_b] = wrench_from_rotor_speed_sq(...) @ u_w`` with a 6 x n matrix (rows
+``f_x f_y f_z tau_x tau_y tau_z``).
+
+Tilting rotors (tilt axis ``a_i`` in the body x-y plane): ``z_i = cos(alpha_i) z_v,i + sin(alpha_i) z_l,i``
+with ``z_v,i = -e3`` and ``z_l,i = e3 x a_i``. With ``u_v,i = c_f u_w,i cos alpha_i`` and
+``u_l,i = c_f u_w,i sin alpha_i`` [N] the wrench is linear in ``u = [u_v1, u_l1, ..., u_vn, u_ln]``
+through the static 6 x 2n matrix of :func:`static_tilting_allocation`, and eq. 5 of the report inverts the
+substitution: ``u_w,i = sqrt(u_v,i^2 + u_l,i^2) / c_f``, ``alpha_i = atan2(u_l,i, u_v,i)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsr_sim.model.vehicle import Vehicle
+
+ROTOR_AXIS_UNTILTED = np.array((0.0, 0.0, -1.0))
+
+
+def rotor_axes(vehicle: Vehicle, tilt_angles: np.ndarray | None = None) -> np.ndarray:
+    """Thrust directions ``z_i`` (body FRD, unit), shape (n, 3), for tilt angles ``alpha_i`` [rad]."""
+    n = vehicle.rotor_count
+    if vehicle.tilt_axes is None or tilt_angles is None:
+        return np.tile(ROTOR_AXIS_UNTILTED, (n, 1))
+    alpha = np.asarray(tilt_angles, dtype=float).reshape(n, 1)
+    z_v, z_l = _tilt_basis(vehicle)
+    return np.cos(alpha) * z_v + np.sin(alpha) * z_l
+
+
+def _tilt_basis(vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray]:
+    """``z_v,i = -e3`` and ``z_l,i = e3 x a_i``: the rotor axis at tilt 0 and at tilt +pi/2."""
+    n = vehicle.rotor_count
+    z_v = np.tile(ROTOR_AXIS_UNTILTED, (n, 1))
+    z_l = np.cross(np.array((0.0, 0.0, 1.0)), vehicle.tilt_axes)
+    return z_v, z_l
+
+
+def _wrench_columns(vehicle: Vehicle, axes: np.ndarray, thrust: float, drag: float) -> np.ndarray:
+    """6 x n columns ``[t z_i; t p_i x z_i - k_i d z_i]`` per unit input (thrust ``t``, drag torque ``d``)."""
+    torque = thrust * np.cross(vehicle.positions, axes) - (vehicle.spins * drag)[:, None] * axes
+    return np.vstack((thrust * axes.T, torque.T))
+
+
+def wrench_from_rotor_speed_sq(vehicle: Vehicle, tilt_angles: np.ndarray | None = None) -> np.ndarray:
+    """The 6 x n allocation matrix: body wrench ``[f; tau]`` from signed squared rotor speeds ``u_w``."""
+    return _wrench_columns(vehicle, rotor_axes(vehicle, tilt_angles), vehicle.c_f, vehicle.c_m)
+
+
+def octocopter_allocation_4x8(vehicle: Vehicle) -> np.ndarray:
+    """The report's ``G_q`` (rows ``f_z, tau_x, tau_y, tau_z``) of a coplanar vehicle: rows 2..5 of the
+    6 x n allocation (``f_x``, ``f_y`` are identically zero without tilt)."""
+    if vehicle.is_tilting:
+        raise ValueError(f"G_q is defined for coplanar fixed rotors; '{vehicle.name}' has tilting rotors")
+    return wrench_from_rotor_speed_sq(vehicle)[2:]
+
+
+def static_tilting_allocation(vehicle: Vehicle) -> np.ndarray:
+    """The 6 x 2n static map from ``u = [u_v1, u_l1, ..., u_vn, u_ln]`` [N] to the body wrench."""
+    if vehicle.tilt_axes is None:
+        raise ValueError(f"vehicle '{vehicle.name}' has no tilting rotors")
+    z_v, z_l = _tilt_basis(vehicle)
+    drag_per_newton = vehicle.c_m / vehicle.c_f
+    vertical = _wrench_columns(vehicle, z_v, 1.0, drag_per_newton)
+    lateral = _wrench_columns(vehicle, z_l, 1.0, drag_per_newton)
+    matrix = np.empty((6, 2 * vehicle.rotor_count))
+    matrix[:, 0::2] = vertical
+    matrix[:, 1::2] = lateral
+    return matrix
+
+
+def rotor_commands_from_static(vehicle: Vehicle, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 5: ``u = [u_v1, u_l1, ...]`` [N] -> (squared speeds ``u_w`` [(rad/s)^2], tilts ``alpha`` [rad])."""
+    pairs = np.asarray(u, dtype=float).reshape(vehicle.rotor_count, 2)
+    speed_sq = np.hypot(pairs[:, 0], pairs[:, 1]) / vehicle.c_f
+    tilt = np.arctan2(pairs[:, 1], pairs[:, 0])
+    return speed_sq, tilt
+
+
+def static_from_rotor_commands(vehicle: Vehicle, speed_sq: np.ndarray, tilt: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`rotor_commands_from_static`: ``u_v = c_f u_w cos(alpha)``, ``u_l = c_f u_w sin(alpha)``."""
+    thrust = vehicle.c_f * np.asarray(speed_sq, dtype=float)
+    u = np.empty(2 * vehicle.rotor_count)
+    u[0::2] = thrust * np.cos(tilt)
+    u[1::2] = thrust * np.sin(tilt)
+    return u
+
+
+@dataclass
+class SaturationReport:
+    """Running record of rotor-speed (and tilt) saturation: how often, since when, and which rotor."""
+
+    count: int = 0
+    first_time: float | None = None
+    last_time: float | None = None
+    worst_rotor: int | None = None  # 1-based rotor index of the largest excess
+    worst_excess: float = 0.0  # rad/s beyond the limit
+    per_rotor: dict[int, int] = field(default_factory=dict)
+
+    def record(self, time: float, excess: np.ndarray) -> bool:
+        """Record one command; ``excess`` per rotor [rad/s] (0 where within limits). True if it saturated."""
+        saturated = np.flatnonzero(excess > 0.0)
+        if saturated.size == 0:
+            return False
+        self.count += 1
+        if self.first_time is None:
+            self.first_time = time
+        self.last_time = time
+        for index in saturated:
+            self.per_rotor[int(index) + 1] = self.per_rotor.get(int(index) + 1, 0) + 1
+        worst = int(np.argmax(excess))
+        if excess[worst] > self.worst_excess:
+            self.worst_excess = float(excess[worst])
+            self.worst_rotor = worst + 1
+        return True
+
+    def as_dict(self) -> dict:
+        return {
+            "count": self.count,
+            "first_time": self.first_time,
+            "last_time": self.last_time,
+            "worst_rotor": self.worst_rotor,
+            "worst_excess_rad_s": self.worst_excess,
+            "per_rotor": {str(k): v for k, v in sorted(self.per_rotor.items())},
+        }
+
+
+def clamp_rotor_speeds(vehicle: Vehicle, speed_sq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotor speeds [rad/s] from squared speeds, clamped to ``[w_min, w_max]``; also the excess per rotor.
+
+    A negative ``u_w`` (reverse thrust, not available) counts as an excess below ``w_min``.
+    """
+    speed_sq = np.asarray(speed_sq, dtype=float)
+    speed = np.sign(speed_sq) * np.sqrt(np.abs(speed_sq))
+    clamped = np.clip(speed, vehicle.rotor_speed_min, vehicle.rotor_speed_max)
+    return clamped, np.abs(speed - clamped)
+
+
+class FixedRotorAllocator:
+    """Wrench -> rotor speeds for fixed (untilted) rotors through the pseudo-inverse of the allocation.
+
+    For a coplanar vehicle only ``[f_z, tau_x, tau_y, tau_z]`` can be produced; the pseudo-inverse of
+    that 4 x n block gives the minimum-norm ``u_w`` (exact inverse for a quadrotor).
+    """
+
+    def __init__(self, vehicle: Vehicle) -> None:
+        if vehicle.is_tilting:
+            raise ValueError(f"FixedRotorAllocator needs fixed rotors; '{vehicle.name}' tilts")
+        self.vehicle = vehicle
+        self.allocation = wrench_from_rotor_speed_sq(vehicle)
+        self.rows = np.flatnonzero(np.any(np.abs(self.allocation) > 1e-15, axis=1))
+        self.inverse = np.linalg.pinv(self.allocation[self.rows])
+        self.saturation = SaturationReport()
+
+    def rotor_speed_sq(self, thrust: float, torque_body: np.ndarray) -> np.ndarray:
+        """Squared speeds for a thrust ``u_T`` [N] along ``-z_b`` and a body torque [N m] (unclamped)."""
+        wrench = np.array((0.0, 0.0, -thrust, torque_body[0], torque_body[1], torque_body[2]))
+        return self.inverse @ wrench[self.rows]
+
+    def rotor_speeds(self, thrust: float, torque_body: np.ndarray, time: float = 0.0) -> np.ndarray:
+        """Clamped rotor speeds [rad/s]; saturation is recorded in :attr:`saturation`."""
+        speeds, excess = clamp_rotor_speeds(self.vehicle, self.rotor_speed_sq(thrust, torque_body))
+        self.saturation.record(time, excess)
+        return speeds

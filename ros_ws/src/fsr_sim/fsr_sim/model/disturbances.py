@@ -1,0 +1,100 @@
+"""External wrench profiles (SPEC §3.4): constant, step, sinusoid and piecewise-linear table.
+
+Each profile gives a force [N] in its ``frame`` (``world`` NED or ``body`` FRD) and a torque [N m] in the
+body frame as a function of simulated time ``t`` [s]. Several profiles add up.
+
+Scenario syntax (a list under ``disturbances``)::
+
+    - {kind: constant, force: [1, 1, 0], torque: [0, 0, -0.4]}          # frame: world (default)
+    - {kind: step, start: 10.0, force: [2, 0, 0]}                         # zero before start
+    - {kind: sinusoid, force: [0.5, 0, 0], frequency_hz: 0.5, phase_deg: 0, offset_force: [0, 0, 0]}
+    - {kind: table, time: [0, 5, 6], force: [[0,0,0], [0,0,0], [1,0,0]]}  # linear, held at the ends
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsr_sim.config.validation import Section, checked_array
+
+ZERO3 = np.zeros(3)
+
+
+@dataclass(frozen=True)
+class DisturbanceProfile:
+    kind: str
+    frame: str  # frame of the force: "world" or "body"
+    force: np.ndarray  # (3,) amplitude / value, or (k, 3) table
+    torque: np.ndarray  # (3,) or (k, 3), body frame
+    start: float = 0.0
+    end: float = float("inf")
+    frequency_hz: float = 0.0
+    phase: float = 0.0
+    offset_force: np.ndarray = field(default_factory=lambda: ZERO3)
+    offset_torque: np.ndarray = field(default_factory=lambda: ZERO3)
+    times: np.ndarray | None = None
+
+    def wrench(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(force in ``frame`` [N], torque body [N m]) at time ``t`` [s]."""
+        if self.kind == "table":
+            return (
+                np.array([np.interp(t, self.times, self.force[:, i]) for i in range(3)]),
+                np.array([np.interp(t, self.times, self.torque[:, i]) for i in range(3)]),
+            )
+        if t < self.start or t >= self.end:
+            return ZERO3, ZERO3
+        if self.kind == "sinusoid":
+            s = np.sin(2.0 * np.pi * self.frequency_hz * (t - self.start) + self.phase)
+            return self.offset_force + s * self.force, self.offset_torque + s * self.torque
+        return self.force, self.torque
+
+
+def disturbance_from_section(section: Section) -> DisturbanceProfile:
+    """Parse one entry of the scenario's ``disturbances`` list (unknown keys refused)."""
+    kind = section.string("kind", choices=("constant", "step", "sinusoid", "table"))
+    frame = section.string("frame", "world", choices=("world", "body"))
+    if kind == "table":
+        times = section.raw("time")
+        if not isinstance(times, list) or len(times) < 1:
+            raise section.error("time", "must be a non-empty list of times [s]")
+        times_array = checked_array(times, (len(times),), section.key("time"), section.source)
+        if np.any(np.diff(times_array) <= 0.0):
+            raise section.error("time", "must be strictly increasing")
+        shape = (len(times), 3)
+        zeros = np.zeros(shape).tolist()
+        force = checked_array(section.raw("force", zeros), shape, section.key("force"), section.source)
+        torque = checked_array(section.raw("torque", zeros), shape, section.key("torque"), section.source)
+        section.reject_unknown()
+        return DisturbanceProfile(kind, frame, force, torque, times=times_array)
+    force = section.vector("force", 3, [0.0, 0.0, 0.0])
+    torque = section.vector("torque", 3, [0.0, 0.0, 0.0])
+    start = section.number("start", 0.0, minimum=0.0) if kind != "constant" else 0.0
+    end = section.number("end") if kind != "constant" and section.has("end") else float("inf")
+    if end <= start:
+        raise section.error("end", f"must be after start ({start}), got {end}")
+    frequency = phase = 0.0
+    offset_force = offset_torque = ZERO3
+    if kind == "sinusoid":
+        frequency = section.number("frequency_hz", strictly_positive=True)
+        phase = np.deg2rad(section.number("phase_deg", 0.0))
+        offset_force = section.vector("offset_force", 3, [0.0, 0.0, 0.0])
+        offset_torque = section.vector("offset_torque", 3, [0.0, 0.0, 0.0])
+    section.reject_unknown()
+    return DisturbanceProfile(
+        kind, frame, force, torque, start, end, frequency, phase, offset_force, offset_torque
+    )
+
+
+def total_external_wrench(
+    profiles: list[DisturbanceProfile], t: float, rotation: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Sum of all profiles at ``t``: (force world NED [N], torque body FRD [N m])."""
+    force_world = np.zeros(3)
+    torque_body = np.zeros(3)
+    for profile in profiles:
+        force, torque = profile.wrench(t)
+        force_world += rotation @ force if profile.frame == "body" else force
+        torque_body += torque
+    return force_world, torque_body

@@ -1,0 +1,221 @@
+"""SO(3) and Euler-angle math: the one place where fsr defines its rotation conventions.
+
+Conventions (SPEC §2):
+
+* ``R`` (``rotation``) maps body (FRD) coordinates to world (NED) coordinates: ``v_world = R v_body``.
+* Quaternions are scalar-last ``[x, y, z, w]`` (ROS ``geometry_msgs/Quaternion`` and scipy order),
+  active rotation, the same map as ``R``.
+* Euler angles ``eta = [phi, theta, psi]`` (roll, pitch, yaw, rad) are ZYX:
+  ``R = Rz(psi) Ry(theta) Rx(phi)``.
+* ``Q(eta)`` maps Euler-angle rates to body angular velocity, ``omega_body = Q(eta) eta_dot``, with
+  ``Q = [[1, 0, -s_th], [0, c_ph, c_th s_ph], [0, -s_ph, c_th c_ph]]``.
+* ``S(v)`` is the skew matrix with ``S(v) w = v x w`` and ``vee(S(v)) = v``.
+
+Functions whose argument is documented with a leading ``...`` accept stacked inputs (a whole log) and
+are vectorised; the others are written for one sample and kept free of avoidable allocations because
+they run in the 1 kHz loop.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+def _as_vector3(value: ArrayLike, name: str) -> FloatArray:
+    array = np.asarray(value, dtype=float)
+    if array.shape[-1:] != (3,):
+        raise ValueError(f"Expected {name} with shape (..., 3), got array of shape {array.shape}")
+    return array
+
+
+def skew(vector: ArrayLike) -> FloatArray:
+    """Skew-symmetric matrix ``S(v)`` with ``S(v) w = v x w``.
+
+    vector: array-like, shape (..., 3). Returns shape (..., 3, 3).
+    """
+    v = _as_vector3(vector, "vector")
+    zero = np.zeros(v.shape[:-1])
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack(
+        (
+            np.stack((zero, -z, y), axis=-1),
+            np.stack((z, zero, -x), axis=-1),
+            np.stack((-y, x, zero), axis=-1),
+        ),
+        axis=-2,
+    )
+
+
+def vee(matrix: ArrayLike) -> FloatArray:
+    """Inverse of :func:`skew`: ``vee(S) = [S32, S13, S21]`` for a skew-symmetric ``S``, shape (..., 3, 3)."""
+    m = np.asarray(matrix, dtype=float)
+    if m.shape[-2:] != (3, 3):
+        raise ValueError(f"Expected matrix with shape (..., 3, 3), got array of shape {m.shape}")
+    return np.stack((m[..., 2, 1], m[..., 0, 2], m[..., 1, 0]), axis=-1)
+
+
+def rotation_from_euler_zyx(eta: ArrayLike) -> FloatArray:
+    """Rotation matrix ``R = Rz(psi) Ry(theta) Rx(phi)`` (body FRD -> world NED).
+
+    eta: array-like, shape (..., 3), ``[roll, pitch, yaw]`` in rad. Returns shape (..., 3, 3).
+    """
+    e = _as_vector3(eta, "eta")
+    cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
+    cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
+    cps, sps = np.cos(e[..., 2]), np.sin(e[..., 2])
+    return np.stack(
+        (
+            np.stack((cps * cth, cps * sth * sph - sps * cph, cps * sth * cph + sps * sph), axis=-1),
+            np.stack((sps * cth, sps * sth * sph + cps * cph, sps * sth * cph - cps * sph), axis=-1),
+            np.stack((-sth, cth * sph, cth * cph), axis=-1),
+        ),
+        axis=-2,
+    )
+
+
+def euler_zyx_from_rotation(rotation: ArrayLike) -> FloatArray:
+    """ZYX Euler angles ``[roll, pitch, yaw]`` (rad) of ``R``; pitch in [-pi/2, pi/2].
+
+    rotation: array-like, shape (..., 3, 3). Returns shape (..., 3). At pitch = +-pi/2 (gimbal lock)
+    roll is set to 0 and the remaining rotation is put in yaw.
+    """
+    r = np.asarray(rotation, dtype=float)
+    if r.shape[-2:] != (3, 3):
+        raise ValueError(f"Expected rotation matrix with shape (..., 3, 3), got array of shape {r.shape}")
+    pitch = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
+    roll = np.arctan2(r[..., 2, 1], r[..., 2, 2])
+    yaw = np.arctan2(r[..., 1, 0], r[..., 0, 0])
+    locked = np.abs(r[..., 2, 0]) > 1.0 - 1e-12
+    if np.any(locked):
+        roll = np.where(locked, 0.0, roll)
+        yaw = np.where(locked, np.arctan2(-r[..., 0, 1], r[..., 1, 1]), yaw)
+    return np.stack((roll, pitch, yaw), axis=-1)
+
+
+def euler_rate_matrix(eta: ArrayLike) -> FloatArray:
+    """``Q(eta)`` with ``omega_body = Q(eta) eta_dot`` (SPEC §2). eta: shape (..., 3) -> (..., 3, 3)."""
+    e = _as_vector3(eta, "eta")
+    cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
+    cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
+    one, zero = np.ones_like(cph), np.zeros_like(cph)
+    return np.stack(
+        (
+            np.stack((one, zero, -sth), axis=-1),
+            np.stack((zero, cph, cth * sph), axis=-1),
+            np.stack((zero, -sph, cth * cph), axis=-1),
+        ),
+        axis=-2,
+    )
+
+
+def euler_rate_matrix_derivative(eta: ArrayLike, eta_dot: ArrayLike) -> FloatArray:
+    """Time derivative ``Q_dot(eta, eta_dot)`` of :func:`euler_rate_matrix`. Shapes (..., 3) -> (..., 3, 3)."""
+    e = _as_vector3(eta, "eta")
+    ed = _as_vector3(eta_dot, "eta_dot")
+    cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
+    cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
+    dph, dth = ed[..., 0], ed[..., 1]
+    zero = np.zeros_like(cph)
+    return np.stack(
+        (
+            np.stack((zero, zero, -cth * dth), axis=-1),
+            np.stack((zero, -sph * dph, -sth * sph * dth + cth * cph * dph), axis=-1),
+            np.stack((zero, -cph * dph, -sth * cph * dth - cth * sph * dph), axis=-1),
+        ),
+        axis=-2,
+    )
+
+
+def euler_mass_matrix(eta: ArrayLike, inertia: ArrayLike) -> FloatArray:
+    """``M(eta) = Q^T I_b Q`` (kg m^2), the rotational inertia in Euler-angle coordinates."""
+    q = euler_rate_matrix(eta)
+    return np.swapaxes(q, -1, -2) @ np.asarray(inertia, dtype=float) @ q
+
+
+def euler_coriolis_matrix(eta: ArrayLike, eta_dot: ArrayLike, inertia: ArrayLike) -> FloatArray:
+    """``C(eta, eta_dot) = Q^T S(Q eta_dot) I_b Q + Q^T I_b Q_dot`` (SPEC §2), shape (..., 3, 3)."""
+    inertia = np.asarray(inertia, dtype=float)
+    q = euler_rate_matrix(eta)
+    q_dot = euler_rate_matrix_derivative(eta, eta_dot)
+    q_t = np.swapaxes(q, -1, -2)
+    omega = (q @ np.asarray(eta_dot, dtype=float)[..., None])[..., 0]
+    return q_t @ skew(omega) @ inertia @ q + q_t @ inertia @ q_dot
+
+
+def rotation_from_quaternion(quaternion: ArrayLike) -> FloatArray:
+    """Rotation matrix of a unit quaternion ``[x, y, z, w]`` (normalised here). Shape (4,) -> (3, 3)."""
+    x, y, z, w = (float(v) for v in quaternion)
+    scale = 2.0 / (x * x + y * y + z * z + w * w)
+    xx, yy, zz = scale * x * x, scale * y * y, scale * z * z
+    xy, xz, yz = scale * x * y, scale * x * z, scale * y * z
+    wx, wy, wz = scale * w * x, scale * w * y, scale * w * z
+    return np.array(
+        (
+            (1.0 - (yy + zz), xy - wz, xz + wy),
+            (xy + wz, 1.0 - (xx + zz), yz - wx),
+            (xz - wy, yz + wx, 1.0 - (xx + yy)),
+        )
+    )
+
+
+def quaternion_from_rotation(rotation: ArrayLike) -> FloatArray:
+    """Unit quaternion ``[x, y, z, w]`` with ``w >= 0`` of a rotation matrix (Shepperd's method)."""
+    r = np.asarray(rotation, dtype=float)
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    if trace > 0.0:
+        s = 2.0 * np.sqrt(1.0 + trace)
+        q = np.array(((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s))
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = np.array((0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s))
+    elif r[1, 1] > r[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = np.array(((r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s))
+    else:
+        s = 2.0 * np.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = np.array(((r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s))
+    q /= np.linalg.norm(q)
+    return -q if q[3] < 0.0 else q
+
+
+def rotation_exp(rotation_vector: ArrayLike) -> FloatArray:
+    """Exponential map (Rodrigues): ``exp(S(phi))`` for a rotation vector ``phi`` (rad), shape (3,)."""
+    phi = np.asarray(rotation_vector, dtype=float)
+    angle = float(np.linalg.norm(phi))
+    s = skew(phi)
+    if angle < 1e-8:
+        return np.eye(3) + s + 0.5 * (s @ s)
+    return np.eye(3) + (np.sin(angle) / angle) * s + ((1.0 - np.cos(angle)) / angle**2) * (s @ s)
+
+
+def rotation_log(rotation: ArrayLike) -> tuple[FloatArray, float]:
+    """Axis and angle of ``R`` (``R = exp(angle S(axis))``), angle in [0, pi]; axis = e_x for angle 0."""
+    r = np.asarray(rotation, dtype=float)
+    cos_angle = np.clip(0.5 * (np.trace(r) - 1.0), -1.0, 1.0)
+    angle = float(np.arccos(cos_angle))
+    if angle < 1e-12:
+        return np.array((1.0, 0.0, 0.0)), 0.0
+    if np.pi - angle < 1e-6:
+        # Near pi the antisymmetric part vanishes: take the axis from the symmetric part.
+        b = 0.5 * (r + np.eye(3))
+        axis = b[:, int(np.argmax(np.diag(b)))]
+        return axis / np.linalg.norm(axis), angle
+    axis = vee(r - r.T) / (2.0 * np.sin(angle))
+    return axis / np.linalg.norm(axis), angle
+
+
+def project_to_so3(matrix: ArrayLike) -> FloatArray:
+    """Closest rotation matrix (Frobenius norm) to a 3x3 matrix, by SVD with det = +1."""
+    u, _, vt = np.linalg.svd(np.asarray(matrix, dtype=float))
+    d = np.sign(np.linalg.det(u @ vt))
+    return u @ np.diag((1.0, 1.0, d)) @ vt
+
+
+def attitude_error(rotation: ArrayLike, rotation_desired: ArrayLike) -> FloatArray:
+    """Geometric attitude error ``e_R = vee(R_d^T R - R^T R_d) / 2`` (Lee et al.), shape (3,)."""
+    r = np.asarray(rotation, dtype=float)
+    rd = np.asarray(rotation_desired, dtype=float)
+    return 0.5 * vee(rd.T @ r - r.T @ rd)

@@ -1,0 +1,137 @@
+"""Message <-> numpy conversions shared by every node (frames as in SPEC §4).
+
+* ``nav_msgs/Odometry``: pose in ``world_ned`` (position [m], orientation body FRD -> world NED),
+  twist in ``base_link_frd`` (linear velocity and angular velocity in body axes, the ROS convention).
+* ``geometry_msgs/WrenchStamped``: force [N] and torque [N m] in ``frame_id``.
+* ``sensor_msgs/JointState`` rotor commands: ``rotor_i`` with velocity [rad/s], ``tilt_i`` with
+  position [rad].
+
+Stamps are integer nanoseconds of simulated time so that the lockstep can match them exactly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import WrenchStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
+
+from fsr_sim.model.so3 import quaternion_from_rotation, rotation_from_quaternion
+
+WORLD_FRAME = "world_ned"
+BODY_FRAME = "base_link_frd"
+
+
+def time_from_ns(stamp_ns: int) -> Time:
+    return Time(sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000))
+
+
+def ns_from_time(stamp: Time) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def odometry_from_state(
+    stamp_ns: int,
+    position: np.ndarray,
+    rotation: np.ndarray,
+    velocity_world: np.ndarray,
+    angular_velocity_body: np.ndarray,
+    msg: Odometry | None = None,
+) -> Odometry:
+    """Fill an Odometry (reused if given): twist.linear is ``R^T v_world`` (body axes)."""
+    msg = Odometry() if msg is None else msg
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = WORLD_FRAME
+    msg.child_frame_id = BODY_FRAME
+    pose = msg.pose.pose
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in position)
+    q = quaternion_from_rotation(rotation)
+    pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = (float(v) for v in q)
+    velocity_body = rotation.T @ velocity_world
+    twist = msg.twist.twist
+    twist.linear.x, twist.linear.y, twist.linear.z = (float(v) for v in velocity_body)
+    twist.angular.x, twist.angular.y, twist.angular.z = (float(v) for v in angular_velocity_body)
+    return msg
+
+
+def state_from_odometry(msg: Odometry) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(position world [m], R body->world, velocity world [m/s], angular velocity body [rad/s])."""
+    p = msg.pose.pose.position
+    o = msg.pose.pose.orientation
+    lin = msg.twist.twist.linear
+    ang = msg.twist.twist.angular
+    rotation = rotation_from_quaternion((o.x, o.y, o.z, o.w))
+    velocity_world = rotation @ np.array((lin.x, lin.y, lin.z))
+    return np.array((p.x, p.y, p.z)), rotation, velocity_world, np.array((ang.x, ang.y, ang.z))
+
+
+def odometry_is_finite(msg: Odometry) -> bool:
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
+    lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
+    values = (p.x, p.y, p.z, o.x, o.y, o.z, o.w, lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+    return all(math.isfinite(v) for v in values) and (o.x * o.x + o.y * o.y + o.z * o.z + o.w * o.w) > 1e-12
+
+
+def wrench_stamped(
+    stamp_ns: int, force: np.ndarray, torque: np.ndarray, frame_id: str = BODY_FRAME
+) -> WrenchStamped:
+    msg = WrenchStamped()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = frame_id
+    msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in force)
+    msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = (float(v) for v in torque)
+    return msg
+
+
+def wrench_from_msg(msg: WrenchStamped) -> tuple[np.ndarray, np.ndarray]:
+    f, t = msg.wrench.force, msg.wrench.torque
+    return np.array((f.x, f.y, f.z)), np.array((t.x, t.y, t.z))
+
+
+def wrench_is_finite(msg: WrenchStamped) -> bool:
+    f, t = msg.wrench.force, msg.wrench.torque
+    return all(math.isfinite(v) for v in (f.x, f.y, f.z, t.x, t.y, t.z))
+
+
+def rotor_command(stamp_ns: int, speeds: np.ndarray, tilts: np.ndarray | None = None) -> JointState:
+    """JointState with ``rotor_i`` (velocity, rad/s) and, for tilting vehicles, ``tilt_i`` (position, rad)."""
+    msg = JointState()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = BODY_FRAME
+    n = len(speeds)
+    names = [f"rotor_{i + 1}" for i in range(n)]
+    velocities = [float(v) for v in speeds]
+    positions = [0.0] * n
+    if tilts is not None:
+        names += [f"tilt_{i + 1}" for i in range(n)]
+        velocities += [0.0] * n
+        positions += [float(v) for v in tilts]
+    msg.name = names
+    msg.velocity = velocities
+    msg.position = positions
+    return msg
+
+
+def rotor_command_arrays(msg: JointState, rotor_count: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """(speeds [rad/s], tilts [rad] or None) from a rotor JointState; ValueError naming what is wrong."""
+    index = {name: i for i, name in enumerate(msg.name)}
+    speeds = np.empty(rotor_count)
+    for i in range(rotor_count):
+        j = index.get(f"rotor_{i + 1}")
+        if j is None or j >= len(msg.velocity):
+            raise ValueError(f"rotor_cmd has no velocity for 'rotor_{i + 1}' (names: {list(msg.name)})")
+        speeds[i] = msg.velocity[j]
+    tilts = None
+    if "tilt_1" in index:
+        tilts = np.empty(rotor_count)
+        for i in range(rotor_count):
+            j = index.get(f"tilt_{i + 1}")
+            if j is None or j >= len(msg.position):
+                raise ValueError(f"rotor_cmd has no position for 'tilt_{i + 1}'")
+            tilts[i] = msg.position[j]
+    if not np.all(np.isfinite(speeds)) or (tilts is not None and not np.all(np.isfinite(tilts))):
+        raise ValueError("rotor_cmd holds NaN or inf")
+    return speeds, tilts

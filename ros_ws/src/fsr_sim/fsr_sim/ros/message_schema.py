@@ -1,0 +1,72 @@
+"""ROS 2 message definitions as rosbag2 writes them into MCAP schemas (encoding ``ros2msg``).
+
+The schema text is the root type's ``.msg`` file, then every nested type once, depth-first in field
+order, each introduced by a line of 80 ``=`` and ``MSG: pkg/Type``. The ``.msg`` files live under the
+Python environment's prefix (``$PREFIX/share/<pkg>/msg``), where the ROS wheels install them.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from functools import cache
+from pathlib import Path
+
+from rosidl_parser.definition import AbstractNestedType, NamespacedType
+
+SEPARATOR = "=" * 80
+
+
+def type_name(msg_class: type) -> str:
+    """``nav_msgs/msg/Odometry`` for the class ``nav_msgs.msg.Odometry``."""
+    package = msg_class.__module__.split(".")[0]
+    return f"{package}/msg/{msg_class.__name__}"
+
+
+def message_class(name: str) -> type:
+    """The Python class of ``pkg/msg/Type`` (or ``pkg/Type``)."""
+    parts = name.split("/")
+    if len(parts) == 2:
+        parts = [parts[0], "msg", parts[1]]
+    if len(parts) != 3:
+        raise ValueError(f"Expected a message type like 'pkg/msg/Type', got '{name}'")
+    return getattr(importlib.import_module(f"{parts[0]}.{parts[1]}"), parts[2])
+
+
+@cache
+def _msg_text(package: str, name: str) -> str:
+    for prefix in (Path(sys.prefix), Path(sys.base_prefix)):
+        path = prefix / "share" / package / "msg" / f"{name}.msg"
+        if path.is_file():
+            return path.read_text(encoding="utf-8")
+    raise FileNotFoundError(f"No definition for {package}/msg/{name} under {sys.prefix}/share")
+
+
+def _nested_types(msg_class: type) -> list[tuple[str, str]]:
+    found: list[tuple[str, str]] = []
+    for slot_type in msg_class.SLOT_TYPES:
+        while isinstance(slot_type, AbstractNestedType):
+            slot_type = slot_type.value_type
+        if isinstance(slot_type, NamespacedType):
+            found.append((slot_type.namespaces[0], slot_type.name))
+    return found
+
+
+@cache
+def message_definition(msg_class: type) -> str:
+    """The full ``ros2msg`` schema text of a message class, as rosbag2 records it."""
+    package = msg_class.__module__.split(".")[0]
+    text = _msg_text(package, msg_class.__name__)
+    seen: set[tuple[str, str]] = set()
+
+    def append_nested(cls: type) -> None:
+        nonlocal text
+        for nested in _nested_types(cls):
+            if nested in seen:
+                continue
+            seen.add(nested)
+            text += f"\n{SEPARATOR}\nMSG: {nested[0]}/{nested[1]}\n{_msg_text(*nested)}"
+            append_nested(message_class(f"{nested[0]}/msg/{nested[1]}"))
+
+    append_nested(msg_class)
+    return text

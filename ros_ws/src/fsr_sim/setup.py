@@ -1,0 +1,27 @@
+from setuptools import find_packages, setup
+
+package_name = "fsr_sim"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    package_data={package_name: ["config/vehicles/*.yaml", "config/scenarios/*.yaml", "config/*.xml"]},
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools", "numpy", "scipy", "PyYAML"],
+    zip_safe=False,
+    maintainer="fsr developers",
+    maintainer_email="fsr@example.org",
+    description="Multirotor plant, rotors, aerodynamics, disturbances and the simulator node",
+    license="Apache-2.0",
+    tests_require=["pytest"],
+    entry_points={
+        "console_scripts": [
+            "simulator = fsr_sim.nodes.simulator_node:main",
+            "fsr-vehicle = fsr_sim.cli.vehicle_cli:main",
+        ],
+    },
+)

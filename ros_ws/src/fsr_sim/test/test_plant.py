@@ -1,0 +1,126 @@
+import numpy as np
+import pytest
+import yaml
+from fsr_sim.config.scenario import load_scenario, simulation_config
+from fsr_sim.model.plant import Plant
+from fsr_sim.model.rigid_body import RigidBody, pack_state
+from fsr_sim.model.so3 import rotation_from_quaternion
+from fsr_sim.model.vehicle import GRAVITY
+
+
+def make_plant(tmp_path, **data):
+    scenario = {"vehicle": "quadrotor_ex4", "duration": 2.0, "actuation": "wrench"}
+    scenario.update(data)
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(scenario))
+    return Plant(simulation_config(load_scenario(path)))
+
+
+def test_free_fall_from_rest_matches_half_g_t_squared(tmp_path):
+    plant = make_plant(tmp_path, initial_state={"position": [0.0, 0.0, -50.0]})
+    for _ in range(1500):
+        plant.step()
+    t = plant.time
+    assert t == pytest.approx(1.5)
+    np.testing.assert_allclose(plant.position, [0.0, 0.0, -50.0 + 0.5 * GRAVITY * t**2], atol=1e-12)
+    np.testing.assert_allclose(plant.velocity, [0.0, 0.0, GRAVITY * t], atol=1e-12)
+
+
+def test_hover_with_thrust_equal_to_weight_stays_put(tmp_path):
+    plant = make_plant(tmp_path, initial_state={"position": [1.0, 2.0, -3.0], "attitude_rpy_deg": [0, 0, 30]})
+    plant.set_wrench_command(plant.vehicle.weight, np.zeros(3))
+    for _ in range(2000):
+        plant.step()
+    np.testing.assert_allclose(plant.position, [1.0, 2.0, -3.0], atol=1e-12)
+    np.testing.assert_allclose(plant.velocity, 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("vehicle", ["octocopter", "quadrotor_ex4", "tilting_quadrotor_ex5"])
+def test_rotor_hover_stays_put_away_from_surfaces(tmp_path, vehicle):
+    plant = make_plant(
+        tmp_path, vehicle=vehicle, actuation="rotors", environment={"ground": {"enabled": False}},
+        initial_state={"position": [0.0, 0.0, -5.0]},
+    )
+    v = plant.vehicle
+    plant.set_rotor_command(np.full(v.rotor_count, np.sqrt(v.weight / (v.rotor_count * v.c_f))))
+    for _ in range(1000):
+        plant.step()
+    np.testing.assert_allclose(plant.position, [0.0, 0.0, -5.0], atol=1e-9)
+    np.testing.assert_allclose(plant.angular_velocity, 0.0, atol=1e-9)
+
+
+def test_torque_free_spinning_body_conserves_angular_momentum_and_stays_orthonormal():
+    inertia = np.diag((0.02, 0.03, 0.05))
+    body = RigidBody(1.0, inertia)
+    state = pack_state(np.zeros(3), np.eye(3), np.zeros(3), np.array((0.3, 5.0, 0.4)))  # near-unstable axis
+    zero = np.zeros(3)
+
+    def no_wrench(_t, _p, _r):
+        return zero, zero
+
+    def world_momentum(s):
+        r = rotation_from_quaternion(s[6:10])
+        return r @ inertia @ s[10:13], r
+
+    momentum0, _ = world_momentum(state)
+    energy0 = 0.5 * state[10:13] @ inertia @ state[10:13]
+    for k in range(100_000):
+        state = body.step(k * 1e-3, state, 1e-3, no_wrench)
+    momentum, r = world_momentum(state)
+    np.testing.assert_allclose(momentum, momentum0, rtol=0, atol=1e-9 * np.linalg.norm(momentum0))
+    assert 0.5 * state[10:13] @ inertia @ state[10:13] == pytest.approx(energy0, rel=1e-9)
+    np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-14)
+    assert np.linalg.norm(state[6:10]) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_ground_stops_the_vehicle(tmp_path):
+    plant = make_plant(tmp_path, initial_state={"position": [0.0, 0.0, -0.5]})
+    for _ in range(1000):
+        plant.step()
+    assert plant.in_contact
+    assert plant.position[2] == pytest.approx(-plant.vehicle.contact_height)
+    np.testing.assert_allclose(plant.velocity, 0.0)
+    assert plant.max_impact_speed == pytest.approx(np.sqrt(2 * GRAVITY * 0.4), rel=1e-2)
+    assert plant.divergence() is None
+
+
+def test_hard_landing_is_reported_as_a_crash(tmp_path):
+    plant = make_plant(tmp_path, initial_state={"position": [0.0, 0.0, -3.0]})
+    for _ in range(1000):
+        plant.step()
+    assert "crashed into the ground" in plant.divergence()
+
+
+def test_constant_world_force_and_body_force_disturbances(tmp_path):
+    plant = make_plant(
+        tmp_path,
+        initial_state={"position": [0.0, 0.0, -20.0], "attitude_rpy_deg": [0.0, 0.0, 90.0]},
+        disturbances=[
+            {"kind": "constant", "force": [1.2, 0.0, 0.0]},
+            {"kind": "step", "start": 0.5, "frame": "body", "force": [2.4, 0.0, 0.0], "torque": [0, 0, 0.1]},
+        ],
+    )
+    plant.set_wrench_command(plant.vehicle.weight, np.zeros(3))
+    for _ in range(1000):
+        plant.step()
+    m = plant.vehicle.mass
+    # World x: 1.2 N for 1 s. Body x (yaw 90 deg = world y): 2.4 N from 0.5 s on.
+    np.testing.assert_allclose(plant.position[:2], [0.5 * 1.2 / m, 0.5 * 2.4 / m * 0.25], atol=1e-3)
+    force, torque = plant.external_wrench()
+    np.testing.assert_allclose(torque, [0, 0, 0.1])
+    assert force[1] == pytest.approx(2.4, abs=1e-2)
+
+
+def test_ground_effect_raises_thrust_near_the_ground(tmp_path):
+    plant = make_plant(tmp_path, vehicle="octocopter", actuation="rotors",
+                       initial_state={"position": [0.0, 0.0, -0.3]})
+    ratios = plant.thrust_ratios()
+    distance = 0.3
+    np.testing.assert_allclose(ratios, 1.0 / (1.0 - (0.127 / (4 * distance)) ** 2), rtol=1e-12)
+
+
+def test_saturated_rotor_command_is_clamped_and_recorded(tmp_path):
+    plant = make_plant(tmp_path, actuation="rotors")
+    assert plant.set_rotor_command(np.array((500.0, 1500.0, 500.0, 500.0)))
+    assert plant.rotor_speeds[1] == 1000.0
+    assert plant.saturation.worst_rotor == 2

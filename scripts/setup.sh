@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Create .venv (if missing) and install fsr with pinned dependencies. Idempotent.
+#   bash scripts/setup.sh            # uses python3 (3.10-3.13, x86_64)
+#   PYTHON=python3.12 bash scripts/setup.sh
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+python="${PYTHON:-python3}"
+venv="$root/.venv"
+if [ ! -x "$venv/bin/python" ]; then
+  "$python" -m venv "$venv"
+fi
+stamp="$venv/.fsr-installed"
+want="$(cat "$root/requirements.txt" "$root"/ros_ws/src/*/setup.py | sha256sum | cut -d' ' -f1)"
+if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$root/requirements.txt"
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps \
+    -e "$root/ros_ws/src/fsr_sim" -e "$root/ros_ws/src/fsr_control" \
+    -e "$root/ros_ws/src/fsr_estimation" -e "$root/ros_ws/src/fsr_bringup"
+  echo "$want" > "$stamp"
+fi
+echo "fsr environment ready: $venv"
