@@ -1,0 +1,123 @@
+"""Reading ROS 2 MCAP recordings, including ones whose writer was killed before it closed the file.
+
+The file is read sequentially (``mcap.stream_reader.StreamReader``), keeping each channel's raw CDR
+messages; they are decoded with ``mcap_ros2``'s dynamic decoder only when a topic is asked for. A file
+without its footer (writer killed) is read up to its last complete chunk and flagged ``truncated``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mcap.records import Channel, DataEnd, Footer, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+from mcap_ros2.decoder import DecoderFactory
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+SCENARIO_METADATA = "fsr_scenario"
+
+
+class RecordingError(ValueError):
+    """A recording that cannot be used; the message names the file and the problem."""
+
+
+@dataclass
+class _ChannelData:
+    topic: str
+    schema: Schema | None
+    encoding: str
+    times: list[int] = field(default_factory=list)
+    payloads: list[bytes] = field(default_factory=list)
+
+
+@dataclass
+class Recording:
+    """The contents of one recording: topics, metadata and (lazily decoded) messages."""
+
+    path: Path
+    topics: dict[str, str]
+    metadata: dict[str, dict[str, str]]
+    truncated: bool
+    _channels: dict[str, _ChannelData] = field(repr=False, default_factory=dict)
+    _decoded: dict[str, list[tuple[int, Any]]] = field(repr=False, default_factory=dict)
+
+    @property
+    def scenario_yaml(self) -> str | None:
+        return self.metadata.get(SCENARIO_METADATA, {}).get("yaml")
+
+    def resolve(self, topic: str) -> str | None:
+        """The recorded topic name for ``topic`` (``odom`` matches ``/odom``), or None."""
+        if topic in self._channels:
+            return topic
+        absolute = topic if topic.startswith("/") else "/" + topic
+        return absolute if absolute in self._channels else None
+
+    def has(self, topic: str) -> bool:
+        return self.resolve(topic) is not None
+
+    def count(self, topic: str) -> int:
+        name = self.resolve(topic)
+        return 0 if name is None else len(self._channels[name].payloads)
+
+    def raw(self, topic: str) -> list[tuple[int, bytes]]:
+        """(log_time_ns, CDR bytes) of every message on ``topic``, in file order."""
+        channel = self._channel(topic)
+        return list(zip(channel.times, channel.payloads, strict=True))
+
+    def messages(self, topic: str) -> list[tuple[int, Any]]:
+        """(log_time_ns, decoded message) of every message on ``topic``, in file order."""
+        channel = self._channel(topic)
+        if channel.topic not in self._decoded:
+            decoder = DecoderFactory().decoder_for(channel.encoding, channel.schema)
+            if decoder is None:
+                raise RecordingError(f"{self.path}: topic '{channel.topic}' is not a CDR/ros2msg channel")
+            self._decoded[channel.topic] = [
+                (t, decoder(data)) for t, data in zip(channel.times, channel.payloads, strict=True)
+            ]
+        return self._decoded[channel.topic]
+
+    def _channel(self, topic: str) -> _ChannelData:
+        name = self.resolve(topic)
+        if name is None:
+            known = ", ".join(sorted(self._channels)) or "none"
+            raise RecordingError(f"{self.path}: no topic '{topic}' in the recording (topics: {known})")
+        return self._channels[name]
+
+
+def open_recording(path: str | Path) -> Recording:
+    """Read the recording at ``path``; :class:`RecordingError` if it is missing or not MCAP."""
+    path = Path(path)
+    if not path.is_file():
+        raise RecordingError(f"{path}: no such file")
+    with open(path, "rb") as stream:
+        if stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+            raise RecordingError(f"{path}: not an MCAP file (bad magic bytes)")
+        stream.seek(0)
+        schemas: dict[int, Schema] = {}
+        by_id: dict[int, _ChannelData] = {}
+        metadata: dict[str, dict[str, str]] = {}
+        complete = False
+        try:
+            for record in StreamReader(stream, record_size_limit=1 << 30).records:
+                if isinstance(record, Message):
+                    channel = by_id.get(record.channel_id)
+                    if channel is not None:
+                        channel.times.append(record.log_time)
+                        channel.payloads.append(record.data)
+                elif isinstance(record, Schema):
+                    schemas[record.id] = record
+                elif isinstance(record, Channel) and record.id not in by_id:
+                    by_id[record.id] = _ChannelData(
+                        record.topic, schemas.get(record.schema_id), record.message_encoding
+                    )
+                elif isinstance(record, Metadata):
+                    metadata[record.name] = dict(record.metadata)
+                elif isinstance(record, DataEnd | Footer):
+                    complete = True
+        except Exception:  # noqa: BLE001 - any decoding failure past the last good record means a cut file
+            pass
+    channels = {c.topic: c for c in by_id.values()}
+    topics = {c.topic: c.schema.name if c.schema else "" for c in by_id.values()}
+    return Recording(path, topics, metadata, truncated=not complete, _channels=channels)

@@ -1,0 +1,109 @@
+"""Writing standard ROS 2 MCAP recordings (what ``ros2 bag record -s mcap`` produces).
+
+Profile ``ros2``, one schema per message type with encoding ``ros2msg`` and the full message definition
+(:func:`fsr_sim.ros.message_schema.message_definition`), message encoding ``cdr``, zstd-compressed chunks
+and a summary section. Chunks are kept small (256 KiB by default) and :meth:`RecordingWriter.flush` can
+be called periodically, so that a process killed with SIGKILL leaves a file whose complete chunks can
+still be read (:func:`fsr_sim.recording.reader.open_recording` reports it as truncated).
+
+Raw CDR bytes (from a ``raw=True`` subscription) are written as they are; :meth:`write_message`
+serialises an rclpy message instance first.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.writer import CompressionType, Writer
+
+from fsr_sim.ros.message_schema import message_class, message_definition
+
+DEFAULT_CHUNK_SIZE = 256 * 1024
+
+
+class RecordingWriter:
+    """An MCAP file being written; use as a context manager or call :meth:`close`."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        metadata: dict[str, dict[str, str]] | None = None,
+        chunk_size: int = DEFAULT_CHUNK_SIZE,
+    ) -> None:
+        self.path = Path(path)
+        try:
+            self._file: IO[bytes] | None = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        except OSError as exc:
+            raise OSError(f"cannot write recording '{self.path}': {exc.strerror or exc}") from exc
+        self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        self._writer.start(profile="ros2", library="fsr")
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        self._sequence: dict[str, int] = {}
+        self.message_counts: dict[str, int] = {}
+        for name, data in (metadata or {}).items():
+            self._writer.add_metadata(name, dict(data))
+
+    def add_topic(self, topic: str, type_name: str) -> None:
+        """Register ``topic`` (absolute name) with its type (``nav_msgs/msg/Odometry``); idempotent."""
+        if topic in self._channels:
+            return
+        schema_id = self._schemas.get(type_name)
+        if schema_id is None:
+            definition = message_definition(message_class(type_name))
+            schema_id = self._writer.register_schema(
+                name=type_name, encoding="ros2msg", data=definition.encode("utf-8")
+            )
+            self._schemas[type_name] = schema_id
+        self._channels[topic] = self._writer.register_channel(
+            topic=topic, message_encoding="cdr", schema_id=schema_id, metadata={"offered_qos_profiles": ""}
+        )
+        self._sequence[topic] = 0
+        self.message_counts[topic] = 0
+
+    def write(self, topic: str, data: bytes, log_time_ns: int, publish_time_ns: int | None = None) -> None:
+        """Append one CDR-encoded message of a registered topic."""
+        channel_id = self._channels.get(topic)
+        if channel_id is None:
+            raise KeyError(f"topic '{topic}' was not registered with add_topic()")
+        sequence = self._sequence[topic]
+        self._sequence[topic] = sequence + 1
+        self.message_counts[topic] += 1
+        self._writer.add_message(
+            channel_id=channel_id,
+            log_time=int(log_time_ns),
+            data=data,
+            publish_time=int(log_time_ns if publish_time_ns is None else publish_time_ns),
+            sequence=sequence,
+        )
+
+    def write_message(self, topic: str, msg: Any, log_time_ns: int) -> None:
+        """Serialise an rclpy message instance and append it (registering the topic if new)."""
+        from rclpy.serialization import serialize_message
+
+        if topic not in self._channels:
+            cls = type(msg)
+            self.add_topic(topic, f"{cls.__module__.split('.')[0]}/msg/{cls.__name__}")
+        self.write(topic, serialize_message(msg), log_time_ns)
+
+    def flush(self) -> None:
+        """Close the current chunk and push it to the file (it survives a SIGKILL from now on)."""
+        if self._file is not None:
+            self._writer.flush()
+
+    def close(self) -> None:
+        """Write the summary and the footer and close the file; safe to call twice."""
+        if self._file is None:
+            return
+        try:
+            self._writer.finish()
+        finally:
+            self._file.close()
+            self._file = None
+
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
