@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+
 from fsr_sim.model.allocation import (
     FixedRotorAllocator,
     SaturationReport,

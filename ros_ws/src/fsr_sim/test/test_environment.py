@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+
 from fsr_sim.model.environment import (
     ceiling_effect_ratio,
     ground_effect_ratio,

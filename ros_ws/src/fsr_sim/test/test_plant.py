@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 import yaml
+
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.model.plant import Plant
 from fsr_sim.model.rigid_body import RigidBody, pack_state

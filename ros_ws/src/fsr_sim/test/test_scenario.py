@@ -1,6 +1,7 @@
 import pytest
+
 from fsr_sim.config.scenario import apply_override, load_scenario, simulation_config
-from fsr_sim.config.validation import ConfigError
+from fsr_sim.config.validation import ConfigError, builtin_names
 
 
 def write(tmp_path, text):
@@ -44,3 +45,16 @@ def test_apply_override_creates_missing_sections():
     data = {}
     apply_override(data, "environment.ceiling.enabled", "true")
     assert data == {"environment": {"ceiling": {"enabled": True}}}
+
+
+BUILT_IN_SCENARIOS = (
+    "ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach", "step_disturbance",
+)
+
+
+def test_built_in_scenarios_ship_and_validate():
+    assert set(BUILT_IN_SCENARIOS) <= set(builtin_names("scenarios"))
+    for name in BUILT_IN_SCENARIOS:
+        config = simulation_config(load_scenario(name))
+        assert config.step_count * config.control_period == pytest.approx(config.duration)
+        assert config.plant_vehicle.mass > 0.0

@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
-from fsr_sim.model import so3
 from scipy.spatial.transform import Rotation
+
+from fsr_sim.model import so3
 
 RNG = np.random.default_rng(7)
 

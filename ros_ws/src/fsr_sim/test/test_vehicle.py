@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 import yaml
+
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.model.vehicle import load_vehicle
 
