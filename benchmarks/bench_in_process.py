@@ -1,0 +1,69 @@
+"""In-process cost per 1 kHz step (us): controller alone, physics alone, and the full closed loop.
+
+    .venv/bin/python benchmarks/bench_in_process.py [--seconds 3]
+
+For ex4 (geometric, wrench actuation) and ex5 (Voliro, rotor actuation, with and without the null-space
+objective). The controller is timed on the states of a recorded in-process flight; the physics step with
+the flight's commands replayed; the full loop is ``fly_in_process`` (round trip, controller, plant).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from fsr_bringup.runner.in_process_flight import fly_in_process
+from fsr_control.config.controller_config import controller_config
+from fsr_control.flight_controller import FlightController
+from fsr_sim.config.scenario import load_scenario, simulation_config
+from fsr_sim.model.plant import Plant
+from fsr_sim.model.so3 import rotation_from_quaternion
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "ros_ws/src/fsr_control/test/scenarios"
+CASES = {
+    "ex4 geometric (wrench)": ("ex4_wrench.yaml", []),
+    "ex5 voliro (rotors)": ("ex5_voliro.yaml", []),
+    "ex5 voliro + min_peak_speed": ("ex5_voliro.yaml", ["controller.secondary_objective.type=min_peak_speed"]),
+}
+
+
+def bench(file: str, overrides: list[str], seconds: float) -> tuple[float, float, float]:
+    scenario = load_scenario(SCENARIOS / file, [*overrides, f"duration={seconds}"])
+    result = fly_in_process(scenario)
+    steps = len(result.time)
+    full = result.wall_time / steps * 1e6
+    sim = simulation_config(scenario)
+    controller = FlightController(controller_config(scenario), sim.vehicle, sim.actuation,
+                                  sim.initial.position, sim.initial.rotation)
+    rotations = [rotation_from_quaternion(q) for q in result.state[:, 6:10]]
+    start = time.perf_counter()
+    for k in range(steps):
+        s = result.state[k]
+        controller.command(result.time[k], s[0:3], rotations[k], s[3:6], s[10:13])
+    control = (time.perf_counter() - start) / steps * 1e6
+    plant = Plant(sim)
+    start = time.perf_counter()
+    for k in range(steps - 1):
+        if sim.actuation == "rotors":
+            tilts = None if result.tilt_angles is None else result.tilt_angles[k]
+            plant.set_rotor_command(result.rotor_speeds[k], tilts)
+        else:
+            plant.set_wrench_command(result.thrust[k], result.torque_cmd[k])
+        plant.step()
+    physics = (time.perf_counter() - start) / (steps - 1) * 1e6
+    return control, physics, full
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seconds", type=float, default=3.0, help="simulated seconds per case")
+    args = parser.parse_args()
+    print(f"{'case':32s} {'controller':>12s} {'physics':>10s} {'full loop':>10s}   [us per 1 kHz step]")
+    for name, (file, overrides) in CASES.items():
+        control, physics, full = bench(file, overrides, args.seconds)
+        print(f"{name:32s} {control:12.1f} {physics:10.1f} {full:10.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Offline analysis of a recording: arrays (load), metrics, figures and a Markdown summary."""

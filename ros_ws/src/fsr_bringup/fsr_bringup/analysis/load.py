@@ -1,0 +1,302 @@
+"""A recording as numpy arrays per topic, on the simulation clock, ready for metrics and figures.
+
+Times are the messages' header stamps (simulated time t_k, seconds) where the type has a header, the
+recorder's log time otherwise (``mass_estimate``; the recorder logs it at its latest simulated time).
+Messages are sorted by stamp. Frames (SPEC §4): positions and the reference in ``world_ned``, odometry
+twist and wrenches in ``base_link_frd``. The reference (fsr_control.nodes.messages) is all world-frame:
+linear velocity and acceleration ``p_dot_d``, ``p_ddot_d`` and angular velocity ``R_d omega_d``.
+
+A missing topic is ``None`` with a note in :attr:`Flight.notes`; nothing here raises for a topic that is
+absent or that cannot be decoded.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fsr_bringup.analysis.cdr import Columns, LayoutError, decode_columns
+from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
+from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
+from fsr_sim.recording.reader import Recording, open_recording
+
+NS_PER_S = 1_000_000_000
+STANDARD_TOPICS = (
+    "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "goal", "wrench_estimate",
+    "mass_estimate", "sim_status",
+)
+
+
+def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (body -> world) of quaternions ``[x, y, z, w]``, shape (n, 4) -> (n, 3, 3)."""
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    x, y, z, w = q.T
+    return np.stack(
+        (
+            np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)), axis=-1),
+            np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)), axis=-1),
+            np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)), axis=-1),
+        ),
+        axis=1,
+    )
+
+
+@dataclass
+class Odometry:
+    stamp_ns: np.ndarray  # (n,) int64
+    t: np.ndarray  # (n,) s
+    position: np.ndarray  # (n, 3) world NED [m]
+    quaternion: np.ndarray  # (n, 4) [x, y, z, w], body FRD -> world NED
+    rotation: np.ndarray  # (n, 3, 3)
+    velocity_world: np.ndarray  # (n, 3) [m/s]
+    angular_velocity: np.ndarray  # (n, 3) body [rad/s]
+
+
+@dataclass
+class Reference:
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    position: np.ndarray  # (n, 3) world [m]
+    quaternion: np.ndarray  # (n, 4)
+    rotation: np.ndarray  # (n, 3, 3)
+    velocity: np.ndarray  # (n, 3) world [m/s]
+    acceleration: np.ndarray  # (n, 3) world [m/s^2]
+    angular_velocity_world: np.ndarray  # (n, 3) ``R_d omega_d`` [rad/s]
+
+
+@dataclass
+class Wrench:
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    force: np.ndarray  # (n, 3) [N], frame of the message (body FRD for every fsr topic)
+    torque: np.ndarray  # (n, 3) [N m]
+
+
+@dataclass
+class RotorCommand:
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    speeds: np.ndarray  # (n, rotors) [rad/s]
+    tilts: np.ndarray | None  # (n, rotors) [rad] for tilting vehicles
+
+
+@dataclass
+class Scalar:
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    value: np.ndarray  # (n,)
+
+
+@dataclass
+class Flight:
+    """Everything the analysis needs from one recording (``None`` where a topic is missing)."""
+
+    recording: Recording
+    namespace: str
+    scenario_name: str
+    config: SimulationConfig | None
+    odom: Odometry | None = None
+    reference: Reference | None = None
+    wrench_truth: Wrench | None = None
+    wrench_cmd: Wrench | None = None
+    wrench_estimate: Wrench | None = None
+    rotor_cmd: RotorCommand | None = None
+    mass_estimate: Scalar | None = None
+    sim_status: list[dict] = field(default_factory=list)
+    message_counts: dict[str, int] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def truncated(self) -> bool:
+        return self.recording.truncated
+
+
+def hold(stamp_ns: np.ndarray, values: np.ndarray, target_ns: np.ndarray) -> np.ndarray:
+    """Zero-order hold of ``values`` (sorted by ``stamp_ns``) at ``target_ns``: the last value at or
+    before each target; NaN before the first sample. Exact stamp matches (lockstep) pick that sample."""
+    index = np.searchsorted(stamp_ns, target_ns, side="right") - 1
+    out = values[np.clip(index, 0, None)].astype(float)
+    out[index < 0] = np.nan
+    return out
+
+
+def detect_namespace(recording: Recording) -> tuple[str, str | None]:
+    """The vehicle namespace to analyse (``/`` or ``/uav1``) and a note when there was a choice."""
+    candidates = sorted(topic[: -len("/odom")] or "/" for topic in recording.topics if topic.endswith("/odom"))
+    if not candidates or "/" in candidates:
+        return "/", None
+    note = None
+    if len(candidates) > 1:
+        note = f"several vehicles recorded ({', '.join(candidates)}); analysing {candidates[0]} (use --namespace)"
+    return candidates[0], note
+
+
+def load_flight(recording: Recording | str | Path, namespace: str | None = None) -> Flight:
+    """Decode the standard topics of ``recording`` (under ``namespace``, detected if None)."""
+    if not isinstance(recording, Recording):
+        recording = open_recording(recording)
+    notes: list[str] = []
+    if namespace is None:
+        namespace, note = detect_namespace(recording)
+        if note:
+            notes.append(note)
+    namespace = "/" + namespace.strip("/") if namespace.strip("/") else "/"
+    config, scenario_name = _scenario(recording, notes)
+    flight = Flight(recording, namespace, scenario_name, config, notes=notes)
+    if recording.truncated:
+        notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
+    for topic in sorted({*recording.topics, *(_topic(namespace, name) for name in ("/clock", *STANDARD_TOPICS))}):
+        flight.message_counts[topic] = recording.count(topic)
+    loaders = {
+        "odom": _odometry, "reference": _reference, "wrench_truth": _wrench, "wrench_cmd": _wrench,
+        "wrench_estimate": _wrench, "rotor_cmd": _rotor_command, "mass_estimate": _scalar,
+    }
+    for name, loader in loaders.items():
+        topic = _topic(namespace, name)
+        if not recording.has(topic) or recording.count(topic) == 0:
+            notes.append(f"no messages on {topic}")
+            continue
+        try:
+            setattr(flight, name, loader(recording, topic))
+        except (LayoutError, KeyError, ValueError) as error:
+            notes.append(f"cannot decode {topic}: {error}")
+    status_topic = _topic(namespace, "sim_status")
+    if recording.has(status_topic):
+        flight.sim_status = _statuses(recording, status_topic, notes)
+    else:
+        notes.append(f"no messages on {status_topic}")
+    return flight
+
+
+def _topic(namespace: str, name: str) -> str:
+    if name.startswith("/"):
+        return name
+    return f"{namespace.rstrip('/')}/{name}"
+
+
+def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig | None, str]:
+    text = recording.scenario_yaml
+    fallback = recording.path.stem
+    if text is None:
+        notes.append("no scenario in the recording's metadata: vehicle limits, true mass and surfaces unknown")
+        return None, fallback
+    source = f"{recording.path} (fsr_scenario metadata)"
+    try:
+        data = parse_yaml_mapping(text, source)
+    except ConfigError as error:
+        notes.append(f"scenario in the metadata cannot be read: {error}")
+        return None, fallback
+    scenario = Scenario(data=data, source=source, base_dir=recording.path.parent)
+    try:
+        return simulation_config(scenario), scenario.name
+    except ConfigError as error:
+        notes.append(f"scenario in the metadata cannot be used: {error}")
+        return None, scenario.name
+
+
+def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:
+    """Decoded columns of ``topic`` sorted by header stamp (log time where there is no header)."""
+    raw = recording.raw(topic)
+    columns = decode_columns([data for _, data in raw], recording.topics[recording.resolve(topic)])
+    if "header.stamp.sec" in columns.numbers:
+        stamp = columns.numbers["header.stamp.sec"].astype(np.int64) * NS_PER_S
+        stamp += columns.numbers["header.stamp.nanosec"].astype(np.int64)
+    else:
+        stamp = np.fromiter((t for t, _ in raw), dtype=np.int64, count=len(raw))
+    order = np.argsort(stamp, kind="stable")
+    columns.numbers = {key: value[order] for key, value in columns.numbers.items()}
+    columns.strings = {key: value[order] for key, value in columns.strings.items()}
+    return stamp[order], columns
+
+
+def _vector(columns: Columns, prefix: str, keys: str = "xyz") -> np.ndarray:
+    return np.stack([columns.get(f"{prefix}.{k}").astype(float) for k in keys], axis=1)
+
+
+def _odometry(recording: Recording, topic: str) -> Odometry:
+    stamp, c = _columns(recording, topic)
+    quaternion = _vector(c, "pose.pose.orientation", "xyzw")
+    rotation = rotations_from_quaternions(quaternion)
+    velocity_body = _vector(c, "twist.twist.linear")
+    return Odometry(
+        stamp, stamp / NS_PER_S, _vector(c, "pose.pose.position"), quaternion, rotation,
+        np.einsum("nij,nj->ni", rotation, velocity_body), _vector(c, "twist.twist.angular"),
+    )
+
+
+def _reference(recording: Recording, topic: str) -> Reference:
+    stamp, c = _columns(recording, topic)
+    point = "points.0"
+
+    def optional(prefix: str) -> np.ndarray:
+        return _vector(c, prefix) if f"{prefix}.x" in c.numbers else np.full((c.n, 3), np.nan)
+
+    quaternion = _vector(c, f"{point}.transforms.0.rotation", "xyzw")
+    return Reference(
+        stamp, stamp / NS_PER_S, _vector(c, f"{point}.transforms.0.translation"), quaternion,
+        rotations_from_quaternions(quaternion), optional(f"{point}.velocities.0.linear"),
+        optional(f"{point}.accelerations.0.linear"), optional(f"{point}.velocities.0.angular"),
+    )
+
+
+def _wrench(recording: Recording, topic: str) -> Wrench:
+    stamp, c = _columns(recording, topic)
+    return Wrench(stamp, stamp / NS_PER_S, _vector(c, "wrench.force"), _vector(c, "wrench.torque"))
+
+
+def _rotor_command(recording: Recording, topic: str) -> RotorCommand:
+    """Rotor speeds from ``rotor_i`` velocities and tilts from ``tilt_i`` positions (by name, SPEC §4)."""
+    stamp, c = _columns(recording, topic)
+    velocity = c.numbers.get("velocity", np.empty((c.n, 0)))
+    position = c.numbers.get("position", np.empty((c.n, 0)))
+    names = [c.strings[key] for key in sorted(c.strings, key=_name_index) if key.startswith("name.")]
+    speeds = _by_name(names, velocity, "rotor_", c.n)
+    tilts = _by_name(names, position, "tilt_", c.n)
+    if speeds.shape[1] == 0:
+        raise ValueError("no 'rotor_i' joints in the rotor command")
+    return RotorCommand(stamp, stamp / NS_PER_S, speeds, tilts if tilts.shape[1] else None)
+
+
+def _name_index(key: str) -> int:
+    return int(key.split(".")[1]) if key.count(".") == 1 and key.split(".")[1].isdigit() else -1
+
+
+def _by_name(names: list[np.ndarray], values: np.ndarray, prefix: str, n: int) -> np.ndarray:
+    """Columns of ``values`` for joints ``prefix1, prefix2, ...`` (names may differ between messages)."""
+    count = 0
+    for column in names:
+        for name in set(column) - {None}:
+            if name.startswith(prefix) and name[len(prefix) :].isdigit():
+                count = max(count, int(name[len(prefix) :]))
+    out = np.full((n, count), np.nan)
+    for j, column in enumerate(names):
+        if j >= values.shape[1]:
+            break
+        for name in set(column) - {None}:
+            if name.startswith(prefix) and name[len(prefix) :].isdigit():
+                rows = column == name
+                out[rows, int(name[len(prefix) :]) - 1] = values[rows, j]
+    return out
+
+
+def _scalar(recording: Recording, topic: str) -> Scalar:
+    stamp, c = _columns(recording, topic)
+    return Scalar(stamp, stamp / NS_PER_S, c.get("data").astype(float))
+
+
+def _statuses(recording: Recording, topic: str, notes: list[str]) -> list[dict]:
+    """The ``sim_status`` JSON messages (few: one per state change), with their log time ``log_time_s``."""
+    statuses = []
+    for log_time, msg in recording.messages(topic):
+        try:
+            status = json.loads(msg.data)
+        except (json.JSONDecodeError, TypeError):
+            notes.append(f"{topic}: a message is not JSON: {str(msg.data)[:60]!r}")
+            continue
+        if isinstance(status, dict):
+            status["log_time_s"] = log_time / NS_PER_S
+            statuses.append(status)
+    return statuses

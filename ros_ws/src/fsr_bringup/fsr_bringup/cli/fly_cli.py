@@ -1,0 +1,153 @@
+"""``fsr-fly SCENARIO``: fly a scenario with the whole node graph, record it, analyse it.
+
+    fsr-fly ex3_estimation                          # built-in scenario, recording under runs/
+    fsr-fly my_flight.yaml --out runs/a.mcap --set disturbances.0.force=[0.5,0,0] --duration 10
+    fsr-fly ex4_geometric --in-process              # same modules, no DDS: fastest
+    fsr-fly three_vehicles                          # a fleet: /uav1../uav3 in one domain (runner/fleet.py)
+
+Starts the simulator, controller, estimator and recorder as separate processes in a ROS domain of their
+own (localhost-only discovery), streams their logs with a prefix per node, shows progress on a terminal,
+stops every process it started, then writes figures and ``metrics.json`` next to the recording and prints
+a summary. Exit codes: 0 success, 1 a node failed (named in the message), 2 invalid scenario or arguments,
+3 the flight diverged, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import yaml
+
+from fsr_bringup.runner.domains import acquire_domain, fixed_domain
+from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_path, load_fleet
+from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
+from fsr_bringup.runner.scenario_check import check_scenario
+from fsr_sim.config.scenario import load_scenario
+from fsr_sim.config.validation import ConfigError, builtin_names
+
+EXIT_CONFIG_ERROR = 2
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="fsr-fly", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "scenario",
+        help=f"built-in scenario ({', '.join(builtin_names('scenarios'))}), built-in fleet "
+        f"({', '.join(builtin_fleet_names())}) or a YAML path",
+    )
+    parser.add_argument("--out", type=Path, help="recording path (default runs/<scenario>_<time>.mcap)")
+    parser.add_argument("--duration", type=float, help="override the scenario's duration [s]")
+    parser.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+        help="override a scenario key by dotted path with a YAML value (repeatable)",
+    )
+    parser.add_argument("--in-process", action="store_true", help="run without DDS (same modules, one process)")
+    parser.add_argument("--domain-id", type=int, help="ROS domain id to use (default: a free one, 150..232)")
+    parser.add_argument("--network", action="store_true", help="allow DDS discovery beyond localhost")
+    parser.add_argument("--no-analysis", action="store_true", help="skip figures and metrics")
+    parser.add_argument("--quiet", action="store_true", help="do not stream node logs")
+    return parser.parse_args(argv)
+
+
+def default_recording_path(name: str) -> Path:
+    return Path("runs") / f"{name}_{time.strftime('%Y%m%d-%H%M%S')}.mcap"
+
+
+def load_members(args: argparse.Namespace) -> tuple[str, list[FleetMember]]:
+    """The run's name and its vehicles (one, or a fleet), every scenario validated."""
+    overrides = list(args.overrides)
+    if args.duration is not None:
+        overrides.append(f"duration={args.duration!r}")
+    path = fleet_path(args.scenario)
+    if path is not None:
+        fleet = load_fleet(path, overrides)
+        return fleet.name, fleet.members
+    checked = check_scenario(load_scenario(args.scenario, overrides))
+    return checked.scenario.name, [FleetMember("", checked)]
+
+
+def write_scenarios(members: list[FleetMember], run_dir: Path) -> tuple[Path, list[FlightMember]]:
+    """Write each member's merged scenario into the run folder (what the nodes read and the recording keeps)."""
+    flight_members = []
+    for member in members:
+        stem = member.namespace.strip("/") or "scenario"
+        path = (run_dir / f"{stem}.yaml").resolve()
+        path.write_text(member.checked.scenario.dump(), encoding="utf-8")
+        flight_members.append(FlightMember(member.namespace, path, member.checked.estimator_enabled))
+    if len(members) == 1 and not members[0].namespace:
+        return flight_members[0].scenario_path, flight_members
+    combined = (run_dir / "fleet.yaml").resolve()
+    fleet = [
+        {"namespace": m.namespace, "scenario": yaml.safe_load(m.checked.scenario.dump())} for m in members
+    ]
+    combined.write_text(yaml.safe_dump({"fleet": fleet}, sort_keys=False), encoding="utf-8")
+    return combined, flight_members
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    try:
+        name, members = load_members(args)
+    except ConfigError as error:
+        print(f"fsr-fly: invalid scenario: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    recording = args.out or default_recording_path(name)
+    if recording.suffix != ".mcap":
+        print(f"fsr-fly: --out must end in .mcap, got '{recording}'", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    if args.in_process and len(members) > 1:
+        print("fsr-fly: --in-process flies one vehicle; fly a fleet with the node graph", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    run_dir = recording.with_suffix("")
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        print(f"fsr-fly: cannot create '{run_dir}': {error.strerror}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    scenario_path, flight_members = write_scenarios(members, run_dir)
+    for member in members:
+        label = f"{member.namespace}: " if member.namespace else ""
+        print(f"fsr-fly: {name}: {label}{member.checked.summary_line()}", flush=True)
+    duration = max(m.checked.simulation.duration for m in members)
+
+    if args.in_process:
+        from fsr_bringup.runner.in_process_flight import fly_in_process
+
+        result = fly_in_process(members[0].checked.scenario, recording)
+    else:
+        try:
+            domain = fixed_domain(args.domain_id) if args.domain_id is not None else acquire_domain()
+        except (ValueError, RuntimeError) as error:
+            print(f"fsr-fly: {error}", file=sys.stderr)
+            return EXIT_CONFIG_ERROR
+        with domain:
+            print(f"fsr-fly: ROS domain {domain.domain_id}, logs in {run_dir / 'logs'}", flush=True)
+            result = fly_graph(
+                flight_members, recording, scenario_path, run_dir / "logs", domain, duration,
+                Console(quiet=args.quiet), localhost_only=not args.network,
+            )
+    print(
+        f"fsr-fly: flight {'interrupted' if result.interrupted else 'ended'}: simulated {result.sim_time:.3f} s "
+        f"in {result.wall_time:.2f} s wall (real-time factor {result.real_time_factor:.2f})",
+        flush=True,
+    )
+    for failure in result.failures:
+        print(f"fsr-fly: ERROR: {failure}", file=sys.stderr, flush=True)
+    if not recording.exists():
+        print(f"fsr-fly: no recording was written at {recording}", file=sys.stderr)
+        return result.exit_code or 1
+    if not args.no_analysis:
+        from fsr_bringup.runner.report import analyse_and_summarise
+
+        analyse_and_summarise(recording, run_dir, [m.namespace for m in members])
+    print(f"fsr-fly: recording {recording}", flush=True)
+    return result.exit_code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

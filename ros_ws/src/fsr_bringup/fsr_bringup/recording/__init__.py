@@ -1,0 +1,1 @@
+"""MCAP recorder node (fsr-record)."""

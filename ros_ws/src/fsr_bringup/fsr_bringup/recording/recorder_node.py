@@ -1,0 +1,322 @@
+"""``fsr-record --out RUN.mcap``: record the fsr graph's topics to a standard ROS 2 MCAP file.
+
+    fsr-record --out run.mcap --scenario my_flight.yaml
+    fsr-record --out fleet.mcap --namespace /uav1 --namespace /uav2 --topic /status:std_msgs/msg/String
+
+Subscribes up front (so nothing published after the simulator's handshake is missed), without
+deserialising (``raw=True``), to ``/clock`` and, under each namespace (default: the node's own, so
+``-r __ns:=/uav1`` works), to ``odom``, ``wrench_truth``, ``rotor_cmd``, ``wrench_cmd``, ``reference``,
+``goal``, ``wrench_estimate``, ``mass_estimate`` and ``sim_status``. Messages are taken in batches from a
+wait set (no executor callback per message: a 1 kHz lockstep graph publishes ~8 k messages/s) and written
+in arrival order.
+
+Times: ``log_time`` is the simulated time of the message: its header stamp (``/clock``: the clock value;
+``sim_status``: its ``sim_time``); messages without a stamp (``mass_estimate``) get the latest simulated
+time the recorder has seen, i.e. its sim-clock receive time (0 before the first). ``publish_time`` is the
+publisher's source timestamp (wall clock).
+
+Files survive crashes: chunks are small and flushed every ``FLUSH_PERIOD`` s, so a SIGKILLed file is
+readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued, write the summary,
+exit 0. A path that cannot be written: one line naming it and the reason, exit 1, before subscribing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import struct
+import sys
+import time
+from contextlib import ExitStack
+from pathlib import Path
+
+from fsr_sim.recording.writer import RecordingWriter
+from fsr_sim.ros.runtime import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_OK, configure_environment, run_node
+
+STANDARD_TOPICS: dict[str, str] = {
+    "odom": "nav_msgs/msg/Odometry",
+    "wrench_truth": "geometry_msgs/msg/WrenchStamped",
+    "rotor_cmd": "sensor_msgs/msg/JointState",
+    "wrench_cmd": "geometry_msgs/msg/WrenchStamped",
+    "reference": "trajectory_msgs/msg/MultiDOFJointTrajectory",
+    "goal": "geometry_msgs/msg/PoseStamped",
+    "wrench_estimate": "geometry_msgs/msg/WrenchStamped",
+    "mass_estimate": "std_msgs/msg/Float64",
+    "sim_status": "std_msgs/msg/String",
+}
+CLOCK_TOPIC = ("/clock", "rosgraph_msgs/msg/Clock")
+STATUS_TYPE = "std_msgs/msg/String"
+CHUNK_SIZE = 64 * 1024  # bytes: ~70 ms of a 1 kHz graph per chunk
+FLUSH_PERIOD = 0.5  # s of wall time between flushes: at most this much is lost to a SIGKILL
+WAIT_TIMEOUT_NS = 100_000_000  # a signal is noticed within 0.1 s
+DRAIN_QUIET_S = 0.2  # at shutdown, stop taking after this long without a message
+DRAIN_MAX_S = 1.0
+_STAMP = struct.Struct("<iI")
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="fsr-record", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--out", required=True, type=Path, help="MCAP file to write (overwritten)")
+    parser.add_argument("--scenario", type=Path, help="scenario YAML stored in the file's metadata")
+    parser.add_argument(
+        "--namespace", action="append", default=[], metavar="NS",
+        help="record the standard topics under NS (repeatable; default: the node's namespace)",
+    )
+    parser.add_argument(
+        "--topic", action="append", default=[], metavar="NAME:TYPE",
+        help="also record NAME (relative names go under each namespace) of TYPE pkg/msg/Type (repeatable)",
+    )
+    return parser.parse_args(argv)
+
+
+def topic_list(namespaces: list[str], extra: list[str]) -> list[tuple[str, str]]:
+    """(topic name, type) to subscribe to; relative names are resolved by the node (its namespace)."""
+    prefixes = ["/" + ns.strip("/") + "/" if ns.strip("/") else "/" for ns in namespaces] or [""]
+    topics: dict[str, str] = {CLOCK_TOPIC[0]: CLOCK_TOPIC[1]}
+    extras: list[tuple[str, str]] = []
+    for item in extra:
+        name, sep, type_name = item.rpartition(":")
+        if not sep or not name or not type_name:
+            raise ValueError(f"--topic: expected NAME:TYPE (e.g. odom:nav_msgs/msg/Odometry), got '{item}'")
+        extras.append((name, type_name))
+    for prefix in prefixes:
+        for name, type_name in [*STANDARD_TOPICS.items(), *extras]:
+            topics[name if name.startswith("/") else prefix + name] = type_name
+    return list(topics.items())
+
+
+def starts_with_stamp(msg_class: type) -> bool:
+    """True when the message starts with a ``std_msgs/Header`` or a ``builtin_interfaces/Time``: its
+    ``int32 sec, uint32 nanosec`` are then the first 8 bytes after the 4-byte CDR encapsulation header."""
+    from rosidl_parser.definition import NamespacedType
+
+    first = msg_class.SLOT_TYPES[0] if msg_class.SLOT_TYPES else None
+    return isinstance(first, NamespacedType) and (tuple(first.namespaces), first.name) in (
+        (("std_msgs", "msg"), "Header"), (("builtin_interfaces", "msg"), "Time"),
+    )
+
+
+def stamp_ns(data: bytes) -> int:
+    """The leading ``sec, nanosec`` of a CDR message (either byte order)."""
+    sec, nanosec = (_STAMP if data[1] == 1 else struct.Struct(">iI")).unpack_from(data, 4)
+    return sec * 1_000_000_000 + nanosec
+
+
+def status_time_ns(data: bytes) -> int | None:
+    """``sim_time`` [ns] of a ``sim_status`` message (std_msgs/String CDR: uint32 length, then JSON text)."""
+    try:
+        (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
+        status = json.loads(data[8 : 8 + length].rstrip(b"\0"))
+        return int(round(float(status["sim_time"]) * 1e9))
+    except (ValueError, KeyError, TypeError, IndexError, struct.error):
+        return None
+
+
+def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> type:
+    """Build the node class lazily (rclpy is imported only after the environment is configured)."""
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile
+
+    from fsr_sim.ros.message_schema import message_class
+    from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
+
+    # The recorder needs every sample, so its reader queues are deep whatever the publisher's depth;
+    # reliability and durability stay those of fsr_sim.ros.qos so that the QoS matches.
+    clock_qos = QoSProfile(
+        reliability=CLOCK_QOS.reliability, durability=CLOCK_QOS.durability, history=CLOCK_QOS.history,
+        depth=STREAM_DEPTH,
+    )
+    status_qos = QoSProfile(
+        reliability=LATCHED_QOS.reliability, durability=LATCHED_QOS.durability, history=LATCHED_QOS.history,
+        depth=100,
+    )
+
+    class Recorder(Node):
+        """Subscriptions drained from one wait set into the MCAP writer."""
+
+        def __init__(self) -> None:
+            super().__init__("fsr_recorder")
+            self.writer = writer
+            self.exit_code = EXIT_OK
+            self.failed = False
+            self.sim_time_ns = 0
+            self.last_flush = time.monotonic()
+            self.unflushed = False
+            self.entries: list[tuple[object, str, bool, bool]] = []  # (subscription, topic, stamped, status)
+            for name, type_name in topics:
+                cls = message_class(type_name)
+                qos = clock_qos if name == CLOCK_TOPIC[0] else STREAM_QOS
+                if type_name == STATUS_TYPE and name.rsplit("/", 1)[-1] == "sim_status":
+                    qos = status_qos
+                sub = self.create_subscription(cls, name, lambda *_: None, qos, raw=True)
+                topic = sub.topic_name
+                writer.add_topic(topic, type_name)
+                self.entries.append((sub, topic, starts_with_stamp(cls), name.endswith("sim_status")))
+            self.wait_set = _rclpy.WaitSet(len(self.entries), 0, 0, 0, 0, 0, self.context.handle)
+            self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
+
+        def done(self) -> bool:
+            return self.failed
+
+        def spin_once(self, _executor: object, _stop: object) -> None:
+            """Wait up to 0.1 s for messages, then take and write everything queued."""
+            self.take(WAIT_TIMEOUT_NS)
+
+        def take(self, timeout_ns: int) -> int:
+            batch: list[tuple[int, int, str, bytes, bool, bool]] = []
+            with ExitStack() as stack:
+                stack.enter_context(self.context.handle)
+                for sub, *_ in self.entries:
+                    stack.enter_context(sub.handle)
+                self.wait_set.clear_entities()
+                for sub, *_ in self.entries:
+                    self.wait_set.add_subscription(sub.handle)
+                self.wait_set.wait(timeout_ns)
+                ready = set(self.wait_set.get_ready_entities("subscription"))
+                for sub, topic, stamped, status in self.entries:
+                    if sub.handle.pointer not in ready:
+                        continue
+                    while True:
+                        taken = sub.handle.take_message(sub.msg_type, True)
+                        if taken is None:
+                            break
+                        data, info = taken
+                        batch.append((info["received_timestamp"], info["source_timestamp"], topic, data, stamped,
+                                      status))
+            if batch:
+                batch.sort(key=lambda item: item[0])
+                self.write(batch)
+            self.maybe_flush()
+            return len(batch)
+
+        def write(self, batch: list[tuple[int, int, str, bytes, bool, bool]]) -> None:
+            try:
+                for _received, source, topic, data, stamped, status in batch:
+                    if stamped:
+                        log_time = stamp_ns(data)
+                        self.sim_time_ns = max(self.sim_time_ns, log_time)
+                    elif status:
+                        status_ns = status_time_ns(data)
+                        log_time = self.sim_time_ns if status_ns is None else status_ns
+                    else:
+                        log_time = self.sim_time_ns
+                    self.writer.write(topic, data, log_time, source)
+                self.unflushed = True
+            except OSError as error:
+                self.fail(error)
+
+        def maybe_flush(self) -> None:
+            """Complete the current chunk every FLUSH_PERIOD s (also when the graph has gone quiet)."""
+            now = time.monotonic()
+            if self.unflushed and not self.failed and now - self.last_flush >= FLUSH_PERIOD:
+                try:
+                    self.writer.flush()
+                except OSError as error:
+                    self.fail(error)
+                self.last_flush = now
+                self.unflushed = False
+
+        def fail(self, error: OSError) -> None:
+            if not self.failed:
+                print(f"fsr-record: error: cannot write {self.writer.path}: {error.strerror or error}",
+                      file=sys.stderr, flush=True)
+            self.failed = True
+            self.exit_code = EXIT_FAILURE
+
+        def close(self) -> None:
+            """Take what is still queued, then finish the file (summary and footer) and report counts."""
+            if not self.failed:
+                start = quiet_since = time.monotonic()
+                while time.monotonic() - quiet_since < DRAIN_QUIET_S and time.monotonic() - start < DRAIN_MAX_S:
+                    if self.take(50_000_000) and not self.failed:
+                        quiet_since = time.monotonic()
+                    if self.failed:
+                        break
+            try:
+                self.writer.close()
+            except OSError as error:
+                self.fail(error)
+            counts = self.writer.message_counts
+            total = sum(counts.values())
+            lines = [f"  {topic}: {count}" for topic, count in sorted(counts.items())]
+            state = "FAILED, file incomplete" if self.failed else "closed"
+            print(f"fsr-record: {state}: wrote {total} messages to {self.writer.path}", *lines, sep="\n",
+                  flush=True)
+
+    return Recorder
+
+
+def open_writer(out: Path, scenario_path: Path | None) -> RecordingWriter:
+    """Create the file and push its header to disk now, so that a bad path fails before subscribing."""
+    metadata = None
+    if scenario_path is not None:
+        try:
+            metadata = {"fsr_scenario": {"yaml": scenario_path.read_text(encoding="utf-8")}}
+        except OSError as error:
+            raise ValueError(f"--scenario: cannot read {scenario_path}: {error.strerror or error}") from None
+    writer = RecordingWriter(out, metadata=metadata, chunk_size=CHUNK_SIZE)
+    try:
+        writer.flush()
+    except OSError:
+        try:
+            writer.close()
+        except OSError:
+            pass
+        raise
+    return writer
+
+
+def main(argv: list[str] | None = None) -> int:
+    configure_environment()
+    from rclpy.utilities import remove_ros_args
+
+    argv = sys.argv if argv is None else argv
+    args = parse_args(remove_ros_args(argv)[1:])
+    from fsr_sim.ros.message_schema import message_class
+
+    try:
+        topics = topic_list(args.namespace, args.topic)
+    except ValueError as error:
+        print(f"fsr-record: error: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    for name, type_name in topics:
+        try:
+            message_class(type_name)
+        except (ValueError, ImportError, AttributeError) as error:
+            print(f"fsr-record: error: --topic {name}: unknown message type '{type_name}' ({error})", file=sys.stderr)
+            return EXIT_CONFIG_ERROR
+    try:
+        writer = open_writer(args.out, args.scenario)
+    except ValueError as error:
+        print(f"fsr-record: error: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    except OSError as error:
+        reason = error.strerror or str(error)
+        message = str(error) if str(error).startswith("cannot write") else f"cannot write {args.out}: {reason}"
+        print(f"fsr-record: error: {message}", file=sys.stderr)
+        return EXIT_FAILURE
+    nodes: list[object] = []
+
+    def make_node(_args: list[str]) -> object:
+        node = make_recorder(writer, topics)()
+        nodes.append(node)
+        return node
+
+    try:
+        code = run_node(make_node, argv)
+    finally:
+        if not nodes:  # the node was never built: still leave a valid (empty) file
+            try:
+                writer.close()
+            except OSError:
+                pass
+    if nodes and getattr(nodes[0], "failed", False):
+        code = EXIT_FAILURE
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

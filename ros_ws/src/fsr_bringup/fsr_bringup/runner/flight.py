@@ -1,0 +1,236 @@
+"""One graph flight: validate the scenario, start simulator/controller/estimator/recorder, supervise, stop.
+
+Order: the recorder first (so it is subscribed before anything is published), then the estimator and the
+controller, the simulator last; the simulator's lockstep handshake waits for all of them. The flight
+ends when the simulator exits (end of the scenario, divergence, or a failure). Then the other nodes get
+SIGINT (the recorder last, so it writes everything and closes its file), with SIGTERM/SIGKILL fallbacks.
+
+A node that dies during the flight is reported by name; the flight goes on (the simulator applies the
+scenario's failsafe when the controller is gone) and the run's exit code is non-zero.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fsr_bringup.runner.domains import DomainLease
+from fsr_bringup.runner.processes import ProcessGroup, describe_exit, executable
+from fsr_sim.ros.runtime import configure_environment
+
+EXIT_NODE_FAILED = 1
+EXIT_DIVERGED = 3
+EXIT_INTERRUPTED = 130
+SIMULATOR_DIVERGED = 3  # the simulator's exit code when the flight diverged
+
+
+@dataclass
+class FlightResult:
+    exit_code: int
+    failures: list[str] = field(default_factory=list)
+    wall_time: float = 0.0
+    sim_time: float = 0.0
+    interrupted: bool = False
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time > 0 else float("nan")
+
+
+class Console:
+    """Prefixed node output and a one-line progress display (only on a terminal)."""
+
+    def __init__(self, quiet: bool = False) -> None:
+        self.quiet = quiet
+        self.tty = sys.stdout.isatty()
+        self.lock = threading.Lock()
+        self.progress_line = ""
+
+    def echo(self, name: str, line: str) -> None:
+        if self.quiet:
+            return
+        with self.lock:
+            if self.tty and self.progress_line:
+                sys.stdout.write("\r\033[K")
+            sys.stdout.write(f"[{name}] {line}\n")
+            if self.tty and self.progress_line:
+                sys.stdout.write(self.progress_line)
+            sys.stdout.flush()
+
+    def progress(self, text: str) -> None:
+        if not self.tty or self.quiet:
+            return
+        with self.lock:
+            self.progress_line = text
+            sys.stdout.write("\r\033[K" + text)
+            sys.stdout.flush()
+
+    def end_progress(self) -> None:
+        if self.tty and self.progress_line:
+            with self.lock:
+                sys.stdout.write("\r\033[K")
+                sys.stdout.flush()
+                self.progress_line = ""
+
+
+@dataclass(frozen=True)
+class FlightMember:
+    """One vehicle of a run: its namespace ('' for a single vehicle) and its validated scenario file."""
+
+    namespace: str
+    scenario_path: Path
+    with_estimator: bool
+
+    def process_name(self, node: str) -> str:
+        return f"{self.namespace.strip('/')}/{node}" if self.namespace else node
+
+
+def node_commands(
+    members: list[FlightMember], recording: Path, scenario_path: Path
+) -> list[tuple[str, list[str]]]:
+    """(name, argv) of each node of the graph, in start order: recorder, then per vehicle the estimator,
+    the controller and the simulator (whose lockstep handshake waits for the others)."""
+    recorder = [executable("fsr-record"), "--out", str(recording), "--scenario", str(scenario_path)]
+    for member in members:
+        if member.namespace:
+            recorder += ["--namespace", member.namespace]
+    commands = [("recorder", recorder)]
+    for index, member in enumerate(members):
+        ros_args = ["--ros-args", "-p", f"scenario:={member.scenario_path}"]
+        if member.namespace:
+            ros_args += ["-r", f"__ns:={member.namespace}"]
+        if member.with_estimator:
+            commands.append((member.process_name("estimator"), [executable("estimator"), *ros_args]))
+        commands.append((member.process_name("controller"), [executable("controller"), *ros_args]))
+        odom_subscribers = 3 if member.with_estimator else 2  # controller, recorder (+ estimator)
+        simulator = [executable("simulator"), *ros_args, "-p", f"wait_for_subscribers:={odom_subscribers}"]
+        if index > 0:
+            simulator += ["-p", "publish_clock:=false"]  # one /clock for the whole run
+        commands.append((member.process_name("simulator"), simulator))
+    return commands
+
+
+def child_environment(domain: DomainLease, localhost_only: bool) -> dict[str, str]:
+    configure_environment()
+    env = dict(os.environ)
+    env["ROS_DOMAIN_ID"] = str(domain.domain_id)
+    if localhost_only:
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        env.pop("ROS_LOCALHOST_ONLY", None)
+    else:
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SUBNET"
+    env["PYTHONUNBUFFERED"] = "1"
+    env["RCUTILS_COLORIZED_OUTPUT"] = "0"
+    env.setdefault("RCUTILS_CONSOLE_OUTPUT_FORMAT", "[{severity}] {message}")
+    return env
+
+
+class ClockWatcher:
+    """Follows ``/clock`` in the run's domain to show simulated time and the real-time factor."""
+
+    def __init__(self, domain_id: int) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rosgraph_msgs.msg import Clock
+
+        from fsr_sim.ros.qos import CLOCK_QOS
+
+        self.sim_time = 0.0
+        self.context = rclpy.context.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node("fsr_fly_progress", context=self.context)
+        self.node.create_subscription(Clock, "/clock", self._on_clock, CLOCK_QOS)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def _on_clock(self, msg: object) -> None:
+        self.sim_time = msg.clock.sec + msg.clock.nanosec * 1e-9
+
+    def spin(self, timeout: float) -> None:
+        self.executor.spin_once(timeout_sec=timeout)
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        import rclpy
+
+        rclpy.try_shutdown(context=self.context)
+
+
+def fly_graph(
+    members: list[FlightMember],
+    recording: Path,
+    scenario_path: Path,
+    log_dir: Path,
+    domain: DomainLease,
+    duration: float,
+    console: Console,
+    localhost_only: bool = True,
+) -> FlightResult:
+    """Run the graph until every simulator has ended; stop everything; report failures by node name."""
+    log_dir.mkdir(parents=True, exist_ok=True)
+    env = child_environment(domain, localhost_only)
+    group = ProcessGroup(env, log_dir, console.echo)
+    interrupted: list[str] = []
+
+    def on_signal(signum: int, _frame: object) -> None:
+        interrupted.append(signal.Signals(signum).name)
+
+    previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    simulators = [m.process_name("simulator") for m in members]
+    watcher = None
+    start = time.monotonic()
+    failures: list[str] = []
+    sim_time = 0.0
+    try:
+        for name, command in node_commands(members, recording, scenario_path):
+            group.start(name, command)
+        watcher = ClockWatcher(domain.domain_id)
+        reported: set[str] = set()
+        last_progress = 0.0
+        while not interrupted:
+            watcher.spin(0.05)
+            for node in group.nodes:
+                code = node.returncode
+                if code is None or node.name in reported or node.name in simulators:
+                    continue
+                reported.add(node.name)
+                failures.append(f"{node.name} died during the flight ({describe_exit(code)})")
+                console.echo("fsr-fly", f"ERROR: {failures[-1]}; see {node.log_path}")
+            if all(group.get(name).returncode is not None for name in simulators):
+                break
+            now = time.monotonic()
+            if now - last_progress > 0.25:
+                last_progress = now
+                wall = now - start
+                rtf = watcher.sim_time / wall if wall > 0 else 0.0
+                console.progress(f"t = {watcher.sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
+    finally:
+        console.end_progress()
+        group.stop_all()
+        if watcher is not None:
+            sim_time = watcher.sim_time
+            watcher.close()
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    wall_time = time.monotonic() - start
+    if interrupted:
+        return FlightResult(EXIT_INTERRUPTED, failures, wall_time, sim_time, interrupted=True)
+    recorder = group.get("recorder")
+    if recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
+        failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
+    exit_code = EXIT_NODE_FAILED if failures else 0
+    for name in simulators:
+        code = group.get(name).returncode
+        if code == SIMULATOR_DIVERGED:
+            failures.append(f"{name}: the flight diverged (see {group.get(name).log_path} for the reason)")
+            exit_code = EXIT_DIVERGED
+        elif code not in (0, None):
+            failures.insert(0, f"{name} failed ({describe_exit(code)}); see {group.get(name).log_path}")
+            exit_code = exit_code if exit_code == EXIT_DIVERGED else EXIT_NODE_FAILED
+    return FlightResult(exit_code, failures, wall_time, sim_time)

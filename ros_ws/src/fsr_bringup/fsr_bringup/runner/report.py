@@ -1,0 +1,34 @@
+"""The end of a run: analyse the recording (figures, ``metrics.json``, ``summary.md``) and print the summary."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from fsr_bringup.analysis.run import analyze_recording
+from fsr_sim.recording.reader import RecordingError, open_recording
+
+
+def analyse_and_summarise(recording_path: Path, run_dir: Path, namespaces: list[str]) -> bool:
+    """Analyse each vehicle of the recording into ``run_dir`` (``run_dir/<ns>`` for a fleet); False on error."""
+    try:
+        recording = open_recording(recording_path)
+    except RecordingError as error:
+        print(f"fsr-fly: cannot analyse the recording: {error}", file=sys.stderr)
+        return False
+    if recording.truncated:
+        print(f"fsr-fly: WARNING: {recording_path} is truncated (the recorder did not close it); "
+              "analysing up to its last complete chunk", file=sys.stderr)
+    ok = True
+    for namespace in namespaces:
+        out_dir = run_dir / namespace.strip("/") if namespace else run_dir
+        try:
+            analysis = analyze_recording(recording, out_dir, namespace or None)
+        except (RecordingError, OSError) as error:
+            print(f"fsr-fly: analysis of {namespace or 'the flight'} failed: {error}", file=sys.stderr)
+            ok = False
+            continue
+        print(analysis.summary, flush=True)
+        print(f"fsr-fly: figures and metrics in {out_dir} ({len(analysis.figures)} figures, "
+              f"{analysis.metrics_path.name}, {analysis.summary_path.name})", flush=True)
+    return ok

@@ -1,0 +1,161 @@
+"""Analysis of synthetic recordings with known errors: metrics, figures, missing topics, truncation, CLI."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rclpy.serialization import deserialize_message
+
+from fsr_bringup.analysis.cdr import decode_columns
+from fsr_bringup.analysis.figures import FIGURES, envelope
+from fsr_bringup.analysis.load import hold, load_flight
+from fsr_bringup.analysis.metrics import flight_metrics
+from fsr_bringup.analysis.run import analyze_recording
+from fsr_bringup.cli.analyze_cli import main as analyze_main
+from fsr_sim.recording.reader import open_recording
+from fsr_sim.recording.writer import RecordingWriter
+from fsr_sim.ros.message_schema import message_class
+
+
+def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expected: dict) -> None:
+    EXPECTED, STEPS = expected, expected["steps"]
+    m = flight_metrics(synthetic_recording)
+    tracking = m["tracking"]
+    assert tracking["position_error_m"]["final"] == pytest.approx(EXPECTED["position_final"], abs=1e-9)
+    assert tracking["position_error_m"]["peak"] == pytest.approx(EXPECTED["position_peak"], abs=1e-9)
+    assert tracking["position_error_m"]["peak_time_s"] == pytest.approx(EXPECTED["position_peak_time"])
+    assert tracking["attitude_error_deg"]["final"] == pytest.approx(EXPECTED["attitude_final"], abs=1e-6)
+    assert tracking["attitude_error_deg"]["peak"] == pytest.approx(EXPECTED["attitude_peak"], abs=1e-6)
+    # World-frame velocity error although odometry carries body-frame twist (yawed vehicle).
+    assert tracking["velocity_error_m_s"]["final"] == pytest.approx(EXPECTED["velocity_error"], abs=1e-9)
+    assert tracking["velocity_error_m_s"]["peak"] == pytest.approx(EXPECTED["velocity_error"], abs=1e-9)
+    w_error = tracking["angular_velocity_error_rad_s"]
+    assert w_error["final"] == pytest.approx(EXPECTED["angular_velocity_error"], abs=1e-9)
+    assert w_error["peak"] == pytest.approx(EXPECTED["angular_velocity_error"], abs=1e-9)
+    saturation = m["saturation"]
+    assert saturation["rotor_speed"]["steps"] == EXPECTED["saturation_steps"]
+    assert saturation["rotor_speed"]["first_time_s"] == pytest.approx(EXPECTED["saturation_first"])
+    assert saturation["rotor_speed"]["worst_rotor"] == EXPECTED["worst_rotor"]
+    assert saturation["at_max_steps"] == EXPECTED["at_max"] and saturation["at_min_steps"] == EXPECTED["at_min"]
+    wrench = m["external_wrench"]
+    np.testing.assert_allclose(wrench["truth_mean_last_s"], [1, 1, 0, 0, 0, -0.4], atol=1e-12)
+    np.testing.assert_allclose(wrench["estimate_mean_last_s"], [1.02, 0.99, 0, 0, 0, -0.395], atol=1e-12)
+    np.testing.assert_allclose(wrench["rms_error"], [0.02, 0.01, 0, 0, 0, 0.005], atol=1e-12)
+    assert wrench["rms_from_s"] == pytest.approx(1.0)  # half the 2 s run (default settling 5 s is longer)
+    assert m["mass"]["estimate_final_kg"] == pytest.approx(EXPECTED["mass_final"])
+    assert m["mass"]["true_kg"] == EXPECTED["mass_true"] and m["mass"]["nominal_kg"] == EXPECTED["mass_nominal"]
+    np.testing.assert_allclose(m["thrust_ratio"]["ground"], EXPECTED["ground_ratio"], rtol=1e-9)
+    assert m["thrust_ratio"]["ceiling"] == [1.0, 1.0]
+    assert m["commanded_thrust_N"]["peak"] == pytest.approx(12.5)
+    assert m["sim_status"] == {"state": "finished", "reason": "duration reached", "sim_time": 2.0, "steps": STEPS}
+    assert m["steps"] == STEPS and m["duration_s"] == pytest.approx(2.0) and m["odom_messages"] == STEPS + 1
+    assert m["message_counts"]["/odom"] == STEPS + 1 and m["message_counts"]["/sim_status"] == 2
+    assert m["truncated"] is False and m["scenario"] == "synthetic_flight" and m["notes"] == []
+    json.dumps(m, allow_nan=False)  # JSON-ready
+
+
+def test_all_figures_and_files_are_written(synthetic_recording: Path, tmp_path: Path) -> None:
+    result = analyze_recording(synthetic_recording, tmp_path)
+    assert sorted(p.name for p in result.figures) == sorted(FIGURES)
+    for path in result.figures:
+        assert path.stat().st_size > 10_000 and path.read_bytes()[:4] == b"\x89PNG"
+    saved = json.loads((tmp_path / "metrics.json").read_text())
+    assert saved["tracking"]["position_error_m"]["peak"] == pytest.approx(0.5)
+    summary = (tmp_path / "summary.md").read_text()
+    assert "| position error [m] final / peak (at t) / RMS | 0.300 / 0.500 (at 1.00 s)" in summary
+    assert "210 steps, first at 0.500 s, worst rotor 3" in summary
+
+
+def test_missing_topics_and_scenario_are_skipped_with_notes(tmp_path: Path, write_flight) -> None:
+    path = write_flight(tmp_path / "odom_only.mcap", topics=("odom",), scenario=False)
+    result = analyze_recording(path, tmp_path / "out")
+    m = result.metrics
+    assert m["tracking"] is None and m["saturation"] is None and m["external_wrench"] is None
+    assert m["mass"] is None and m["thrust_ratio"] is None and m["sim_status"] is None
+    assert m["duration_s"] == pytest.approx(2.0) and m["scenario"] == "odom_only"
+    notes = "\n".join(m["notes"])
+    for expected in ("no scenario", "no messages on /reference", "tracking errors skipped", "figure errors.png"):
+        assert expected in notes
+    assert [p.name for p in result.figures] == ["pose.png"]
+    assert "Notes:" in result.summary
+
+
+def test_truncated_file_is_flagged_and_analysed(synthetic_recording: Path, tmp_path: Path, expected: dict) -> None:
+    data = synthetic_recording.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: int(len(data) * 0.6)])
+    recording = open_recording(cut)
+    assert recording.truncated
+    kept = recording.count("odom")
+    assert 0 < kept < expected["steps"] + 1
+    m = flight_metrics(recording)
+    assert m["truncated"] is True
+    assert any("truncated" in note for note in m["notes"])
+    # What is there is decoded right: odom stamps are the first `kept` steps.
+    flight = load_flight(recording)
+    np.testing.assert_array_equal(flight.odom.stamp_ns, np.arange(kept) * 1_000_000)
+
+
+def test_vectorised_decoding_equals_rclpy(synthetic_recording: Path) -> None:
+    recording = open_recording(synthetic_recording)
+    for topic, path in (("odom", "twist.twist.linear.y"), ("reference", "points.0.transforms.0.rotation.z"),
+                        ("rotor_cmd", "velocity"), ("mass_estimate", "data")):
+        raw = recording.raw(topic)
+        type_name = recording.topics["/" + topic]
+        columns = decode_columns([d for _, d in raw], type_name)
+        cls = message_class(type_name)
+        for index in (0, 777, len(raw) - 1):
+            msg = deserialize_message(raw[index][1], cls)
+            expected = msg
+            for part in path.split("."):
+                expected = expected[int(part)] if part.isdigit() else getattr(expected, part)
+            np.testing.assert_array_equal(columns.get(path)[index], np.asarray(expected))
+
+
+def test_layouts_that_differ_between_messages_are_split() -> None:
+    from rclpy.serialization import serialize_message
+
+    from fsr_sim.ros.conversions import rotor_command
+
+    msgs = [rotor_command(k, np.full(4, float(k)), np.arange(4.0) if k % 3 == 0 else None) for k in range(10)]
+    msgs[5].header.frame_id = "x"  # another string length
+    columns = decode_columns([serialize_message(m) for m in msgs], "sensor_msgs/msg/JointState")
+    np.testing.assert_array_equal(columns.get("velocity")[:, 0], np.arange(10.0))
+    assert np.isnan(columns.get("position")[1, 4]) and columns.get("position")[3, 5] == 1.0
+    assert columns.strings["header.frame_id"][5] == "x" and columns.strings["name.4"][0] == "tilt_1"
+
+
+def test_hold_and_envelope() -> None:
+    stamps = np.array([10, 20, 30])
+    np.testing.assert_array_equal(hold(stamps, np.array([1.0, 2.0, 3.0]), np.array([5, 10, 25, 40]))[1:], [1, 2, 3])
+    assert np.isnan(hold(stamps, np.array([1.0, 2.0, 3.0]), np.array([5]))[0])
+    t = np.arange(100_000) * 1e-3
+    y = np.zeros_like(t)
+    y[51_234] = 7.0  # a one-sample spike must survive decimation
+    td, yd = envelope(t, y)
+    assert len(td) < 5000 and yd.max() == 7.0 and np.all(np.diff(td) >= 0)
+
+
+def test_cli_writes_outputs_and_prints_summary(synthetic_recording: Path, tmp_path: Path, capsys) -> None:
+    assert analyze_main([str(synthetic_recording), "--out", str(tmp_path), "--no-figures"]) == 0
+    out = capsys.readouterr().out
+    assert "### Flight `synthetic_flight`" in out and (tmp_path / "metrics.json").is_file()
+
+
+@pytest.mark.parametrize("kind", ["missing", "text", "empty", "no_messages"])
+def test_cli_refuses_bad_input_with_one_line_exit_2(kind: str, tmp_path: Path, capsys) -> None:
+    path = tmp_path / "bad.mcap"
+    if kind == "text":
+        path.write_text("not an mcap file\n")
+    elif kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "no_messages":
+        with RecordingWriter(path) as writer:
+            writer.add_topic("/odom", "nav_msgs/msg/Odometry")
+    assert analyze_main([str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0]
+    assert not (tmp_path / "out" / "metrics.json").exists()

@@ -1,0 +1,156 @@
+"""The ``controller`` and ``trajectory`` sections of a scenario, validated (fsr_control's part of it).
+
+```yaml
+trajectory:
+  waypoints:                        # flown in order, each rest-to-rest from the previous one
+    - position: [1, 1, -4]          # world NED [m]
+      attitude_rpy_deg: [0, 0, 20]  # optional (default: the previous waypoint's / initial attitude);
+                                    # fixed-rotor vehicles take only yaw (roll and pitch must be 0)
+      duration: 20.0                # travel time [s] > 0
+      hold: 0.0                     # optional wait after arrival [s] >= 0
+  goal_duration: 10.0               # travel time [s] of a goal received at run time (`goal` topic)
+controller:
+  type: geometric                   # geometric (fixed rotors) | voliro (tilting rotors); default by vehicle
+  gains: {k_p: [20, 20, 100], k_v: [20, 20, 100], k_r: [10, 10, 100], k_w: [10, 10, 100]}
+  angular_feedforward: consistent   # voliro only: consistent | report
+  secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
+```
+
+Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix; gains not given
+take the report's values for the controller type. Unknown keys are refused with a typo hint.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsr_control.controllers import geometric, voliro
+from fsr_control.planning.trajectory import Waypoint
+from fsr_sim.config.scenario import Scenario, load_vehicle_for
+from fsr_sim.config.validation import ConfigError, Section, diagonal_or_matrix
+from fsr_sim.model.so3 import rotation_from_euler_zyx
+from fsr_sim.model.vehicle import Vehicle
+
+CONTROLLER_TYPES = ("geometric", "voliro")
+DEFAULT_GAINS = {"geometric": geometric.REPORT_GAINS, "voliro": voliro.REPORT_GAINS}
+SECONDARY_TYPES = ("none", "min_peak_speed")
+DEFAULT_GOAL_DURATION = 10.0  # s
+
+
+@dataclass(frozen=True)
+class SecondaryObjectiveConfig:
+    type: str = "none"
+    exponent: int = 8
+    iterations: int = 3
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """Validated controller + trajectory settings. ``gains``: name -> 3x3 array."""
+
+    type: str
+    gains: dict[str, np.ndarray]
+    waypoints: list[Waypoint]
+    angular_feedforward: str = "consistent"
+    secondary_objective: SecondaryObjectiveConfig = field(default_factory=SecondaryObjectiveConfig)
+    goal_duration: float = DEFAULT_GOAL_DURATION
+    source: str = ""
+
+
+def reject_unknown_with_hint(section: Section) -> None:
+    """Like ``Section.reject_unknown`` but names the closest known key (``k_P`` -> ``k_p``?)."""
+    unknown = sorted(str(k) for k in section.data if k not in section._read)
+    if not unknown:
+        return
+    known = {name.lower(): name for name in sorted(section._read)}
+    close = difflib.get_close_matches(unknown[0].lower(), list(known), n=1, cutoff=0.5)
+    hint = f"did you mean '{known[close[0]]}'? " if close else ""
+    raise section.error(unknown[0], f"unknown key ({hint}known here: {', '.join(sorted(section._read))})")
+
+
+def checked_gain(value: object, key: str, source: str) -> np.ndarray:
+    """3 positive numbers or a symmetric positive-definite 3x3 matrix -> 3x3 array."""
+    gain = diagonal_or_matrix(value, key, source)
+    if not np.allclose(gain, gain.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(gain).max()))):
+        raise ConfigError(key, f"must be symmetric, got {gain.tolist()}", source)
+    eigenvalues = np.linalg.eigvalsh(gain)
+    if eigenvalues.min() <= 0.0:
+        raise ConfigError(key, f"must be positive definite, got eigenvalues {eigenvalues.tolist()}", source)
+    return gain
+
+
+def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
+    defaults = DEFAULT_GAINS[controller_type]
+    gains = {}
+    for name, default in defaults.items():
+        value = section.raw(name)
+        gains[name] = default.copy() if value is None else checked_gain(value, section.key(name), section.source)
+    reject_unknown_with_hint(section)
+    return gains
+
+
+def _waypoints(section: Section, vehicle: Vehicle) -> list[Waypoint]:
+    raw = section.raw("waypoints", [])
+    if not isinstance(raw, list):
+        raise section.error("waypoints", f"must be a list, got {type(raw).__name__}")
+    waypoints = []
+    for index, item in enumerate(raw):
+        entry = Section(item, section.key(f"waypoints.{index}"), section.source)
+        position = entry.vector("position", 3)
+        rotation = None
+        if entry.has("attitude_rpy_deg"):
+            rpy = entry.vector("attitude_rpy_deg", 3)
+            if not vehicle.is_tilting and np.any(np.abs(rpy[:2]) > 1e-9):
+                raise entry.error(
+                    "attitude_rpy_deg",
+                    f"roll and pitch must be 0 for the fixed-rotor vehicle '{vehicle.name}' (only yaw can be "
+                    f"commanded), got {rpy.tolist()}",
+                )
+            rotation = rotation_from_euler_zyx(np.deg2rad(rpy))
+        duration = entry.number("duration", strictly_positive=True)
+        hold = entry.number("hold", 0.0, minimum=0.0)
+        reject_unknown_with_hint(entry)
+        waypoints.append(Waypoint(position, rotation, duration, hold))
+    return waypoints
+
+
+def controller_config(scenario: Scenario) -> ControllerConfig:
+    """Validate ``controller`` and ``trajectory`` of ``scenario``; :class:`ConfigError` names file and key."""
+    vehicle = load_vehicle_for(scenario)
+    actuation = scenario.data.get("actuation", "rotors")
+    controller = scenario.section("controller")
+    default_type = "voliro" if vehicle.is_tilting else "geometric"
+    controller_type = controller.string("type", default_type, choices=CONTROLLER_TYPES)
+    if controller_type == "voliro" and not vehicle.is_tilting:
+        raise controller.error("type", f"voliro needs a tilting-rotor vehicle; '{vehicle.name}' has fixed rotors "
+                                       "(use geometric)")
+    if controller_type == "geometric" and vehicle.is_tilting:
+        raise controller.error("type", f"geometric is for fixed-rotor vehicles; '{vehicle.name}' has tilting "
+                                       "rotors (use voliro)")
+    if controller_type == "voliro" and actuation == "wrench":
+        raise controller.error("type", "voliro commands a full 6-D wrench; it needs 'actuation: rotors' "
+                                       "(wrench actuation applies only u_T along -z_b and tau_b)")
+    gains = _gains(controller.section("gains"), controller_type)
+    feedforward = "consistent"
+    secondary = SecondaryObjectiveConfig()
+    if controller_type == "voliro":
+        feedforward = controller.string("angular_feedforward", "consistent", choices=voliro.ANGULAR_FEEDFORWARDS)
+        objective = controller.section("secondary_objective")
+        secondary = SecondaryObjectiveConfig(
+            type=objective.string("type", "none", choices=SECONDARY_TYPES),
+            exponent=objective.integer("exponent", 8, minimum=4),
+            iterations=objective.integer("iterations", 3, minimum=1),
+        )
+        if secondary.exponent % 2:
+            raise objective.error("exponent", f"must be an even integer >= 4, got {secondary.exponent}")
+        reject_unknown_with_hint(objective)
+    reject_unknown_with_hint(controller)
+
+    trajectory = scenario.section("trajectory")
+    waypoints = _waypoints(trajectory, vehicle)
+    goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
+    reject_unknown_with_hint(trajectory)
+    return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source)

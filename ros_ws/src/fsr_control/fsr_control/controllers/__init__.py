@@ -1,0 +1,1 @@
+"""Control laws returning a body wrench: geometric (fixed rotors) and Voliro (tilting rotors)."""

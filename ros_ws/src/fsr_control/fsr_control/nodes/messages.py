@@ -1,0 +1,57 @@
+"""Controller messages <-> numpy (the node and the in-process recorder build them the same way).
+
+* ``reference`` (trajectory_msgs/MultiDOFJointTrajectory, frame ``world_ned``, one joint ``base_link_frd``,
+  one point): ``transforms[0]`` the desired pose (translation world NED [m], rotation ``R_d`` body -> world),
+  ``velocities[0]`` linear velocity world [m/s] and angular velocity ``R_d omega_d`` world [rad/s],
+  ``accelerations[0]`` linear acceleration world [m/s^2] and ``R_d omega_dot_d`` world [rad/s^2].
+* ``goal`` (geometry_msgs/PoseStamped, world NED): position and orientation of the new target.
+* Stamps: the controller's outputs carry the stamp of the ``odom`` they answer (integer ns of sim time).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from geometry_msgs.msg import PoseStamped, Transform, Twist
+from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
+
+from fsr_control.planning.trajectory import Reference
+from fsr_sim.model.so3 import quaternion_from_rotation, rotation_from_quaternion
+from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME, time_from_ns
+
+
+def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTrajectory:
+    """The one-point trajectory message of a :class:`Reference` (see the module docstring)."""
+    msg = MultiDOFJointTrajectory()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = WORLD_FRAME
+    msg.joint_names = [BODY_FRAME]
+    transform = Transform()
+    transform.translation.x, transform.translation.y, transform.translation.z = reference.position.tolist()
+    q = quaternion_from_rotation(reference.rotation).tolist()
+    transform.rotation.x, transform.rotation.y, transform.rotation.z, transform.rotation.w = q
+    velocity = Twist()
+    velocity.linear.x, velocity.linear.y, velocity.linear.z = reference.velocity.tolist()
+    velocity.angular.x, velocity.angular.y, velocity.angular.z = (
+        reference.rotation @ reference.angular_velocity
+    ).tolist()
+    acceleration = Twist()
+    acceleration.linear.x, acceleration.linear.y, acceleration.linear.z = reference.acceleration.tolist()
+    acceleration.angular.x, acceleration.angular.y, acceleration.angular.z = (
+        reference.rotation @ reference.angular_acceleration
+    ).tolist()
+    point = MultiDOFJointTrajectoryPoint(transforms=[transform], velocities=[velocity], accelerations=[acceleration])
+    msg.points = [point]
+    return msg
+
+
+def goal_from_message(msg: PoseStamped) -> tuple[np.ndarray, np.ndarray]:
+    """(position world NED [m], rotation body -> world) of a goal; ValueError for NaN/inf or a zero quaternion."""
+    p, o = msg.pose.position, msg.pose.orientation
+    values = (p.x, p.y, p.z, o.x, o.y, o.z, o.w)
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError("goal holds NaN or inf")
+    if o.x * o.x + o.y * o.y + o.z * o.z + o.w * o.w < 1e-12:
+        raise ValueError("goal orientation is a zero quaternion")
+    return np.array((p.x, p.y, p.z)), rotation_from_quaternion((o.x, o.y, o.z, o.w))

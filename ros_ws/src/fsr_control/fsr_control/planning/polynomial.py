@@ -1,0 +1,86 @@
+"""7th-order (septic) polynomials in normalised time for rest-to-rest motion (SPEC §3.5).
+
+A channel ``x(t)`` over ``t in [t0, t0 + T]`` is written in ``tau = (t - t0) / T``:
+
+    x(tau) = sum_{k=0}^{7} c_k tau^k,      d^n x / dt^n = x^(n)(tau) / T^n.
+
+Rest-to-rest (position, velocity, acceleration and jerk zero at both ends) from ``x0`` to ``xf`` is
+``x = x0 + (xf - x0) s(tau)`` with ``s = 35 tau^4 - 84 tau^5 + 70 tau^6 - 20 tau^7``. A plan that starts
+while moving (a goal received mid-flight) keeps the start's velocity ``v0``, acceleration ``a0`` and
+jerk ``j0``: ``c_0..c_3 = x0, v0 T, a0 T^2 / 2, j0 T^3 / 6`` and ``c_4..c_7`` bring ``x`` to rest at ``xf``.
+After the end the channel holds ``xf`` with every derivative exactly zero.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+DEGREE = 7
+DERIVATIVES = 5  # value, 1st (velocity), 2nd (acceleration), 3rd (jerk), 4th (snap)
+REST_TO_REST = np.array((0.0, 0.0, 0.0, 0.0, 35.0, -84.0, 70.0, -20.0))
+
+# d^n/dtau^n of tau^k is falling(k, n) tau^(k-n): row n holds falling(k, n) for k = 0..7.
+_FALLING = np.array([[float(np.prod(np.arange(k - n + 1, k + 1))) if k >= n else 0.0 for k in range(8)]
+                     for n in range(DERIVATIVES)])
+# End conditions at tau = 1 on c_4..c_7 (value and derivatives 1..3).
+_END_INVERSE = np.linalg.inv(_FALLING[:4, 4:])
+
+
+def _derivative_coefficients(coefficients: np.ndarray, duration: float) -> np.ndarray:
+    """(DERIVATIVES, channels, 8): row n holds the coefficients of ``d^n x / dt^n`` in powers of tau."""
+    out = np.zeros((DERIVATIVES, coefficients.shape[0], DEGREE + 1))
+    for n in range(DERIVATIVES):
+        scaled = coefficients[:, n:] * _FALLING[n, n:] / duration**n
+        out[n, :, : DEGREE + 1 - n] = scaled
+    return out
+
+
+class SepticSegment:
+    """Several channels of one 7th-order segment, evaluated together (one small matrix product).
+
+    start: array-like, shape (c,), the values at ``t0``; goal: shape (c,), the values at rest at the end;
+    start_rates: optional shape (3, c), the start's 1st..3rd time derivatives (default: at rest).
+    """
+
+    def __init__(
+        self,
+        start_time: float,
+        duration: float,
+        start: np.ndarray,
+        goal: np.ndarray,
+        start_rates: np.ndarray | None = None,
+    ) -> None:
+        if not duration > 0.0:
+            raise ValueError(f"segment duration must be > 0 s, got {duration}")
+        start = np.asarray(start, dtype=float)
+        goal = np.asarray(goal, dtype=float)
+        self.start_time = float(start_time)
+        self.duration = float(duration)
+        self.end_time = self.start_time + self.duration
+        self.goal = goal.copy()
+        coefficients = np.zeros((start.size, DEGREE + 1))
+        coefficients[:, 0] = start
+        if start_rates is None:
+            coefficients += np.outer(goal - start, REST_TO_REST)
+        else:
+            rates = np.asarray(start_rates, dtype=float).reshape(3, start.size)
+            for n in range(1, 4):
+                coefficients[:, n] = rates[n - 1] * duration**n / _FALLING[n, n]
+            # Remaining end conditions: x(1) = goal, x'(1) = x''(1) = x'''(1) = 0.
+            residual = -coefficients[:, :4] @ _FALLING[:4, :4].T
+            residual[:, 0] += goal
+            coefficients[:, 4:] = residual @ _END_INVERSE.T
+        self.coefficients = coefficients
+        self._table = _derivative_coefficients(coefficients, self.duration)
+        self._rest = np.zeros((DERIVATIVES, start.size))
+        self._rest[0] = goal
+
+    def evaluate(self, t: float) -> np.ndarray:
+        """Shape (5, c): value and time derivatives 1..4 at ``t`` [s] (clamped to the segment's start)."""
+        tau = (t - self.start_time) / self.duration
+        if tau >= 1.0:
+            return self._rest.copy()
+        if tau < 0.0:
+            tau = 0.0
+        powers = tau ** np.arange(DEGREE + 1)
+        return self._table @ powers

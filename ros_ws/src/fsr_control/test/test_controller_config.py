@@ -1,0 +1,110 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from fsr_control.config import controller_config
+from fsr_sim.config.scenario import load_scenario
+from fsr_sim.config.validation import ConfigError
+
+SCENARIOS = Path(__file__).parent / "scenarios"
+
+
+def scenario_with(tmp_path, base="ex4_wrench.yaml", **changes):
+    data = yaml.safe_load((SCENARIOS / base).read_text())
+    for key, value in changes.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = value
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return load_scenario(path)
+
+
+def test_test_scenarios_are_valid():
+    ex4 = controller_config(load_scenario(SCENARIOS / "ex4_wrench.yaml"))
+    assert ex4.type == "geometric"
+    np.testing.assert_array_equal(ex4.gains["k_p"], np.diag((20.0, 20.0, 100.0)))
+    assert len(ex4.waypoints) == 1 and ex4.waypoints[0].hold == 10.0
+    ex5 = controller_config(load_scenario(SCENARIOS / "ex5_voliro.yaml"))
+    assert ex5.type == "voliro" and ex5.angular_feedforward == "consistent"
+    assert ex5.secondary_objective.type == "none"
+    np.testing.assert_array_equal(ex5.gains["k_w"], np.diag((10.0, 10.0, 50.0)))
+
+
+def test_type_defaults_by_vehicle_and_gains_default_to_the_report(tmp_path):
+    config = controller_config(scenario_with(tmp_path, controller={}))
+    assert config.type == "geometric"
+    np.testing.assert_array_equal(config.gains["k_w"], np.diag((10.0, 10.0, 100.0)))
+    config = controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller=None))
+    assert config.type == "voliro"
+
+
+def test_full_matrix_gain_accepted(tmp_path):
+    gain = [[20, 1, 0], [1, 20, 0], [0, 0, 100]]
+    config = controller_config(scenario_with(tmp_path, controller={"gains": {"k_p": gain}}))
+    np.testing.assert_array_equal(config.gains["k_p"], gain)
+
+
+@pytest.mark.parametrize(
+    ("controller", "key", "reason"),
+    [
+        ({"gains": {"k_p": [20, -1, 100]}}, "controller.gains.k_p", "positive definite"),
+        ({"gains": {"k_p": [20, 100]}}, "controller.gains.k_p", "shape"),
+        ({"gains": {"k_p": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]}}, "controller.gains.k_p", "symmetric"),
+        ({"gains": {"k_P": [1, 1, 1]}}, "controller.gains.k_P", "did you mean 'k_p'"),
+        ({"gains": {"k_d": [1, 1, 1]}}, "controller.gains.k_d", "unknown key"),  # voliro's name
+        ({"type": "voliro"}, "controller.type", "tilting"),
+        ({"type": "pid"}, "controller.type", "must be one of"),
+        ({"angular_feedforward": "report"}, "controller.angular_feedforward", "unknown key"),
+        ({"gain": {}}, "controller.gain", "did you mean 'gains'"),
+    ],
+)
+def test_invalid_controller_sections_are_refused(tmp_path, controller, key, reason):
+    with pytest.raises(ConfigError) as error:
+        controller_config(scenario_with(tmp_path, controller=controller))
+    assert error.value.key == key
+    assert reason in str(error.value)
+    assert "scenario.yaml" in str(error.value)
+
+
+def test_geometric_refused_for_tilting_vehicle_and_voliro_for_wrench_actuation(tmp_path):
+    with pytest.raises(ConfigError, match="tilting"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={"type": "geometric"}))
+    with pytest.raises(ConfigError, match="actuation: rotors"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", actuation="wrench"))
+
+
+@pytest.mark.parametrize(
+    ("waypoint", "key", "reason"),
+    [
+        ({"position": [0, 0, -1], "attitude_rpy_deg": [10, 0, 0], "duration": 5}, "attitude_rpy_deg", "roll and pitch"),
+        ({"position": [0, 0, -1], "duration": 0}, "duration", "> 0"),
+        ({"position": [0, 0, -1], "duration": 5, "hold": -1}, "hold", ">= 0"),
+        ({"position": [0, 0], "duration": 5}, "position", "shape"),
+        ({"position": [0, 0, -1], "duraton": 5}, "duration", "is required"),
+        ({"position": [0, 0, -1], "duration": 5, "hodl": 1}, "hodl", "did you mean 'hold'"),
+    ],
+)
+def test_invalid_waypoints_are_refused(tmp_path, waypoint, key, reason):
+    with pytest.raises(ConfigError) as error:
+        controller_config(scenario_with(tmp_path, trajectory={"waypoints": [waypoint]}))
+    assert error.value.key == f"trajectory.waypoints.0.{key}"
+    assert reason in str(error.value)
+
+
+def test_roll_pitch_waypoints_accepted_for_tilting_vehicle_and_voliro_options(tmp_path):
+    scenario = scenario_with(
+        tmp_path, "ex5_voliro.yaml",
+        controller={"angular_feedforward": "report", "secondary_objective": {"type": "min_peak_speed", "exponent": 6}},
+    )
+    config = controller_config(scenario)
+    assert config.angular_feedforward == "report"
+    assert config.secondary_objective.type == "min_peak_speed" and config.secondary_objective.exponent == 6
+    with pytest.raises(ConfigError, match="even"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml",
+                                        controller={"secondary_objective": {"type": "min_peak_speed", "exponent": 5}}))
+    with pytest.raises(ConfigError, match="must be one of"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={"secondary_objective": {"type": "x"}}))

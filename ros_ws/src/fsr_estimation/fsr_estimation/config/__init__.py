@@ -1,0 +1,1 @@
+"""The estimator section of a scenario."""

@@ -1,0 +1,1 @@
+"""Momentum observer algorithms (numpy/scipy only, no rclpy)."""

@@ -1,0 +1,202 @@
+"""Momentum-based external wrench observer (SPEC §3.8, report exercise 3).
+
+Discrete recursion (all states zero at k = 0), with ``K_1 .. K_r`` from
+:func:`fsr_estimation.core.filter_design.gain_chain` and ``q``, ``b`` from :mod:`fsr_estimation.core.momentum`:
+
+    gamma_1[k+1] = gamma_1[k] + K_1 ((q[k+1] - q[k]) - T_s (w_hat[k] + b_k))
+    gamma_j[k+1] = gamma_j[k] + K_j T_s (gamma_{j-1}[k] - w_hat[k]),   j = 2..r
+    w_hat[k+1]   = gamma_r[k+1]
+
+``w_hat = [f_e; tau_e]``: force [N] in world NED, torque [N m] in Euler-angle (eta) coordinates. In the body
+frame (comparable with ``wrench_truth``): force ``R_b^T f_e``, torque ``Q(eta)^-T tau_e``.
+Mass estimate: ``m_model + f_e,z / g`` (NED: a lighter vehicle than the model needs less thrust, the
+residual force points up, ``f_e,z < 0``, so ``dm < 0``).
+
+Two paths give the same numbers: :class:`MomentumObserver` (sample by sample, for the node) and
+:func:`estimate_log` (a whole log at C speed with ``scipy.signal.sosfilt``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.signal import sosfilt
+
+from fsr_estimation.core.filter_design import cascade_sections, check_filter_parameters, gain_chain
+from fsr_estimation.core.momentum import E3, GRAVITY, observer_input
+from fsr_sim.model.so3 import euler_rate_matrix, euler_rate_matrix_derivative, rotation_from_euler_zyx
+
+
+def checked_model(mass: float, inertia: ArrayLike) -> tuple[float, np.ndarray]:
+    """(mass [kg] > 0, inertia 3x3 [kg m^2] symmetric positive definite); a 3-vector is the diagonal."""
+    if isinstance(mass, bool) or not np.isfinite(mass) or mass <= 0.0:
+        raise ValueError(f"mass: must be a finite number > 0 [kg], got {mass!r}")
+    matrix = np.asarray(inertia, dtype=float)
+    if matrix.shape == (3,):
+        matrix = np.diag(matrix)
+    if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)):
+        raise ValueError(f"inertia: expected 3 finite numbers (diagonal) or a 3x3 matrix, got {inertia!r}")
+    if not np.allclose(matrix, matrix.T, rtol=0.0, atol=1e-12 * max(1.0, np.abs(matrix).max())):
+        raise ValueError(f"inertia: must be symmetric, got {matrix.tolist()}")
+    if np.linalg.eigvalsh(matrix).min() <= 0.0:
+        raise ValueError(f"inertia: must be positive definite, got {matrix.tolist()}")
+    return float(mass), matrix
+
+
+@dataclass(frozen=True)
+class ObserverModel:
+    """The nominal model the observer uses: mass [kg] and body inertia (3, 3) [kg m^2]."""
+
+    mass: float
+    inertia: np.ndarray
+    gravity: float = GRAVITY
+
+    def __post_init__(self) -> None:
+        mass, inertia = checked_model(self.mass, self.inertia)
+        object.__setattr__(self, "mass", mass)
+        object.__setattr__(self, "inertia", inertia)
+
+
+class MomentumObserver:
+    """Sample-by-sample momentum observer; :meth:`update` once per control period.
+
+    mass [kg], inertia (3,) diagonal or (3, 3) [kg m^2], c0 [rad/s] > 0, r >= 1, sample_time [s]
+    (``c0 * sample_time < 2``). All working arrays are allocated here; :meth:`update` reuses them.
+    """
+
+    def __init__(self, mass: float, inertia: ArrayLike, c0: float, r: int, sample_time: float,
+                 gravity: float = GRAVITY) -> None:
+        check_filter_parameters(c0, r, sample_time)
+        self.mass, self.inertia = checked_model(mass, inertia)
+        self.c0 = float(c0)
+        self.r = int(r)
+        self.sample_time = float(sample_time)
+        self.gravity = float(gravity)
+        self.gains = gain_chain(c0, r)
+        self._gravity_force = self.mass * self.gravity * E3
+        self._gamma = np.zeros((self.r, 6))
+        self._estimate = np.zeros(6)
+        self._momentum = np.zeros(6)
+        self._previous_momentum = np.zeros(6)
+        self._previous_rate = np.zeros(6)  # b_{k-1}
+        self._residual = np.zeros(6)
+        self._mass_matrix = np.zeros((3, 3))  # M(eta[k-1])
+        self._rotation = np.eye(3)
+        self._rate_matrix = np.eye(3)
+        self._rate_matrix_dot = np.zeros((3, 3))
+        self._omega = np.zeros(3)
+        self._inertia_omega = np.zeros(3)
+        self._work = np.zeros((3, 3))
+        self.samples = 0
+
+    def reset(self) -> None:
+        """Forget all history: the next :meth:`update` is sample k = 0 again (estimate zero)."""
+        self._gamma.fill(0.0)
+        self._estimate.fill(0.0)
+        self.samples = 0
+
+    def update(self, velocity_world: ArrayLike, euler_zyx: ArrayLike, euler_rates: ArrayLike,
+               force_body: ArrayLike, torque_body: ArrayLike) -> np.ndarray:
+        """Take sample k and return ``w_hat[k] = [f_e (world NED) [N]; tau_e (eta coords) [N m]]``, shape (6,).
+
+        velocity_world (3,) [m/s] NED; euler_zyx (3,) [rad]; euler_rates (3,) [rad/s]; force_body,
+        torque_body (3,) [N, N m] body FRD: the actuator wrench at sample k (used from the next sample on).
+        The returned array is the observer's own buffer: copy it to keep it past the next update.
+        """
+        eta = np.asarray(euler_zyx, dtype=float)
+        eta_dot = np.asarray(euler_rates, dtype=float)
+        q = self._momentum
+        np.multiply(self.mass, velocity_world, out=q[:3])
+        if self.samples == 0:
+            self._store_sample_terms(eta, eta_dot, force_body, torque_body)  # q[0] uses M(eta[0])
+            np.matmul(self._mass_matrix, eta_dot, out=q[3:])
+        else:
+            np.matmul(self._mass_matrix, eta_dot, out=q[3:])  # M(eta[k-1]) eta_dot[k]
+            self._step()
+            self._store_sample_terms(eta, eta_dot, force_body, torque_body)
+        self._previous_momentum[:] = q
+        self.samples += 1
+        return self._estimate
+
+    def _step(self) -> None:
+        """One step of the gamma chain from w_hat[k-1] to w_hat[k] (states updated last to first so
+        that each uses its predecessor's previous value)."""
+        ts, gains, gamma, previous = self.sample_time, self.gains, self._gamma, self._estimate
+        u = self._residual
+        np.subtract(self._momentum, self._previous_momentum, out=u)
+        u -= ts * (previous + self._previous_rate)
+        for j in range(self.r - 1, 0, -1):
+            gamma[j] += gains[j] * ts * (gamma[j - 1] - previous)
+        gamma[0] += gains[0] * u
+        previous[:] = gamma[self.r - 1]
+
+    def _store_sample_terms(self, eta: np.ndarray, eta_dot: np.ndarray, force_body: ArrayLike,
+                            torque_body: ArrayLike) -> None:
+        """b_k, M(eta[k]), R_b,k and Q_k for the next step and for :meth:`wrench_body`.
+
+        Lean form of the same quantities as :mod:`fsr_estimation.core.momentum` (one call each to the
+        :mod:`fsr_sim.model.so3` matrices, the rest in preallocated buffers): ``M = Q^T I_b Q`` and
+        ``C^T eta_dot = Q_dot^T I_b omega``, because the other term of ``C^T eta_dot``,
+        ``(Q^T S(omega) I_b Q)^T eta_dot = -Q^T I_b (omega x omega)``, is zero.
+        """
+        rotation, rate, rate_dot = self._rotation, self._rate_matrix, self._rate_matrix_dot
+        rotation[:] = rotation_from_euler_zyx(eta)
+        rate[:] = euler_rate_matrix(eta)
+        rate_dot[:] = euler_rate_matrix_derivative(eta, eta_dot)
+        omega, inertia_omega, b = self._omega, self._inertia_omega, self._previous_rate
+        np.matmul(rate, eta_dot, out=omega)
+        np.matmul(self.inertia, omega, out=inertia_omega)
+        np.matmul(rotation, force_body, out=b[:3])
+        b[:3] += self._gravity_force
+        np.matmul(rate_dot.T, inertia_omega, out=b[3:])
+        np.matmul(rate.T, torque_body, out=omega)  # omega is free again: reuse it for Q^T tau_b
+        b[3:] += omega
+        np.matmul(self.inertia, rate, out=self._work)
+        np.matmul(rate.T, self._work, out=self._mass_matrix)
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """The latest ``w_hat`` (copy), shape (6,)."""
+        return self._estimate.copy()
+
+    def wrench_body(self) -> tuple[np.ndarray, np.ndarray]:
+        """Latest estimate in body FRD: (force ``R_b^T f_e`` [N], torque ``Q^-T tau_e`` [N m]), as ``wrench_truth``."""
+        force = self._rotation.T @ self._estimate[:3]
+        torque = np.linalg.solve(self._rate_matrix.T, self._estimate[3:])
+        return force, torque
+
+    @property
+    def mass_estimate(self) -> float:
+        """``m_model + f_e,z / g`` [kg]."""
+        return self.mass + float(self._estimate[2]) / self.gravity
+
+
+def filter_observer_input(u: ArrayLike, c0: float, r: int, sample_time: float) -> np.ndarray:
+    """Whole-log observer output from ``u[k] = (q[k+1] - q[k]) - T_s b_k`` (N, 6): ``w_hat`` (N, 6).
+
+    ``w_hat[0] = 0``; equal to the recursion of :class:`MomentumObserver` up to rounding.
+    """
+    return sosfilt(cascade_sections(c0, r, sample_time), np.asarray(u, dtype=float), axis=0)
+
+
+def estimate_log(velocity_world: ArrayLike, eta: ArrayLike, eta_dot: ArrayLike, force_body: ArrayLike,
+                 torque_body: ArrayLike, *, model: ObserverModel, c0: float, r: int,
+                 sample_time: float) -> np.ndarray:
+    """Observer estimate ``w_hat`` (N, 6) over a whole log (arrays (N, 3) as in :meth:`MomentumObserver.update`)."""
+    check_filter_parameters(c0, r, sample_time)
+    u = observer_input(model.mass, model.inertia, velocity_world, eta, eta_dot, force_body, torque_body,
+                       sample_time, model.gravity)
+    return filter_observer_input(u, c0, r, sample_time)
+
+
+def body_frame_wrench(estimate: ArrayLike, eta: ArrayLike) -> np.ndarray:
+    """Whole-log ``w_hat`` (N, 6) in body FRD: ``[R_b^T f_e ; Q^-T tau_e]`` (N, 6), as ``wrench_truth``."""
+    w = np.asarray(estimate, dtype=float)
+    eta = np.asarray(eta, dtype=float)
+    out = np.empty_like(w)
+    out[:, :3] = np.einsum("kji,kj->ki", rotation_from_euler_zyx(eta), w[:, :3])
+    rate_t = np.swapaxes(euler_rate_matrix(eta), -1, -2)
+    out[:, 3:] = np.linalg.solve(rate_t, w[:, 3:, None])[..., 0]
+    return out

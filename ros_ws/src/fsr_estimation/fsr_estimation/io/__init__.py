@@ -1,0 +1,1 @@
+"""Flight logs: loading (.mat, MCAP, CSV), validation and writing as MCAP."""

@@ -1,0 +1,75 @@
+"""The estimator node's parameters: typed checks and how they override the scenario (no rclpy here).
+
+ROS parameters (``--ros-args -p name:=value``):
+
+* ``scenario`` (string): a built-in scenario name or a scenario YAML file; its ``estimator`` section
+  (:mod:`fsr_estimation.config.estimator_config`) gives c0, r, mass and inertia, and its physics step x
+  substeps the expected control period.
+* Overrides: ``c0`` (rad/s > 0), ``r`` (integer >= 1), ``mass`` (kg > 0), ``inertia`` (3 numbers, the
+  diagonal, or 9, row-major; symmetric positive definite) and ``control_period`` (s > 0; without it and
+  without a scenario the period is taken from the first two samples).
+
+Without a scenario, ``mass`` and ``inertia`` are required. A refused value raises :class:`ConfigError`
+reading ``ROS parameter: <name>: <reason>``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fsr_estimation.config.estimator_config import DEFAULT_C0, DEFAULT_R, EstimatorConfig, estimator_config
+from fsr_estimation.core.filter_design import check_filter_parameters
+from fsr_sim.config.scenario import load_scenario, simulation_config
+from fsr_sim.config.validation import ConfigError, Section
+from fsr_sim.model.vehicle import checked_inertia
+
+PARAMETER_SOURCE = "ROS parameter"
+PARAMETER_NAMES = ("scenario", "c0", "r", "mass", "inertia", "control_period")
+
+
+@dataclass(frozen=True)
+class EstimatorNodeSettings:
+    config: EstimatorConfig
+    control_period: float | None  # s; None: measured from the first two samples
+
+
+def node_settings(values: dict[str, Any]) -> EstimatorNodeSettings:
+    """Check raw parameter values (``None`` = not given), merge them over the scenario's estimator section."""
+    given = {name: value for name, value in values.items() if value is not None}
+    section = Section(given, "", PARAMETER_SOURCE)
+    scenario = section.string("scenario", "").strip()
+    c0 = section.number("c0", strictly_positive=True) if section.has("c0") else None
+    r = section.integer("r", minimum=1) if section.has("r") else None
+    mass = section.number("mass", strictly_positive=True) if section.has("mass") else None
+    inertia = None
+    if section.has("inertia"):
+        raw = np.asarray(list(section.raw("inertia")), dtype=float)
+        inertia = checked_inertia(raw.reshape(3, 3) if raw.size == 9 else raw, "inertia", PARAMETER_SOURCE)
+    period = section.number("control_period", strictly_positive=True) if section.has("control_period") else None
+    section.reject_unknown()
+    if scenario:
+        loaded = load_scenario(scenario)
+        base = estimator_config(loaded)
+        if period is None:
+            period = simulation_config(loaded).control_period
+    else:
+        for name, value in (("mass", mass), ("inertia", inertia)):
+            if value is None:
+                raise ConfigError(name, "is required when no scenario is given", PARAMETER_SOURCE)
+        base = EstimatorConfig(enabled=True, mass=mass, inertia=inertia, c0=DEFAULT_C0, r=DEFAULT_R)
+    config = EstimatorConfig(
+        enabled=base.enabled,
+        mass=base.mass if mass is None else mass,
+        inertia=base.inertia if inertia is None else inertia,
+        c0=base.c0 if c0 is None else c0,
+        r=base.r if r is None else r,
+    )
+    if period is not None:
+        try:
+            check_filter_parameters(config.c0, config.r, period)
+        except ValueError as error:
+            raise ConfigError("", str(error), PARAMETER_SOURCE) from None
+    return EstimatorNodeSettings(config=config, control_period=period)
