@@ -121,7 +121,7 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
     from rclpy.qos import QoSProfile
 
     from fsr_sim.ros.message_schema import message_class
-    from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
+    from fsr_sim.ros.qos import CLOCK_QOS, GOAL_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
 
     # The recorder needs every sample, so its reader queues are deep whatever the publisher's depth;
     # reliability and durability stay those of fsr_sim.ros.qos so that the QoS matches.
@@ -149,6 +149,8 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
             for name, type_name in topics:
                 cls = message_class(type_name)
                 qos = clock_qos if name == CLOCK_TOPIC[0] else STREAM_QOS
+                if name.rsplit("/", 1)[-1] == "goal":
+                    qos = GOAL_QOS
                 if type_name == STATUS_TYPE and name.rsplit("/", 1)[-1] == "sim_status":
                     qos = status_qos
                 sub = self.create_subscription(cls, name, lambda *_: None, qos, raw=True)

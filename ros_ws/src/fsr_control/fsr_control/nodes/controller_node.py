@@ -4,7 +4,7 @@ Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``t
 ``controller_type`` (``geometric`` | ``voliro``, overrides the scenario), gain overrides ``k_p``, ``k_v``,
 ``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal). An invalid value exits with code 2 and names it.
 
-Subscribes ``odom`` and ``goal`` (STREAM_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
+Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd`` and ``reference``, all stamped ``t_k`` (lockstep contract).
 NaN/inf odom or goals are dropped with a rate-limited warning. At exit it logs the saturation summary and
 the callback's cost.
@@ -35,7 +35,7 @@ from fsr_sim.ros.conversions import (
     state_from_odometry,
     wrench_stamped,
 )
-from fsr_sim.ros.qos import STREAM_QOS
+from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, run_node
 
 GAIN_PARAMETERS = ("k_p", "k_v", "k_d", "k_r", "k_w")
@@ -86,7 +86,7 @@ class ControllerNode(Node):
         self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS)
         self.reference_pub = self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
-        self.create_subscription(PoseStamped, "goal", self.on_goal, STREAM_QOS)
+        self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
         self.warn = RateLimitedWarning(self.get_logger())
         self.callback_seconds = 0.0
         self.callbacks = 0

@@ -1,8 +1,12 @@
 """QoS profiles shared by every node and the recorder.
 
 The lockstep topics are reliable with a deep queue so that a slower listener (estimator, recorder) gets
-every step instead of dropping samples; ``/clock`` is reliable (rclpy's best-effort clock subscription
-matches it).
+every step instead of dropping samples, and transient-local so that a listener matched a little late (DDS
+discovery is asynchronous: the estimator may see the controller's ``wrench_cmd`` some milliseconds after
+the first commands went out) still receives the history it missed. A volatile subscriber (e.g. a user's
+tool) matches these publishers; a volatile *publisher* does not match our subscribers, so external
+inputs that users publish by hand (``goal``) use ``GOAL_QOS``. ``/clock`` is reliable (rclpy's
+best-effort clock subscription matches it).
 """
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -11,9 +15,17 @@ STREAM_DEPTH = 5000  # messages: about 5 s of a 1 kHz stream
 
 STREAM_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.VOLATILE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
     history=HistoryPolicy.KEEP_LAST,
     depth=STREAM_DEPTH,
+)
+
+# Inputs published by users (any durability matches a volatile subscriber).
+GOAL_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=10,
 )
 
 CLOCK_QOS = QoSProfile(

@@ -1,0 +1,50 @@
+"""Decoding and checking the commands the simulator receives (per step, so kept lean).
+
+* ``rotor_cmd`` (sensor_msgs/JointState): ``rotor_i`` velocity [rad/s], ``tilt_i`` position [rad].
+* ``wrench_cmd`` (geometry_msgs/WrenchStamped, body FRD): the plant takes ``u_T = -force.z`` [N] along
+  ``-z_b`` and ``torque`` [N m]; ``force.x``/``force.y`` cannot be produced by the wrench-actuated
+  plant (SPEC §3.1) and are ignored.
+
+A command holding NaN/inf (or missing a rotor) raises ``ValueError``; the node drops it with a warning so
+it never reaches the plant.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fsr_sim.ros.conversions import rotor_command_arrays
+
+
+class RotorCommandReader:
+    """``JointState`` -> (speeds [rad/s], tilts [rad] or None); fast when the names are in the usual order."""
+
+    def __init__(self, rotor_count: int, tilting: bool) -> None:
+        self.rotor_count = rotor_count
+        names = [f"rotor_{i + 1}" for i in range(rotor_count)]
+        self._plain_names = names
+        self._tilt_names = names + [f"tilt_{i + 1}" for i in range(rotor_count)] if tilting else None
+
+    def read(self, msg: object) -> tuple[np.ndarray, np.ndarray | None]:
+        n = self.rotor_count
+        names = msg.name
+        if names == self._plain_names and len(msg.velocity) >= n:
+            speeds, tilts = np.array(msg.velocity[:n], dtype=float), None
+        elif names == self._tilt_names and len(msg.velocity) >= n and len(msg.position) >= 2 * n:
+            speeds = np.array(msg.velocity[:n], dtype=float)
+            tilts = np.array(msg.position[n : 2 * n], dtype=float)
+        else:
+            return rotor_command_arrays(msg, n)  # any order; raises ValueError naming what is missing
+        if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
+            raise ValueError("rotor_cmd holds NaN or inf")
+        return speeds, tilts
+
+
+def wrench_command(msg: object) -> tuple[float, np.ndarray]:
+    """``WrenchStamped`` (body FRD) -> (thrust ``u_T = -f_z`` [N], torque body [N m]); ValueError if not finite."""
+    f, t = msg.wrench.force, msg.wrench.torque
+    if not all(math.isfinite(v) for v in (f.x, f.y, f.z, t.x, t.y, t.z)):
+        raise ValueError("wrench_cmd holds NaN or inf")
+    return -f.z, np.array((t.x, t.y, t.z))

@@ -1,0 +1,393 @@
+"""Simulator node: steps the plant in lockstep with the controller and publishes the state (SPEC §4).
+
+Publishes ``/clock`` (if ``publish_clock``), ``odom`` and ``wrench_truth`` (STREAM_QOS) and ``sim_status``
+(std_msgs/String JSON ``{"state": "running"|"finished"|"diverged"|"stopped", "reason", "sim_time",
+"steps"}``, LATCHED_QOS); subscribes ``rotor_cmd`` (sensor_msgs/JointState) or, with ``actuation:
+wrench``, ``wrench_cmd`` (geometry_msgs/WrenchStamped). Parameters: :mod:`fsr_sim.nodes.simulator_params`.
+
+Lockstep (default):
+
+1. Handshake (both modes): wait until ``odom`` has ``wait_for_subscribers`` subscribers and the command topic has a
+   publisher, then publish the state ``t_0`` and repeat it every 50 ms until the command stamped ``t_0``
+   arrives (the first message can be lost while discovery completes). Subscribers may therefore see
+   ``t_0`` more than once.
+2. Step k: wait for the command stamped ``t_k`` (stale stamps ignored, NaN/inf dropped with a warning),
+   apply it, run ``physics_substeps`` RK4 steps, publish the state ``t_{k+1}``. A missing command ->
+   failsafe (``hold`` the last command or ``cut`` thrust); see :mod:`fsr_sim.nodes.lockstep`.
+3. After ``duration``: publish the final state, ``sim_status`` finished, exit 0. Divergence (NaN state,
+   speed/spin bounds, crash) -> ``sim_status`` diverged with the reason, exit 3. SIGINT/SIGTERM ->
+   ``sim_status`` stopped, exit 0. A start-up handshake that does not complete -> exit 1.
+
+Free-running (``lockstep.enabled: false``): after the same handshake, steps are paced to
+``real_time_factor`` x wall time and the latest valid command (any stamp) is applied; the failsafe applies
+after ``timeout`` s without one.
+
+Waiting uses a raw rcl wait set on the command subscription (the fastest measured style; the executor
+given by ``run_node`` is never spun, so the subscription's callback never runs).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.duration import Duration
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
+
+from fsr_sim.model.plant import Plant
+from fsr_sim.nodes.commands import RotorCommandReader, wrench_command
+from fsr_sim.nodes.lockstep import (
+    AHEAD,
+    CURRENT,
+    CommandWait,
+    CommandWatchdog,
+    FreeRunPacer,
+    classify_stamp,
+)
+from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
+from fsr_sim.nodes.state_messages import StateMessages
+from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_QOS
+from fsr_sim.ros.runtime import EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node
+
+EXIT_DIVERGED = 3
+HANDSHAKE_RESEND = 0.05  # s between repeats of the t_0 state during the handshake
+WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
+BATCH_WALL = 0.05  # s of stepping per spin_once call
+ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last messages
+
+HANDSHAKE, FIRST_COMMAND, RUNNING, DONE = "handshake", "first_command", "running", "done"
+
+
+class SimulatorNode(Node):
+    """The plant as a ROS node; ``run_node`` drives it through :meth:`spin_once`."""
+
+    def __init__(self, _args: list[str]) -> None:
+        super().__init__("simulator", start_parameter_services=False)
+        dynamic = ParameterDescriptor(dynamic_typing=True)
+        values = {name: self.declare_parameter(name, None, dynamic).value for name in PARAMETER_NAMES}
+        self.params = parse_parameters(values)
+        self.scenario, self.config = load_simulation(self.params)
+        self.plant = Plant(self.config)
+        self.messages = StateMessages(self.plant)
+        vehicle = self.config.plant_vehicle
+        self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.is_tilting)
+
+        self.command_topic = "wrench_cmd" if self.config.actuation == "wrench" else "rotor_cmd"
+        command_type = self._command_type()
+        self.odom_pub = self.create_publisher(type(self.messages.odom), "odom", STREAM_QOS)
+        self.wrench_pub = self.create_publisher(type(self.messages.wrench), "wrench_truth", STREAM_QOS)
+        self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS) if self.params.publish_clock else None
+        self.status_pub = self.create_publisher(String, "sim_status", LATCHED_QOS)
+        self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS)
+        self.wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, self.context.handle)
+
+        self.phase = HANDSHAKE
+        self.exit_code = EXIT_OK
+        self.final_state: str | None = None
+        self.command_wait = CommandWait(self.config.lockstep_timeout)
+        self.pacer: FreeRunPacer | None = None
+        self.watchdog: CommandWatchdog | None = None
+        self.have_command = False  # the command for the current state was applied
+        self.controller_name = "(name not discovered)"
+        self.stop_flag: object = None  # run_node's StopFlag (its signal_name says why we stop)
+        self.warn_bad = RateLimitedWarning(self.get_logger())
+        self.warn_saturation = RateLimitedWarning(self.get_logger(), period=2.0)
+        self.startup_deadline = time.monotonic() + self.params.startup_timeout
+        self.last_resend = 0.0
+        self.wall_start = 0.0
+        self.stale_commands = 0
+        mode = "lockstep" if self.config.lockstep else f"free-running at {self.config.real_time_factor}x real time"
+        self.get_logger().info(
+            f"scenario '{self.config.name}' ({self.scenario.source}): {self.config.plant_vehicle.name}, "
+            f"{self.config.step_count} steps of {self.config.control_period * 1e3:g} ms, {mode}, "
+            f"failsafe {self.config.failsafe} after {self.config.lockstep_timeout:g} s; waiting for "
+            f"{self.params.wait_for_subscribers} odom subscriber(s) and a {self.command_topic} publisher"
+        )
+
+    def _command_type(self) -> type:
+        if self.config.actuation == "wrench":
+            from geometry_msgs.msg import WrenchStamped
+
+            return WrenchStamped
+        from sensor_msgs.msg import JointState
+
+        return JointState
+
+    # ----- run_node hooks ---------------------------------------------------------------------------
+    def done(self) -> bool:
+        return self.phase == DONE
+
+    def spin_once(self, _executor: object, stop: object) -> None:
+        """One slice of work: a handshake poll, or up to ``BATCH_WALL`` s of steps."""
+        self.stop_flag = stop
+        if self.phase == HANDSHAKE:
+            self._handshake()
+        elif self.phase == FIRST_COMMAND:
+            self._first_command(stop)
+        elif self.phase == RUNNING:
+            step = self._lockstep_step if self.config.lockstep else self._free_step
+            batch_end = time.monotonic() + BATCH_WALL
+            while self.phase == RUNNING and not stop and time.monotonic() < batch_end:
+                step(stop)
+
+    def close(self) -> None:
+        """Report how the run ended (``stopped`` if nothing else did) and let the last messages arrive."""
+        if self.final_state is None:
+            signal_name = getattr(self.stop_flag, "signal_name", None)
+            reason = f"received {signal_name}" if signal_name else "stopped before the end of the flight"
+            self._finish("stopped", reason, self.exit_code)
+        deadline = time.monotonic() + ACK_TIMEOUT
+        for pub in (self.odom_pub, self.wrench_pub, self.status_pub):
+            remaining = deadline - time.monotonic()
+            if remaining <= 0.0 or not pub.wait_for_all_acked(Duration(nanoseconds=int(remaining * 1e9))):
+                self.get_logger().warning(f"'{pub.topic_name}': not every subscriber acknowledged the last messages")
+                break
+
+    # ----- start-up ---------------------------------------------------------------------------------
+    def _handshake(self) -> None:
+        subscribers = self.odom_pub.get_subscription_count()
+        publishers = self.command_sub.get_publisher_count()
+        if subscribers >= self.params.wait_for_subscribers and publishers >= 1:
+            self.get_logger().info(
+                f"graph ready: {subscribers} odom subscriber(s) and {publishers} {self.command_topic} publisher(s);"
+                " sending the initial state"
+            )
+            self._publish_status("running", "")
+            self._publish_state()
+            self.last_resend = time.monotonic()
+            self.phase = FIRST_COMMAND
+            return
+        if time.monotonic() > self.startup_deadline:
+            self._fail_startup(
+                f"only {subscribers} of {self.params.wait_for_subscribers} odom subscriber(s) and "
+                f"{publishers} {self.command_topic} publisher(s) after {self.params.startup_timeout:g} s"
+            )
+            return
+        time.sleep(0.01)  # polling the graph (discovery is asynchronous), not waiting blindly
+
+    def _first_command(self, stop: object) -> None:
+        """Repeat the t_0 state until its command arrives (the first message may be lost)."""
+        expected = self.messages.stamp_ns
+        if self._take_commands(expected, HANDSHAKE_RESEND):
+            self.have_command = True
+            self.phase = RUNNING
+            self.wall_start = time.monotonic()
+            self._refresh_controller_name()
+            self.get_logger().info(f"controller {self.controller_name} answered the initial state: stepping")
+            if not self.config.lockstep:
+                self.pacer = FreeRunPacer(self.config.control_period, self.config.real_time_factor, self.wall_start)
+                self.watchdog = CommandWatchdog(self.config.lockstep_timeout, self.wall_start)
+            return
+        if stop:
+            return
+        now = time.monotonic()
+        if now > self.startup_deadline:
+            timeout = self.params.startup_timeout
+            self._fail_startup(f"no {self.command_topic} answered the first state within {timeout:g} s")
+            return
+        if now - self.last_resend >= HANDSHAKE_RESEND:
+            self.odom_pub.publish(self.messages.odom)
+            if self.clock_pub is not None:
+                self.clock_pub.publish(self.messages.clock)
+            self.last_resend = now
+
+    def _refresh_controller_name(self) -> None:
+        """Name the command publisher(s) for messages (node names may be discovered after the endpoint)."""
+        infos = self.get_publishers_info_by_topic(self.command_sub.topic_name)
+        names = sorted(
+            {_node_path(i.node_namespace, i.node_name) for i in infos if "_UNKNOWN_" not in i.node_name}
+        )
+        if names:
+            self.controller_name = ", ".join(names)
+
+    def _fail_startup(self, reason: str) -> None:
+        self.get_logger().error(f"start-up failed: {reason}")
+        self._finish("stopped", f"start-up failed: {reason}", EXIT_FAILURE)
+
+    # ----- stepping ---------------------------------------------------------------------------------
+    def _lockstep_step(self, stop: object) -> None:
+        if not self.have_command:
+            answered = self._await_command(self.messages.stamp_ns, stop)
+            if answered is None:
+                return  # stop requested while waiting
+            if answered:
+                if self.command_wait.answered() == "recovered":
+                    self.get_logger().info(f"{self.command_topic}: the controller answers again at {self._where()}")
+            else:
+                self._on_missed(self.command_sub.get_publisher_count())
+        self._advance()
+
+    def _await_command(self, expected_ns: int, stop: object) -> bool | None:
+        """Wait (in slices) for the command stamped ``expected_ns``; None if a stop was requested."""
+        deadline = time.monotonic() + self.command_wait.budget()
+        while True:
+            remaining = deadline - time.monotonic()
+            if self._take_commands(expected_ns, max(0.0, min(remaining, WAIT_SLICE))):
+                return True
+            if time.monotonic() >= deadline:
+                return False
+            if stop:
+                return None
+            if self.command_sub.get_publisher_count() == 0:
+                return False
+
+    def _on_missed(self, publishers: int) -> None:
+        event = self.command_wait.missed(publishers)
+        failsafe = self.config.failsafe
+        if event == "timeout":
+            self._refresh_controller_name()
+            self.get_logger().warning(
+                f"controller {self.controller_name} did not answer {self._where()} within "
+                f"{self.config.lockstep_timeout:g} s on {self.command_topic}: applying failsafe '{failsafe}' and "
+                "going on (waiting only briefly for it from now on)"
+            )
+        elif event == "gone":
+            self.get_logger().warning(
+                f"{self.command_topic} has no publisher any more (controller {self.controller_name} gone) at "
+                f"{self._where()}: applying failsafe '{failsafe}' and finishing the flight without waiting"
+            )
+        elif event == "publisher_back":
+            self.get_logger().info(f"{self.command_topic} has a publisher again at {self._where()}")
+        if failsafe == "cut":
+            self.plant.cut_thrust()
+
+    def _free_step(self, stop: object) -> None:
+        now = time.monotonic()
+        deadline = self.pacer.deadline(self.plant.step_index, now)
+        while now < deadline:
+            self._take_commands(None, min(deadline - now, WAIT_SLICE))
+            if stop:
+                return
+            now = time.monotonic()
+        if self.watchdog.expired(now):
+            publishers = self.command_sub.get_publisher_count()
+            why = "no publisher" if publishers == 0 else f"no valid command for {self.config.lockstep_timeout:g} s"
+            self.get_logger().warning(
+                f"{self.command_topic}: {why} (controller {self.controller_name}) at {self._where()}: "
+                f"applying failsafe '{self.config.failsafe}'"
+            )
+            if self.config.failsafe == "cut":
+                self.plant.cut_thrust()
+        self._advance()
+
+    def _advance(self) -> None:
+        """Step the plant one control period, then publish the new state or end the run."""
+        self.have_command = False
+        self.plant.step()
+        reason = self.plant.divergence()
+        if reason is not None:
+            if self.messages.is_finite():
+                self._publish_state()
+            self.get_logger().error(f"simulation diverged at t = {self.plant.time:.4f} s: {reason}")
+            self._finish("diverged", reason, EXIT_DIVERGED)
+            return
+        self._publish_state()
+        if self.plant.step_index >= self.config.step_count:
+            self._finish("finished", f"reached the scenario duration {self.config.duration:g} s", EXIT_OK)
+
+    # ----- commands ---------------------------------------------------------------------------------
+    def _take_commands(self, expected_ns: int | None, wait: float) -> bool:
+        """Wait up to ``wait`` s, take every queued command, apply the valid one answering ``expected_ns``
+        (lockstep) or every valid one (free-running, ``expected_ns`` None); True if one was applied."""
+        sub = self.command_sub
+        applied = False
+        with sub.handle:
+            self.wait_set.clear_entities()
+            self.wait_set.add_subscription(sub.handle)
+            self.wait_set.wait(int(wait * 1e9))
+            if not self.wait_set.get_ready_entities("subscription"):
+                return False
+            while True:
+                taken = sub.handle.take_message(sub.msg_type, False)
+                if taken is None:
+                    break
+                msg = taken[0]
+                if expected_ns is not None:
+                    stamp = msg.header.stamp
+                    verdict = classify_stamp(stamp.sec * 1_000_000_000 + stamp.nanosec, expected_ns)
+                    if verdict != CURRENT:
+                        self._on_off_stamp(verdict, stamp, expected_ns)
+                        continue
+                if self._apply(msg):
+                    applied = True
+        if applied and self.watchdog is not None and self.watchdog.feed(time.monotonic()):
+            self.get_logger().info(f"{self.command_topic}: commands arrive again at {self._where()}")
+        return applied
+
+    def _on_off_stamp(self, verdict: str, stamp: object, expected_ns: int) -> None:
+        if verdict == AHEAD:
+            self.warn_bad(
+                f"{self.command_topic} stamped {stamp.sec}.{stamp.nanosec:09d} is ahead of the state "
+                f"{expected_ns * 1e-9:.6f} s: ignored"
+            )
+        else:
+            self.stale_commands += 1
+
+    def _apply(self, msg: object) -> bool:
+        """Apply one command to the plant; NaN/inf or malformed -> dropped with a warning, False."""
+        try:
+            if self.config.actuation == "wrench":
+                thrust, torque = wrench_command(msg)
+                self.plant.set_wrench_command(thrust, torque)
+                return True
+            speeds, tilts = self.rotor_reader.read(msg)
+        except ValueError as error:
+            self.warn_bad(f"dropped a command at {self._where()}: {error}")
+            return False
+        if self.plant.set_rotor_command(speeds, tilts):
+            self.warn_saturation(f"rotor command saturated at {self._where()} (clamped to the speed limits)")
+        return True
+
+    # ----- output -----------------------------------------------------------------------------------
+    def _publish_state(self) -> None:
+        messages = self.messages
+        messages.fill()
+        self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
+        self.wrench_pub.publish(messages.wrench)
+        if self.clock_pub is not None:
+            self.clock_pub.publish(messages.clock)
+
+    def _publish_status(self, state: str, reason: str) -> None:
+        status = {"state": state, "reason": reason, "sim_time": self.plant.time, "steps": self.plant.step_index}
+        self.status_pub.publish(String(data=json.dumps(status)))
+
+    def _finish(self, state: str, reason: str, exit_code: int) -> None:
+        self.final_state = state
+        self.exit_code = exit_code
+        self.phase = DONE
+        self._publish_status(state, reason)
+        wall = time.monotonic() - self.wall_start if self.wall_start else 0.0
+        speed = f", {self.plant.time / wall:.2f}x real time" if wall > 0 and self.plant.time > 0 else ""
+        missed = self.command_wait.missed_steps
+        summary = f"; {missed} step(s) ran on the failsafe" if missed else ""
+        summary += f"; {self.stale_commands} late command(s) ignored" if self.stale_commands else ""
+        saturation = self.plant.saturation.count
+        summary += f"; {saturation} saturated rotor command(s)" if saturation else ""
+        self.get_logger().info(
+            f"{state}: {reason} ({self.plant.step_index} steps, t = {self.plant.time:.4f} s in {wall:.2f} s wall"
+            f"{speed}{summary})"
+        )
+
+    def _where(self) -> str:
+        return f"step {self.plant.step_index} (t = {self.plant.time:.4f} s)"
+
+
+def _unused(_msg: object) -> None:
+    """Subscription callback that never runs: commands are taken from the wait set."""
+
+
+def _node_path(namespace: str, name: str) -> str:
+    return f"{namespace.rstrip('/')}/{name}"
+
+
+def main(argv: list[str] | None = None) -> None:
+    sys.exit(run_node(SimulatorNode, argv))
+
+
+if __name__ == "__main__":
+    main()

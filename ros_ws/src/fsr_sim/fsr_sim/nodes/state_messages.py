@@ -1,0 +1,82 @@
+"""The simulator's outgoing messages, allocated once and refilled from the plant at every step.
+
+* ``odom`` (nav_msgs/Odometry): pose in ``world_ned``, twist in ``base_link_frd`` (linear ``R^T v_world``
+  [m/s], angular ``omega_b`` [rad/s]); orientation is the plant's unit quaternion ``[x, y, z, w]`` with
+  ``w >= 0`` (the same rotation as ``-q``; the sign is fixed so consecutive messages are comparable).
+* ``wrench_truth`` (geometry_msgs/WrenchStamped): the true external wrench in ``base_link_frd``,
+  force ``R^T f_ext,world`` [N] and torque ``tau_ext,body`` [N m].
+* ``/clock`` (rosgraph_msgs/Clock): the simulated time of the state.
+
+Every stamp is the physics time ``t_k`` of the state, in exact integer nanoseconds (``Plant.stamp_ns``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from geometry_msgs.msg import WrenchStamped
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+
+from fsr_sim.model.plant import Plant
+from fsr_sim.model.so3 import rotation_from_quaternion
+from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME
+
+NS_PER_S = 1_000_000_000
+
+
+class StateMessages:
+    """Preallocated ``Odometry``, ``WrenchStamped`` and ``Clock`` filled by :meth:`fill`."""
+
+    def __init__(self, plant: Plant) -> None:
+        self.plant = plant
+        self.odom = Odometry()
+        self.odom.header.frame_id = WORLD_FRAME
+        self.odom.child_frame_id = BODY_FRAME
+        self.wrench = WrenchStamped()
+        self.wrench.header.frame_id = BODY_FRAME
+        self.clock = Clock()
+        self.has_disturbances = bool(plant.config.disturbances)
+        self.stamp_ns = -1
+
+    def fill(self) -> None:
+        """Refill all three messages with the plant's current state and time."""
+        plant = self.plant
+        stamp_ns = plant.stamp_ns
+        sec, nanosec = divmod(stamp_ns, NS_PER_S)
+        state = plant.state
+        x, y, z, vx, vy, vz, qx, qy, qz, qw = state[:10].tolist()
+        if qw < 0.0:
+            qx, qy, qz, qw = -qx, -qy, -qz, -qw
+        rotation = rotation_from_quaternion((qx, qy, qz, qw))
+        vbx, vby, vbz = (rotation.T @ state[3:6]).tolist()
+        wx, wy, wz = state[10:13].tolist()
+
+        odom = self.odom
+        odom.header.stamp.sec = sec
+        odom.header.stamp.nanosec = nanosec
+        position = odom.pose.pose.position
+        position.x, position.y, position.z = x, y, z
+        orientation = odom.pose.pose.orientation
+        orientation.x, orientation.y, orientation.z, orientation.w = qx, qy, qz, qw
+        twist = odom.twist.twist
+        twist.linear.x, twist.linear.y, twist.linear.z = vbx, vby, vbz
+        twist.angular.x, twist.angular.y, twist.angular.z = wx, wy, wz
+
+        wrench = self.wrench
+        wrench.header.stamp.sec = sec
+        wrench.header.stamp.nanosec = nanosec
+        if self.has_disturbances:
+            force_world, torque_body = plant.external_wrench()
+            fx, fy, fz = (rotation.T @ force_world).tolist()
+            tx, ty, tz = np.asarray(torque_body, dtype=float).tolist()
+            w = wrench.wrench
+            w.force.x, w.force.y, w.force.z = fx, fy, fz
+            w.torque.x, w.torque.y, w.torque.z = tx, ty, tz
+
+        self.clock.clock.sec = sec
+        self.clock.clock.nanosec = nanosec
+        self.stamp_ns = stamp_ns
+
+    def is_finite(self) -> bool:
+        """False when the plant state holds NaN/inf (such a state is never published)."""
+        return bool(np.isfinite(self.plant.state).all())
