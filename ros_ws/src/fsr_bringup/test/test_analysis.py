@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message
 
-from fsr_bringup.analysis.cdr import decode_columns
 from fsr_bringup.analysis.figures import FIGURES, envelope
 from fsr_bringup.analysis.load import hold, load_flight
 from fsr_bringup.analysis.metrics import flight_metrics
 from fsr_bringup.analysis.run import analyze_recording
 from fsr_bringup.cli.analyze_cli import main as analyze_main
+from fsr_sim.recording.cdr_columns import decode_columns
 from fsr_sim.recording.reader import open_recording
 from fsr_sim.recording.writer import RecordingWriter
 from fsr_sim.ros.message_schema import message_class
@@ -113,19 +113,6 @@ def test_vectorised_decoding_equals_rclpy(synthetic_recording: Path) -> None:
             for part in path.split("."):
                 expected = expected[int(part)] if part.isdigit() else getattr(expected, part)
             np.testing.assert_array_equal(columns.get(path)[index], np.asarray(expected))
-
-
-def test_layouts_that_differ_between_messages_are_split() -> None:
-    from rclpy.serialization import serialize_message
-
-    from fsr_sim.ros.conversions import rotor_command
-
-    msgs = [rotor_command(k, np.full(4, float(k)), np.arange(4.0) if k % 3 == 0 else None) for k in range(10)]
-    msgs[5].header.frame_id = "x"  # another string length
-    columns = decode_columns([serialize_message(m) for m in msgs], "sensor_msgs/msg/JointState")
-    np.testing.assert_array_equal(columns.get("velocity")[:, 0], np.arange(10.0))
-    assert np.isnan(columns.get("position")[1, 4]) and columns.get("position")[3, 5] == 1.0
-    assert columns.strings["header.frame_id"][5] == "x" and columns.strings["name.4"][0] == "tilt_1"
 
 
 def test_hold_and_envelope() -> None:

@@ -107,7 +107,7 @@ class TiltingActuation:
         speeds, excess = clamp_rotor_speeds(self.vehicle, speed_sq)
         saturated = self.saturation.record(time, excess)
         limit = self.vehicle.tilt_angle_max
-        clamped_tilts = np.clip(tilts, -limit, limit)
+        clamped_tilts = np.minimum(np.maximum(tilts, -limit), limit)  # np.clip without its Python overhead
         saturated |= self.tilt_saturation.record(time, np.abs(tilts - clamped_tilts))
         produced = self.allocation @ static_from_rotor_commands(self.vehicle, speeds * speeds, clamped_tilts)
         return Actuated(speeds, clamped_tilts, produced[:3], produced[3:], saturated)

@@ -18,7 +18,10 @@ step's ``z``) solve it, with
     grad = p sum_i |t_i|^(p-2) N_i^T t_i,
     hess = p sum_i (|t_i|^(p-2) N_i^T N_i + (p - 2) |t_i|^(p-4) (N_i^T t_i)(N_i^T t_i)^T).
 
-Thrusts are scaled by their mean before the steps so that the powers stay near 1. The wrench is unchanged
+Thrusts are scaled by their mean before the steps so that the powers stay near 1. The constant
+``N_i^T N_i`` is precomputed (the first Hessian term is then one matrix product) and the 2 x 2 Newton
+system of the tilting quadrotor is solved in closed form (numpy's per-call overhead dominates at this
+size). The wrench is unchanged
 (to rounding): tracking is the same, only the rotor speeds and tilt angles change. Over the exercise-5
 flight it lowers the peak rotor speed while the vehicle holds roll = pitch = 45 deg (numbers in
 ``SECONDARY_OBJECTIVE.md`` and ``test_nullspace.py``).
@@ -44,17 +47,20 @@ class PeakThrustObjective:
         self.exponent = exponent
         self.iterations = iterations
         self._z = np.zeros(self.dimension)  # previous solution [N], warm start
+        # N_i^T N_i per rotor, flattened: sum_i w_i N_i^T N_i = (w @ ntn).reshape(k, k).
+        self._ntn = np.einsum("ijk,ijl->ikl", self.per_rotor, self.per_rotor).reshape(self.rotor_count, -1)
 
     def correction(self, u_p: np.ndarray) -> np.ndarray:
         """``N z`` [N] to add to the minimum-norm solution ``u_p`` (shape (2n,))."""
         if self.dimension == 0:
             return np.zeros_like(u_p)
         pairs = u_p.reshape(self.rotor_count, 2)
-        scale = float(np.mean(np.sqrt(np.einsum("ij,ij->i", pairs, pairs))))
+        scale = float(np.sqrt(np.einsum("ij,ij->i", pairs, pairs)).sum()) / self.rotor_count  # the mean, as np.mean
         if not scale > 1e-9:
             self._z[:] = 0.0
             return np.zeros_like(u_p)
         half = self.exponent // 2
+        k = self.dimension
         u = u_p / scale
         z = self._z / scale
         for _ in range(self.iterations):
@@ -64,10 +70,21 @@ class PeakThrustObjective:
             w1 = sq ** (half - 1)  # |t_i|^(p-2)
             w2 = (self.exponent - 2) * sq ** (half - 2)  # (p-2) |t_i|^(p-4)
             grad = w1 @ nt
-            hess = np.einsum("i,ijk,ijl->kl", w1, self.per_rotor, self.per_rotor) + (nt.T * w2) @ nt
-            z = z - np.linalg.solve(hess, grad)
+            hess = (w1 @ self._ntn).reshape(k, k) + (nt.T * w2) @ nt
+            z = z - _solve(hess, grad)
         self._z = z * scale
         return self.basis @ self._z
 
     def reset(self) -> None:
         self._z[:] = 0.0
+
+
+def _solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` for the small symmetric positive-definite Hessian: closed form for 2 x 2 (the tilting
+    quadrotor), LAPACK otherwise."""
+    if rhs.shape == (2,):
+        (a, b), (c, d) = matrix.tolist()
+        r0, r1 = rhs.tolist()
+        det = a * d - b * c
+        return np.array(((d * r0 - b * r1) / det, (a * r1 - c * r0) / det))
+    return np.linalg.solve(matrix, rhs)

@@ -2,7 +2,6 @@ import numpy as np
 import pytest
 import scipy.io
 
-from fsr_estimation.io.cdr_arrays import stamped_doubles
 from fsr_estimation.io.flight_log import (
     FlightLog,
     FlightLogError,
@@ -103,9 +102,7 @@ def test_vectorised_cdr_path_equals_the_generic_decoder(tmp_path):
 
     log = small_log(30)
     recording = open_recording(write_mcap(log, tmp_path / "log.mcap"))
-    for topic, strings, count in (("odom", 2, 85), ("wrench_cmd", 1, 6)):
-        fast = stamped_doubles([d for _, d in recording.raw(topic)], strings, count)
-        assert fast is not None
+    for topic in ("odom", "wrench_cmd"):
         stamps, values = _topic_arrays(recording, topic)
         decoded = recording.messages(topic)
         assert stamps.tolist() == [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for _, m in decoded]
@@ -119,11 +116,22 @@ def test_vectorised_cdr_path_equals_the_generic_decoder(tmp_path):
                                                            for _, m in decoded])
             np.testing.assert_array_equal(values[:, 10:13], [[m.twist.twist.angular.x, m.twist.twist.angular.y,
                                                               m.twist.twist.angular.z] for _, m in decoded])
-    # different frame ids in one topic: no fixed layout, the caller falls back to the decoder
-    payloads = [d for _, d in recording.raw("wrench_cmd")]
-    changed = bytearray(payloads[1])
-    changed[16] = ord("X")
-    assert stamped_doubles([payloads[0], bytes(changed)], 1, 6) is None
+
+
+def test_topic_with_two_frame_ids_is_decoded_per_layout(tmp_path):
+    from fsr_sim.recording.writer import RecordingWriter
+    from fsr_sim.ros.conversions import wrench_stamped
+
+    messages = [wrench_stamped(k * 10**6, np.array([k, 2.0 * k, 3.0]), np.array([0.5, -k, 0.0])) for k in range(12)]
+    messages[4].header.frame_id = "another_frame"  # another string length: a second byte layout
+    with RecordingWriter(tmp_path / "mixed.mcap") as writer:
+        for k, msg in enumerate(messages):
+            writer.write_message("/wrench_cmd", msg, k * 10**6)
+    from fsr_sim.recording.reader import open_recording
+
+    stamps, values = _topic_arrays(open_recording(tmp_path / "mixed.mcap"), "wrench_cmd")
+    assert stamps.tolist() == [k * 10**6 for k in range(12)]
+    np.testing.assert_array_equal(values, [[k, 2.0 * k, 3.0, 0.5, -k, 0.0] for k in range(12)])
 
 
 def test_mcap_without_the_wrench_topic_is_refused(tmp_path):

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fsr_bringup.analysis.cdr import Columns, LayoutError, decode_columns
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
+from fsr_sim.recording.cdr_columns import Columns, LayoutError, decode_columns
 from fsr_sim.recording.reader import Recording, open_recording
 
 NS_PER_S = 1_000_000_000

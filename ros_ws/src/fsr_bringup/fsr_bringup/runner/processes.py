@@ -84,7 +84,8 @@ class ProcessGroup:
         self.nodes: list[NodeProcess] = []
 
     def start(self, name: str, command: list[str]) -> NodeProcess:
-        log_path = self.log_dir / f"{name}.log"
+        log_path = self.log_dir / f"{name}.log"  # a fleet's "uav1/simulator" logs in a folder per vehicle
+        log_path.parent.mkdir(parents=True, exist_ok=True)
         process = subprocess.Popen(
             command,
             env=self.env,

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_control.controllers._vec import cross3
-from fsr_control.planning.flatness import attitude_from_thrust_vector
+from fsr_control.controllers.common import gain_rows, linear_feedback, tracking_errors
+from fsr_control.planning.flatness import attitude_rows_from_thrust_vector
 from fsr_control.planning.trajectory import Reference
-from fsr_sim.model.so3 import attitude_error
+from fsr_sim.model.so3 import Vec3, attitude_error3, cross3, dot3, mat_t_mat3, mat_vec3
 from fsr_sim.model.vehicle import GRAVITY, Vehicle
 
 REPORT_GAINS = {
@@ -58,9 +58,10 @@ class GeometricController:
         self.inertia = np.array(vehicle.inertia, dtype=float)
         self.k_p, self.k_v = np.asarray(gains["k_p"], float), np.asarray(gains["k_v"], float)
         self.k_r, self.k_w = np.asarray(gains["k_r"], float), np.asarray(gains["k_w"], float)
-        self._weight = np.array((0.0, 0.0, self.mass * GRAVITY))
-        self._gravity = np.array((0.0, 0.0, GRAVITY))
-        self._previous: tuple[float, np.ndarray] | None = None  # (t [s], velocity world [m/s])
+        # The per-step arithmetic is on Python floats (3-vectors: far cheaper than numpy calls).
+        self._k_p, self._k_v, self._k_r, self._k_w = (gain_rows(k) for k in (self.k_p, self.k_v, self.k_r, self.k_w))
+        self._inertia = gain_rows(self.inertia)
+        self._previous: tuple[float, Vec3] | None = None  # (t [s], velocity world [m/s])
 
     def compute(
         self,
@@ -71,42 +72,46 @@ class GeometricController:
         angular_velocity_body: np.ndarray,
     ) -> GeometricCommand:
         m = self.mass
-        e_p = position - reference.position
-        e_v = velocity_world - reference.velocity
-        a = -(self.k_p @ e_p) - self.k_v @ e_v - self._weight + m * reference.acceleration
-        z_b = rotation[:, 2]
-        thrust = -float(a @ z_b)
+        k_p, k_v, inertia = self._k_p, self._k_v, self._inertia
+        e_p, e_v = tracking_errors(reference, position, velocity_world)
+        a = linear_feedback(k_p, e_p, k_v, e_v, m, reference.acceleration.tolist())
+        a = (a[0], a[1], a[2] - m * GRAVITY)  # - m g e3
+        r = rotation.tolist()
+        z_b = (r[0][2], r[1][2], r[2][2])
+        thrust = -dot3(a, z_b)
         # R_d and its rates: differentiate a with the model-predicted acceleration and jerk of this thrust.
-        w = angular_velocity_body
-        wx, wy, _ = w.tolist()
-        z_b_dot = rotation @ np.array((wy, -wx, 0.0))  # R S(w) e3
-        e_a = self._measured_acceleration(reference.time, velocity_world, thrust, z_b) - reference.acceleration
-        a_dot = -(self.k_p @ e_v) - self.k_v @ e_a + m * reference.jerk
-        thrust_dot = -float(a_dot @ z_b) - float(a @ z_b_dot)
-        e_j = -(thrust_dot * z_b + thrust * z_b_dot) / m - reference.jerk
-        a_ddot = -(self.k_p @ e_a) - self.k_v @ e_j + m * reference.snap
-        rotation_desired, omega_d, omega_dot_d = attitude_from_thrust_vector(
-            -a, -a_dot, -a_ddot, reference.yaw, reference.yaw_rate, reference.yaw_acceleration
+        w = angular_velocity_body.tolist()
+        z_b_dot = mat_vec3(r, (w[1], -w[0], 0.0))  # R S(w) e3
+        acceleration = self._measured_acceleration(reference.time, velocity_world.tolist(), thrust, z_b)
+        acc_d, jerk_d = reference.acceleration.tolist(), reference.jerk.tolist()
+        e_a = (acceleration[0] - acc_d[0], acceleration[1] - acc_d[1], acceleration[2] - acc_d[2])
+        a_dot = linear_feedback(k_p, e_v, k_v, e_a, m, jerk_d)
+        thrust_dot = -dot3(a_dot, z_b) - dot3(a, z_b_dot)
+        e_j = tuple(-(thrust_dot * z_b[i] + thrust * z_b_dot[i]) / m - jerk_d[i] for i in range(3))
+        a_ddot = linear_feedback(k_p, e_a, k_v, e_j, m, reference.snap.tolist())
+        rotation_desired, omega_d, omega_dot_d = attitude_rows_from_thrust_vector(
+            (-a[0], -a[1], -a[2]), (-a_dot[0], -a_dot[1], -a_dot[2]), (-a_ddot[0], -a_ddot[1], -a_ddot[2]),
+            reference.yaw, reference.yaw_rate, reference.yaw_acceleration,
         )
-        relative = rotation.T @ rotation_desired  # R_b^T R_d
-        e_r = attitude_error(rotation, rotation_desired)
-        omega_d_body = relative @ omega_d
-        e_w = w - omega_d_body
-        inertia = self.inertia
-        torque = (
-            -(self.k_r @ e_r)
-            - self.k_w @ e_w
-            + cross3(w, inertia @ w)
-            - inertia @ (cross3(w, omega_d_body) - relative @ omega_dot_d)
-        )
-        return GeometricCommand(thrust, torque, rotation_desired)
+        relative = mat_t_mat3(r, rotation_desired)  # R_b^T R_d
+        omega_d_body = mat_vec3(relative, omega_d)
+        e_w = (w[0] - omega_d_body[0], w[1] - omega_d_body[1], w[2] - omega_d_body[2])
+        gyro = cross3(w, mat_vec3(inertia, w))
+        turn = cross3(w, omega_d_body)
+        turn_d = mat_vec3(relative, omega_dot_d)
+        feedforward = mat_vec3(inertia, (turn[0] - turn_d[0], turn[1] - turn_d[1], turn[2] - turn_d[2]))
+        e_r = attitude_error3(r, rotation_desired)
+        feedback = linear_feedback(self._k_r, e_r, self._k_w, e_w, 0.0, (0.0, 0.0, 0.0))
+        torque = tuple(feedback[i] + gyro[i] - feedforward[i] for i in range(3))
+        return GeometricCommand(thrust, np.array(torque), np.array(rotation_desired))
 
-    def _measured_acceleration(self, t: float, velocity_world: np.ndarray, thrust: float, z_b: np.ndarray
-                               ) -> np.ndarray:
+    def _measured_acceleration(self, t: float, velocity_world: Vec3, thrust: float, z_b: Vec3) -> Vec3:
         """Acceleration [m/s^2] from consecutive velocities (includes unmodelled forces); the model's
         ``g e3 - u_T z_b / m`` at the first step or when time does not advance."""
         previous = self._previous
-        self._previous = (t, velocity_world.copy())
+        self._previous = (t, velocity_world)
         if previous is not None and t > previous[0]:
-            return (velocity_world - previous[1]) / (t - previous[0])
-        return self._gravity - (thrust / self.mass) * z_b
+            dt = t - previous[0]
+            return tuple((velocity_world[i] - previous[1][i]) / dt for i in range(3))
+        scale = thrust / self.mass
+        return (-scale * z_b[0], -scale * z_b[1], GRAVITY - scale * z_b[2])

@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers._vec import cross3
+from fsr_control.controllers.common import gain_rows, linear_feedback, tracking_errors
 from fsr_control.planning.trajectory import Reference
-from fsr_sim.model.so3 import attitude_error
+from fsr_sim.model.so3 import attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3
 from fsr_sim.model.vehicle import GRAVITY, Vehicle
 
 REPORT_GAINS = {
@@ -49,7 +49,9 @@ class VoliroController:
         self.k_p, self.k_d = np.asarray(gains["k_p"], float), np.asarray(gains["k_d"], float)
         self.k_r, self.k_w = np.asarray(gains["k_r"], float), np.asarray(gains["k_w"], float)
         self.report_feedforward = angular_feedforward == "report"
-        self._gravity = np.array((0.0, 0.0, GRAVITY))
+        # The per-step arithmetic is on Python floats (3-vectors: far cheaper than numpy calls).
+        self._k_p, self._k_d, self._k_r, self._k_w = (gain_rows(k) for k in (self.k_p, self.k_d, self.k_r, self.k_w))
+        self._inertia = gain_rows(self.inertia)
 
     def compute(
         self,
@@ -59,21 +61,27 @@ class VoliroController:
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        e_p = position - reference.position
-        e_v = velocity_world - reference.velocity
-        v = -(self.k_p @ e_p) - self.k_d @ e_v + reference.acceleration
-        rotation_desired = reference.rotation
-        relative = rotation.T @ rotation_desired
-        w_b = angular_velocity_body
-        omega_d_body = relative @ reference.angular_velocity
-        omega_dot_d_body = relative @ reference.angular_acceleration
-        e_r = attitude_error(rotation, rotation_desired)
-        e_w = w_b - omega_d_body
-        feedback = -(self.k_r @ e_r) - self.k_w @ e_w
+        e_p, e_v = tracking_errors(reference, position, velocity_world)
+        v = linear_feedback(self._k_p, e_p, self._k_d, e_v, 1.0, reference.acceleration.tolist())
+        r = rotation.tolist()
+        rotation_desired = reference.rotation.tolist()
+        relative = mat_t_mat3(r, rotation_desired)  # R_b^T R_d
+        w_b = angular_velocity_body.tolist()
+        omega_d_body = mat_vec3(relative, reference.angular_velocity.tolist())
+        omega_dot_d_body = mat_vec3(relative, reference.angular_acceleration.tolist())
+        e_r = attitude_error3(r, rotation_desired)
+        e_w = (w_b[0] - omega_d_body[0], w_b[1] - omega_d_body[1], w_b[2] - omega_d_body[2])
+        feedback = linear_feedback(self._k_r, e_r, self._k_w, e_w, 0.0, (0.0, 0.0, 0.0))
+        turn = cross3(w_b, omega_d_body)
+        inertia = self._inertia
         if self.report_feedforward:
-            w = feedback + self.inertia @ (cross3(w_b, omega_d_body) + omega_dot_d_body)
+            ff = mat_vec3(inertia, tuple(turn[i] + omega_dot_d_body[i] for i in range(3)))
+            w = tuple(feedback[i] + ff[i] for i in range(3))
         else:
-            w = feedback - cross3(w_b, omega_d_body) + omega_dot_d_body
-        force_body = self.mass * (rotation.T @ (v - self._gravity))
-        torque_body = self.inertia @ w + cross3(w_b, self.inertia @ w_b)
-        return force_body, torque_body
+            w = tuple(feedback[i] - turn[i] + omega_dot_d_body[i] for i in range(3))
+        m = self.mass
+        force_body = mat_t_vec3(r, (v[0], v[1], v[2] - GRAVITY))
+        inertia_w = mat_vec3(inertia, w)
+        gyro = cross3(w_b, mat_vec3(inertia, w_b))
+        return (np.array((m * force_body[0], m * force_body[1], m * force_body[2])),
+                np.array(tuple(inertia_w[i] + gyro[i] for i in range(3))))

@@ -22,6 +22,7 @@ REST_TO_REST = np.array((0.0, 0.0, 0.0, 0.0, 35.0, -84.0, 70.0, -20.0))
 # d^n/dtau^n of tau^k is falling(k, n) tau^(k-n): row n holds falling(k, n) for k = 0..7.
 _FALLING = np.array([[float(np.prod(np.arange(k - n + 1, k + 1))) if k >= n else 0.0 for k in range(8)]
                      for n in range(DERIVATIVES)])
+_EXPONENTS = np.arange(DEGREE + 1)
 # End conditions at tau = 1 on c_4..c_7 (value and derivatives 1..3).
 _END_INVERSE = np.linalg.inv(_FALLING[:4, 4:])
 
@@ -82,5 +83,5 @@ class SepticSegment:
             return self._rest.copy()
         if tau < 0.0:
             tau = 0.0
-        powers = tau ** np.arange(DEGREE + 1)
+        powers = tau**_EXPONENTS
         return self._table @ powers

@@ -112,7 +112,7 @@ class _Segment:
     def evaluate(self, t: float) -> tuple[Reference, np.ndarray]:
         """The reference at ``t`` and the raw channel derivatives (5, 4): x, y, z, theta."""
         d = self.poly.evaluate(t)
-        theta, theta_dot, theta_ddot = d[0, 3], d[1, 3], d[2, 3]
+        theta, theta_dot, theta_ddot = d[:3, 3].tolist()  # Python floats: cheaper scalar arithmetic
         if self.yaw_start is not None:
             yaw = self.yaw_start + theta
             rotation = yaw_rotation(yaw)

@@ -26,7 +26,16 @@ from scipy.signal import sosfilt
 
 from fsr_estimation.core.filter_design import cascade_sections, check_filter_parameters, gain_chain
 from fsr_estimation.core.momentum import E3, GRAVITY, observer_input
-from fsr_sim.model.so3 import euler_rate_matrix, euler_rate_matrix_derivative, rotation_from_euler_zyx
+from fsr_sim.model.so3 import (
+    euler_rate_derivative_rows,
+    euler_rate_matrix,
+    euler_rate_rows,
+    mat_t_mat3,
+    mat_t_vec3,
+    mat_vec3,
+    rotation_from_euler_zyx,
+    rotation_rows_from_euler_zyx,
+)
 
 
 def checked_model(mass: float, inertia: ArrayLike) -> tuple[float, np.ndarray]:
@@ -76,19 +85,18 @@ class MomentumObserver:
         self.gravity = float(gravity)
         self.gains = gain_chain(c0, r)
         self._gravity_force = self.mass * self.gravity * E3
+        self._weight = float(self._gravity_force[2])
+        self._inertia_rows = self.inertia.tolist()  # symmetric: I^T = I
         self._gamma = np.zeros((self.r, 6))
         self._estimate = np.zeros(6)
         self._momentum = np.zeros(6)
         self._previous_momentum = np.zeros(6)
         self._previous_rate = np.zeros(6)  # b_{k-1}
         self._residual = np.zeros(6)
-        self._mass_matrix = np.zeros((3, 3))  # M(eta[k-1])
-        self._rotation = np.eye(3)
-        self._rate_matrix = np.eye(3)
-        self._rate_matrix_dot = np.zeros((3, 3))
-        self._omega = np.zeros(3)
-        self._inertia_omega = np.zeros(3)
-        self._work = np.zeros((3, 3))
+        identity = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+        self._mass_rows = ((0.0,) * 3,) * 3  # M(eta[k-1]), rows
+        self._rotation_rows = identity  # R_b of the latest sample, rows
+        self._rate_rows = identity  # Q(eta) of the latest sample, rows
         self.samples = 0
 
     def reset(self) -> None:
@@ -105,15 +113,15 @@ class MomentumObserver:
         torque_body (3,) [N, N m] body FRD: the actuator wrench at sample k (used from the next sample on).
         The returned array is the observer's own buffer: copy it to keep it past the next update.
         """
-        eta = np.asarray(euler_zyx, dtype=float)
-        eta_dot = np.asarray(euler_rates, dtype=float)
+        eta = np.asarray(euler_zyx, dtype=float).tolist()
+        eta_dot = np.asarray(euler_rates, dtype=float).tolist()
         q = self._momentum
         np.multiply(self.mass, velocity_world, out=q[:3])
         if self.samples == 0:
             self._store_sample_terms(eta, eta_dot, force_body, torque_body)  # q[0] uses M(eta[0])
-            np.matmul(self._mass_matrix, eta_dot, out=q[3:])
+            q[3:] = mat_vec3(self._mass_rows, eta_dot)
         else:
-            np.matmul(self._mass_matrix, eta_dot, out=q[3:])  # M(eta[k-1]) eta_dot[k]
+            q[3:] = mat_vec3(self._mass_rows, eta_dot)  # M(eta[k-1]) eta_dot[k]
             self._step()
             self._store_sample_terms(eta, eta_dot, force_body, torque_body)
         self._previous_momentum[:] = q
@@ -132,29 +140,27 @@ class MomentumObserver:
         gamma[0] += gains[0] * u
         previous[:] = gamma[self.r - 1]
 
-    def _store_sample_terms(self, eta: np.ndarray, eta_dot: np.ndarray, force_body: ArrayLike,
+    def _store_sample_terms(self, eta: list[float], eta_dot: list[float], force_body: ArrayLike,
                             torque_body: ArrayLike) -> None:
         """b_k, M(eta[k]), R_b,k and Q_k for the next step and for :meth:`wrench_body`.
 
-        Lean form of the same quantities as :mod:`fsr_estimation.core.momentum` (one call each to the
-        :mod:`fsr_sim.model.so3` matrices, the rest in preallocated buffers): ``M = Q^T I_b Q`` and
+        Lean form of the same quantities as :mod:`fsr_estimation.core.momentum` (on Python floats with the
+        single-sample functions of :mod:`fsr_sim.model.so3`): ``M = Q^T I_b Q`` and
         ``C^T eta_dot = Q_dot^T I_b omega``, because the other term of ``C^T eta_dot``,
         ``(Q^T S(omega) I_b Q)^T eta_dot = -Q^T I_b (omega x omega)``, is zero.
         """
-        rotation, rate, rate_dot = self._rotation, self._rate_matrix, self._rate_matrix_dot
-        rotation[:] = rotation_from_euler_zyx(eta)
-        rate[:] = euler_rate_matrix(eta)
-        rate_dot[:] = euler_rate_matrix_derivative(eta, eta_dot)
-        omega, inertia_omega, b = self._omega, self._inertia_omega, self._previous_rate
-        np.matmul(rate, eta_dot, out=omega)
-        np.matmul(self.inertia, omega, out=inertia_omega)
-        np.matmul(rotation, force_body, out=b[:3])
-        b[:3] += self._gravity_force
-        np.matmul(rate_dot.T, inertia_omega, out=b[3:])
-        np.matmul(rate.T, torque_body, out=omega)  # omega is free again: reuse it for Q^T tau_b
-        b[3:] += omega
-        np.matmul(self.inertia, rate, out=self._work)
-        np.matmul(rate.T, self._work, out=self._mass_matrix)
+        phi, theta, psi = eta
+        rotation = rotation_rows_from_euler_zyx(phi, theta, psi)
+        rate = euler_rate_rows(phi, theta)
+        rate_dot = euler_rate_derivative_rows(phi, theta, eta_dot[0], eta_dot[1])
+        inertia = self._inertia_rows
+        inertia_omega = mat_vec3(inertia, mat_vec3(rate, eta_dot))  # I_b omega
+        fx, fy, fz = mat_vec3(rotation, np.asarray(force_body, dtype=float).tolist())
+        cx, cy, cz = mat_t_vec3(rate_dot, inertia_omega)  # C^T eta_dot
+        tx, ty, tz = mat_t_vec3(rate, np.asarray(torque_body, dtype=float).tolist())  # Q^T tau_b
+        self._previous_rate[:] = (fx, fy, fz + self._weight, cx + tx, cy + ty, cz + tz)
+        self._mass_rows = mat_t_mat3(rate, mat_t_mat3(inertia, rate))  # Q^T (I_b Q), I_b symmetric
+        self._rotation_rows, self._rate_rows = rotation, rate
 
     @property
     def estimate(self) -> np.ndarray:
@@ -163,8 +169,8 @@ class MomentumObserver:
 
     def wrench_body(self) -> tuple[np.ndarray, np.ndarray]:
         """Latest estimate in body FRD: (force ``R_b^T f_e`` [N], torque ``Q^-T tau_e`` [N m]), as ``wrench_truth``."""
-        force = self._rotation.T @ self._estimate[:3]
-        torque = np.linalg.solve(self._rate_matrix.T, self._estimate[3:])
+        force = np.array(mat_t_vec3(self._rotation_rows, self._estimate[:3].tolist()))
+        torque = np.linalg.solve(np.array(self._rate_rows).T, self._estimate[3:])
         return force, torque
 
     @property

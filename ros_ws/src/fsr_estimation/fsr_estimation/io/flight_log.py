@@ -23,7 +23,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fsr_estimation.io.cdr_arrays import stamped_doubles
 from fsr_sim.model.so3 import (
     euler_rate_matrix,
     euler_zyx_from_rotation,
@@ -43,7 +42,6 @@ CSV_COLUMNS_HELP = (
     "either thrust [N] (fixed rotors, body force [0, 0, -thrust]) or fx, fy, fz [N] (body FRD force); "
     "tx, ty, tz [N m] (body FRD torque)."
 )
-ODOMETRY_DOUBLES = 85  # float64 fields of nav_msgs/Odometry after its header and child_frame_id
 ODOM_TOPIC = "odom"
 WRENCH_TOPIC = "wrench_cmd"
 
@@ -234,16 +232,28 @@ def load_mcap(path: str | Path) -> FlightLog:
     )
 
 
+ODOMETRY_FIELDS = tuple(f"pose.pose.{part}" for part in (
+    "position.x", "position.y", "position.z", "orientation.x", "orientation.y", "orientation.z", "orientation.w",
+)) + tuple(f"twist.twist.{part}.{axis}" for part in ("linear", "angular") for axis in "xyz")
+WRENCH_FIELDS = tuple(f"wrench.{part}.{axis}" for part in ("force", "torque") for axis in "xyz")
+
+
 def _topic_arrays(recording: object, topic: str) -> tuple[np.ndarray, np.ndarray]:
     """(stamps [ns] (N,), values) of ``odom`` -> (N, 13) ``[p, q_xyzw, v_body, omega_body]`` or
-    ``wrench_cmd`` -> (N, 6) ``[force, torque]``: vectorised for uniform payloads, else decoded one by one."""
+    ``wrench_cmd`` -> (N, 6) ``[force, torque]``: vectorised (fsr_sim.recording.cdr_columns), or decoded
+    message by message when the payloads have a layout it does not handle."""
+    from fsr_sim.recording.cdr_columns import LayoutError, decode_columns
+
     odometry = topic == ODOM_TOPIC
-    fast = stamped_doubles([data for _, data in recording.raw(topic)], 2 if odometry else 1,  # type: ignore[attr-defined]
-                           ODOMETRY_DOUBLES if odometry else 6)
-    if fast is not None:
-        stamps, values = fast
-        # Odometry doubles: position 3, orientation 4, pose covariance 36, twist linear 3, angular 3, covariance 36.
-        return stamps, (np.concatenate((values[:, :7], values[:, 43:49]), axis=1) if odometry else values)
+    wanted = ODOMETRY_FIELDS if odometry else WRENCH_FIELDS
+    raw = recording.raw(topic)  # type: ignore[attr-defined]
+    try:
+        columns = decode_columns([data for _, data in raw], recording.topics[recording.resolve(topic)])  # type: ignore[attr-defined]
+        stamps = (columns.get("header.stamp.sec").astype(np.int64) * 1_000_000_000
+                  + columns.get("header.stamp.nanosec").astype(np.int64))
+        return stamps, np.column_stack([columns.get(name) for name in wanted]).astype(float, copy=False)
+    except (LayoutError, KeyError):
+        pass
     messages = recording.messages(topic)  # type: ignore[attr-defined]
     stamps = np.array([_stamp_ns(m) for _, m in messages], dtype=np.int64)
     if odometry:
@@ -255,7 +265,7 @@ def _topic_arrays(recording: object, topic: str) -> tuple[np.ndarray, np.ndarray
         rows = [(m.wrench.force.x, m.wrench.force.y, m.wrench.force.z, m.wrench.torque.x, m.wrench.torque.y,
                  m.wrench.torque.z) for _, m in messages]
     values = np.array(rows, dtype=float).reshape(len(rows), 13 if odometry else 6)
-    # Keep the first message of a repeated stamp, as the fast path's intersect1d does.
+    # Keep the first message of a repeated stamp, as the vectorised path's intersect1d does.
     stamps, first = np.unique(stamps, return_index=True)
     return stamps, values[first]
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsr_sim.config.validation import Section, checked_array
+from fsr_sim.model.so3 import Mat3, mat_vec3
 
 ZERO3 = np.zeros(3)
 
@@ -91,10 +92,22 @@ def total_external_wrench(
     profiles: list[DisturbanceProfile], t: float, rotation: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Sum of all profiles at ``t``: (force world NED [N], torque body FRD [N m])."""
-    force_world = np.zeros(3)
-    torque_body = np.zeros(3)
+    total = external_wrench_floats(profiles, t, np.asarray(rotation, dtype=float).tolist())
+    return np.array(total[:3]), np.array(total[3:])
+
+
+def external_wrench_floats(
+    profiles: list[DisturbanceProfile], t: float, rotation: Mat3
+) -> tuple[float, float, float, float, float, float]:
+    """:func:`total_external_wrench` on Python floats (rows of ``R``): ``(f_x, f_y, f_z)`` world [N] and
+    ``(tau_x, tau_y, tau_z)`` body [N m] (the plant evaluates it at every RK4 stage)."""
+    fx = fy = fz = tx = ty = tz = 0.0
     for profile in profiles:
         force, torque = profile.wrench(t)
-        force_world += rotation @ force if profile.frame == "body" else force
-        torque_body += torque
-    return force_world, torque_body
+        force = force.tolist()
+        if profile.frame == "body":
+            force = mat_vec3(rotation, force)
+        torque = torque.tolist()
+        fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
+        tx, ty, tz = tx + torque[0], ty + torque[1], tz + torque[2]
+    return fx, fy, fz, tx, ty, tz

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_sim.config.validation import Section
+from fsr_sim.model.so3 import Vec3
 
 MIN_DISTANCE = 1e-3  # m, floor for surface distances
 
@@ -63,10 +64,34 @@ def bounded_ratio(denominator: np.ndarray | float, max_ratio: float) -> np.ndarr
     return 1.0 / np.maximum(denominator, 1.0 / max_ratio)
 
 
+# The formulas, written with arithmetic operators only so that they serve both the vectorised functions
+# (arrays, whole logs) and the plant's per-rotor path on Python floats (every RK4 stage): one definition.
+def _ground_denominator(z: np.ndarray | float, rotor_radius: float) -> np.ndarray | float:
+    """``1 - (rho / (4 z))^2`` (single-rotor images), ``z`` floored."""
+    return 1.0 - (rotor_radius / (4.0 * z)) ** 2
+
+
+def _neighbour_scale(z: np.ndarray | float, rho2: float) -> tuple[np.ndarray | float, np.ndarray | float]:
+    """``(c, q) = (rho^2 z / 2, 4 z^2)``: a neighbour at distance ``d`` takes ``c / (d^2 + q)^(3/2)`` off the
+    denominator (both paths evaluate exactly that expression with these two numbers)."""
+    return 0.5 * rho2 * z, 4.0 * z**2
+
+
+def _body_term(z: np.ndarray | float, arm_sq: np.ndarray | float, rho2: float, body_factor: float
+               ) -> np.ndarray | float:
+    """``2 K_b rho^2 z / (b^2 + 4 z^2)^(3/2)``: the body's share of the denominator."""
+    return 2.0 * body_factor * rho2 * z / (arm_sq + 4.0 * z**2) ** 1.5
+
+
+def _ceiling_denominator(z: np.ndarray | float, rotor_radius: float, k1: float, k2: float) -> np.ndarray | float:
+    """``1 - (1/k1) (rho / (z + k2))^2``, ``z`` floored."""
+    return 1.0 - (rotor_radius / (z + k2)) ** 2 / k1
+
+
 def ground_effect_ratio(distance: np.ndarray | float, rotor_radius: float, max_ratio: float = 1.5) -> np.ndarray:
     """``T_IGE / T_OGE = 1 / (1 - (rho / (4 z))^2)`` for distances ``z`` [m] to the ground (bounded)."""
     z = np.maximum(distance, MIN_DISTANCE)
-    return bounded_ratio(1.0 - (rotor_radius / (4.0 * z)) ** 2, max_ratio)
+    return bounded_ratio(_ground_denominator(z, rotor_radius), max_ratio)
 
 
 def multirotor_ground_effect_ratio(
@@ -84,11 +109,11 @@ def multirotor_ground_effect_ratio(
     """
     z = np.maximum(distance, MIN_DISTANCE)
     rho2 = rotor_radius**2
-    d2 = rotor_separation**2
-    neighbours = (0.5 * rho2 * z[:, None]) / (d2 + 4.0 * z[:, None] ** 2) ** 1.5
+    c, q = _neighbour_scale(z[:, None], rho2)
+    neighbours = c / (np.asarray(rotor_separation) ** 2 + q) ** 1.5
     np.fill_diagonal(neighbours, 0.0)
-    body = 2.0 * body_factor * rho2 * z / (arm_lengths**2 + 4.0 * z**2) ** 1.5
-    denominator = 1.0 - (rotor_radius / (4.0 * z)) ** 2 - neighbours.sum(axis=1) - body
+    body = _body_term(z, np.asarray(arm_lengths) ** 2, rho2, body_factor)
+    denominator = _ground_denominator(z, rotor_radius) - neighbours.sum(axis=1) - body
     return bounded_ratio(denominator, max_ratio)
 
 
@@ -97,7 +122,7 @@ def ceiling_effect_ratio(
 ) -> np.ndarray:
     """``T_CE / T_OGE = 1 / (1 - (1/k1) (rho / (z + k2))^2)`` for distances ``z`` [m] to the ceiling."""
     z = np.maximum(distance, MIN_DISTANCE)
-    return bounded_ratio(1.0 - (rotor_radius / (z + k2)) ** 2 / k1, max_ratio)
+    return bounded_ratio(_ceiling_denominator(z, rotor_radius, k1, k2), max_ratio)
 
 
 def environment_from_section(section: Section) -> Environment:
@@ -138,6 +163,15 @@ class ThrustEffects:
         self.separation = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=2)
         self.arm_lengths = np.linalg.norm(positions, axis=1)
         self.enabled = environment.has_thrust_effects
+        # Constants of the per-rotor float path (ratios_floats() runs at every RK4 stage).
+        self._rotor_positions = [tuple(row) for row in positions.tolist()]
+        separations = self.separation.tolist()
+        self._others_sq = [[d * d for j, d in enumerate(row) if j != i] for i, row in enumerate(separations)]
+        self._arm_sq = [b * b for b in self.arm_lengths.tolist()]
+        ground, ceiling = environment.ground, environment.ceiling
+        self._ground = ground.enabled and ground.effect
+        self._ceiling = ceiling.enabled and ceiling.effect
+        self._multirotor = environment.ground_model == "multirotor"
 
     def ratios(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """``T_i / T_OGE,i`` for each rotor (1 away from surfaces); ground and ceiling multiply."""
@@ -159,3 +193,29 @@ class ThrustEffects:
                 distance, self.rotor_radius, env.ceiling_k1, env.ceiling_k2, env.ceiling.max_ratio
             )
         return ratio
+
+    def ratios_floats(self, position_down: float, rotation_row2: Vec3) -> list[float]:
+        """:meth:`ratios` on Python floats: ``position_down`` = p_z [m], ``rotation_row2`` = third row of ``R``."""
+        env = self.environment
+        rho = self.rotor_radius
+        rho2 = rho * rho
+        ground_height, ceiling_height = env.ground.height, env.ceiling.height
+        ground_floor, ceiling_floor = 1.0 / env.ground.max_ratio, 1.0 / env.ceiling.max_ratio
+        r0, r1, r2 = rotation_row2
+        out = []
+        for i, (px, py, pz) in enumerate(self._rotor_positions):
+            rotor_down = position_down + (px * r0 + py * r1 + pz * r2)  # world z of the rotor
+            ratio = 1.0
+            if self._ground:
+                z = max(ground_height - rotor_down, MIN_DISTANCE)
+                denominator = _ground_denominator(z, rho)
+                if self._multirotor:
+                    c, q = _neighbour_scale(z, rho2)
+                    neighbours = sum([c / (d2 + q) ** 1.5 for d2 in self._others_sq[i]])
+                    denominator = denominator - neighbours - _body_term(z, self._arm_sq[i], rho2, env.body_factor)
+                ratio = 1.0 / max(denominator, ground_floor)
+            if self._ceiling:
+                z = max(rotor_down - ceiling_height, MIN_DISTANCE)
+                ratio = ratio * (1.0 / max(_ceiling_denominator(z, rho, env.ceiling_k1, env.ceiling_k2), ceiling_floor))
+            out.append(ratio)
+        return out

@@ -18,8 +18,8 @@ import math
 import numpy as np
 
 from fsr_sim.config.scenario import SimulationConfig
-from fsr_sim.model.allocation import SaturationReport, clamp_rotor_speeds, rotor_axes
-from fsr_sim.model.disturbances import total_external_wrench
+from fsr_sim.model.allocation import SaturationReport, clamp_rotor_speeds, rotor_axes, tilt_basis
+from fsr_sim.model.disturbances import external_wrench_floats, total_external_wrench
 from fsr_sim.model.environment import ThrustEffects
 from fsr_sim.model.rigid_body import (
     ANGULAR_VELOCITY,
@@ -29,7 +29,7 @@ from fsr_sim.model.rigid_body import (
     RigidBody,
     pack_state,
 )
-from fsr_sim.model.so3 import rotation_from_quaternion
+from fsr_sim.model.so3 import Mat3, Vec3, mat_vec3, rotation_from_quaternion
 
 MAX_SPEED = 100.0  # m/s: beyond this the simulation is considered diverged
 MAX_SPIN = 200.0  # rad/s
@@ -61,8 +61,11 @@ class Plant:
         self.thrust = 0.0
         self.torque_command = np.zeros(3)
         self._speed_sq = np.zeros(n)
+        # Constant per-rotor columns of the tilt basis (z_v, z_l): the axes are linear in (cos, sin) of the tilt.
+        self._tilt_columns = [self._columns(axes) for axes in tilt_basis(vehicle)] if vehicle.is_tilting else None
         self._set_axes(self.tilt_angles)
         self._ratios = np.ones(n)
+        self._update_body_wrench()
 
     # ----- time -------------------------------------------------------------------------------------
     @property
@@ -101,12 +104,39 @@ class Plant:
         return self.state[ANGULAR_VELOCITY]
 
     # ----- commands ---------------------------------------------------------------------------------
-    def _set_axes(self, tilts: np.ndarray | None) -> None:
+    def _columns(self, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(3, n) force, lever-arm torque and drag torque per squared speed for rotor axes (n, 3)."""
         v = self.vehicle
-        axes = rotor_axes(v, tilts)
-        self._force_cols = (v.c_f * axes).T  # (3, n) per squared speed, scaled by the thrust ratio
-        self._lever_cols = (v.c_f * np.cross(v.positions, axes)).T
-        self._drag_cols = (-(v.spins * v.c_m)[:, None] * axes).T
+        return (v.c_f * axes).T, (v.c_f * np.cross(v.positions, axes)).T, (-(v.spins * v.c_m)[:, None] * axes).T
+
+    def _set_axes(self, tilts: np.ndarray | None) -> None:
+        if self._tilt_columns is None or tilts is None:
+            # force (scaled by the thrust ratio), lever-arm torque (scaled too) and drag torque columns
+            self._force_cols, self._lever_cols, self._drag_cols = self._columns(rotor_axes(self.vehicle, tilts))
+            return
+        # z_i = cos(alpha_i) z_v,i + sin(alpha_i) z_l,i, so each column is the same combination of the
+        # constant columns of z_v and z_l (no np.cross / np.tile per command).
+        c, s = np.cos(tilts), np.sin(tilts)
+        (f_v, l_v, d_v), (f_l, l_l, d_l) = self._tilt_columns
+        self._force_cols = f_v * c + f_l * s
+        self._lever_cols = l_v * c + l_l * s
+        self._drag_cols = d_v * c + d_l * s
+
+    def _update_body_wrench(self) -> None:
+        """Cache the actuator wrench as floats: constant over the period unless thrust ratios vary with pose."""
+        if self.actuation == "wrench":
+            self._body_wrench = (0.0, 0.0, -self.thrust, *self.torque_command.tolist())
+        elif not self.effects.enabled:
+            u = self._speed_sq
+            self._body_wrench = (*(self._force_cols @ u).tolist(),
+                                 *(self._lever_cols @ u + self._drag_cols @ u).tolist())
+        else:
+            # Per rotor: force and lever-arm torque at ratio 1 (scaled per stage by the ratio), and the
+            # total drag torque (not scaled).
+            u = self._speed_sq
+            self._rotor_terms = list(zip((self._force_cols * u).T.tolist(), (self._lever_cols * u).T.tolist(),
+                                         strict=True))
+            self._drag_torque = (self._drag_cols @ u).tolist()
 
     def set_rotor_command(self, speeds: np.ndarray, tilts: np.ndarray | None = None) -> bool:
         """Apply rotor speeds [rad/s] (and tilts [rad]); returns True if anything saturated."""
@@ -117,20 +147,23 @@ class Plant:
         self._speed_sq = np.abs(clamped) * clamped
         if self.vehicle.is_tilting and tilts is not None:
             limit = self.vehicle.tilt_angle_max
-            self.tilt_angles = np.clip(np.asarray(tilts, dtype=float), -limit, limit)
+            self.tilt_angles = np.minimum(np.maximum(np.asarray(tilts, dtype=float), -limit), limit)
             self._set_axes(self.tilt_angles)
+        self._update_body_wrench()
         return saturated
 
     def set_wrench_command(self, thrust: float, torque_body: np.ndarray) -> None:
         """Apply ``u_T`` [N] along ``-z_b`` and ``tau_b`` [N m] (``actuation: wrench``)."""
         self.thrust = float(thrust)
         self.torque_command = np.array(torque_body, dtype=float)
+        self._update_body_wrench()
 
     def cut_thrust(self) -> None:
         """Failsafe: all rotors stopped / zero wrench."""
         self.set_wrench_command(0.0, np.zeros(3))
         self.rotor_speeds = np.zeros(self.vehicle.rotor_count)
         self._speed_sq = np.zeros(self.vehicle.rotor_count)
+        self._update_body_wrench()
 
     # ----- dynamics ---------------------------------------------------------------------------------
     def body_wrench(self, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -145,13 +178,23 @@ class Plant:
             scaled = u
         return self._force_cols @ scaled, self._lever_cols @ scaled + self._drag_cols @ u
 
-    def _wrench(self, t: float, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        force_body, torque_body = self.body_wrench(position, rotation)
-        force_world = rotation @ force_body
-        if self.config.disturbances:
-            f_ext, tau_ext = total_external_wrench(self.config.disturbances, t, rotation)
-            return force_world + f_ext, torque_body + tau_ext
-        return force_world, torque_body
+    def _wrench(self, t: float, position: Vec3, rotation: Mat3) -> tuple[float, float, float, float, float, float]:
+        """Force world (excluding gravity) [N] and torque body [N m] at an RK4 stage, on Python floats."""
+        if self.actuation == "rotors" and self.effects.enabled:
+            fx = fy = fz = 0.0
+            tx, ty, tz = self._drag_torque
+            for ratio, (force, lever) in zip(self.effects.ratios_floats(position[2], rotation[2]), self._rotor_terms,
+                                             strict=True):
+                fx, fy, fz = fx + ratio * force[0], fy + ratio * force[1], fz + ratio * force[2]
+                tx, ty, tz = tx + ratio * lever[0], ty + ratio * lever[1], tz + ratio * lever[2]
+        else:
+            fx, fy, fz, tx, ty, tz = self._body_wrench
+        fx, fy, fz = mat_vec3(rotation, (fx, fy, fz))
+        disturbances = self.config.disturbances
+        if disturbances:
+            ex, ey, ez, ux, uy, uz = external_wrench_floats(disturbances, t, rotation)
+            return fx + ex, fy + ey, fz + ez, tx + ux, ty + uy, tz + uz
+        return fx, fy, fz, tx, ty, tz
 
     def external_wrench(self) -> tuple[np.ndarray, np.ndarray]:
         """True external wrench now: (force world NED [N], torque body FRD [N m])."""
@@ -167,7 +210,7 @@ class Plant:
         """Advance one period: ``physics_substeps`` RK4 steps of ``physics_dt``, with ground contact."""
         for sub in range(self.substeps):
             t = self.time + sub * self.dt
-            self.state = self.body.step(t, self.state, self.dt, self._wrench)
+            self.state = self.body.step_floats(t, self.state, self.dt, self._wrench)
             self._apply_ground_contact()
         self.step_index += 1
 
@@ -189,12 +232,13 @@ class Plant:
 
     def divergence(self) -> str | None:
         """Why the simulation cannot go on (NaN state, beyond physical bounds, crash), or None."""
-        if not np.all(np.isfinite(self.state)):
+        s = self.state.tolist()
+        if not all(map(math.isfinite, s)):
             return "state is not finite (NaN or inf)"
-        speed = math.sqrt(self.state[3:6] @ self.state[3:6])
+        speed = math.sqrt(s[3] * s[3] + s[4] * s[4] + s[5] * s[5])
         if speed > MAX_SPEED:
             return f"speed {speed:.1f} m/s exceeds {MAX_SPEED} m/s"
-        spin = math.sqrt(self.state[10:13] @ self.state[10:13])
+        spin = math.sqrt(s[10] * s[10] + s[11] * s[11] + s[12] * s[12])
         if spin > MAX_SPIN:
             return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
         if self.max_impact_speed > self.crash_speed:

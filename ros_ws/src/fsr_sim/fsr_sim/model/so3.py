@@ -15,10 +15,11 @@ Functions whose argument is documented with a leading ``...`` accept stacked inp
 are vectorised; the others are written for one sample and kept free of avoidable allocations because
 they run in the 1 kHz loop.
 
-Single-sample fast path: the functions ending in ``3`` (:func:`cross3`, :func:`dot3`, :func:`mat_vec3`,
-:func:`mat_t_vec3`, :func:`rotation_rows_from_quaternion`, :func:`rotation_rows_from_euler_zyx`,
-:func:`euler_rate_rows`, :func:`euler_rate_derivative_rows`, :func:`attitude_error3`) work on Python
-floats: a 3-vector is a tuple (or list) of 3 floats and a 3x3 matrix a tuple of 3 row tuples
+Single-sample fast path: the functions ending in ``3`` or ``_rows`` (:func:`cross3`, :func:`dot3`,
+:func:`mat_vec3`, :func:`mat_t_vec3`, :func:`mat_t_mat3`, :func:`attitude_error3`,
+:func:`rotation_rows_from_quaternion`, :func:`rotation_rows_from_euler_zyx`,
+:func:`euler_zyx_from_rotation_rows`, :func:`euler_rate_rows`, :func:`euler_rate_derivative_rows`) work
+on Python floats: a 3-vector is a tuple (or list) of 3 floats and a 3x3 matrix a tuple of 3 row tuples
 (``ndarray.tolist()`` gives both). On 3-vectors numpy spends ~1 us per call in overhead (``np.cross``
 ~10 us), plain float arithmetic ~0.1 us, so the 1 kHz code (plant, controllers, observer) uses these,
 and the vectorised functions use them for their single-sample case: one definition of each formula.
@@ -63,6 +64,17 @@ def mat_t_vec3(m: Mat3, v: Vec3) -> Vec3:
     return (m00 * x + m10 * y + m20 * z, m01 * x + m11 * y + m21 * z, m02 * x + m12 * y + m22 * z)
 
 
+def mat_t_mat3(a: Mat3, b: Mat3) -> Mat3:
+    """``A^T B`` for two 3x3 matrices given by their rows (e.g. ``R_b^T R_d``)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = b
+    return (
+        (a00 * b00 + a10 * b10 + a20 * b20, a00 * b01 + a10 * b11 + a20 * b21, a00 * b02 + a10 * b12 + a20 * b22),
+        (a01 * b00 + a11 * b10 + a21 * b20, a01 * b01 + a11 * b11 + a21 * b21, a01 * b02 + a11 * b12 + a21 * b22),
+        (a02 * b00 + a12 * b10 + a22 * b20, a02 * b01 + a12 * b11 + a22 * b21, a02 * b02 + a12 * b12 + a22 * b22),
+    )
+
+
 def rotation_rows_from_quaternion(x: float, y: float, z: float, w: float) -> Mat3:
     """Rows of the rotation matrix of the quaternion ``[x, y, z, w]`` (normalised here)."""
     scale = 2.0 / (x * x + y * y + z * z + w * w)
@@ -86,6 +98,14 @@ def rotation_rows_from_euler_zyx(phi: float, theta: float, psi: float) -> Mat3:
         (sps * cth, sps * sth * sph + cps * cph, sps * sth * cph - cps * sph),
         (-sth, cth * sph, cth * cph),
     )
+
+
+def euler_zyx_from_rotation_rows(rotation: Mat3) -> Vec3:
+    """``(roll, pitch, yaw)`` [rad] of the rows of ``R`` (see :func:`euler_zyx_from_rotation`)."""
+    (r00, r01, _), (r10, r11, _), (r20, r21, r22) = rotation
+    if abs(r20) > 1.0 - 1e-12:  # gimbal lock: roll 0, the rest in yaw
+        return (0.0, math.asin(max(-1.0, min(1.0, -r20))), math.atan2(-r01, r11))
+    return (math.atan2(r21, r22), math.asin(max(-1.0, min(1.0, -r20))), math.atan2(r10, r00))
 
 
 def euler_rate_rows(phi: float, theta: float) -> Mat3:
@@ -194,6 +214,8 @@ def euler_zyx_from_rotation(rotation: ArrayLike) -> FloatArray:
     r = np.asarray(rotation, dtype=float)
     if r.shape[-2:] != (3, 3):
         raise ValueError(f"Expected rotation matrix with shape (..., 3, 3), got array of shape {r.shape}")
+    if r.ndim == 2:
+        return np.array(euler_zyx_from_rotation_rows(r.tolist()))
     pitch = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
     roll = np.arctan2(r[..., 2, 1], r[..., 2, 2])
     yaw = np.arctan2(r[..., 1, 0], r[..., 0, 0])

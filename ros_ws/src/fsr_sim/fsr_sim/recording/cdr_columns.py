@@ -13,6 +13,9 @@ A layout is fully determined by the string lengths and sequence counts met while
 the messages that share the first message's length, counts and string bytes share its layout exactly;
 the others are split off and walked in turn. Field paths are dotted (``pose.pose.position.x``,
 ``points.0.transforms.0.translation.x``); a numeric sequence or array is one path with a 2-D column.
+
+Used by every whole-log reader (``fsr_bringup.analysis.load``, ``fsr_estimation.io.flight_log``); needs
+the ROS message definitions (``rosidl_parser`` and the message packages), not a running ROS graph.
 """
 
 from __future__ import annotations

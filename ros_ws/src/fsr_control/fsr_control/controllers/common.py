@@ -1,0 +1,41 @@
+"""What the control laws share: gains as float rows and the tracking errors, on Python floats (1 kHz).
+
+Both laws take ``(reference, position, R, velocity_world, angular_velocity_body)`` and start from the
+position and velocity errors ``e_p = p - p_d``, ``e_v = v - v_d`` (world NED); the 3-vector algebra is
+fsr_sim.model.so3's single-sample float functions (one definition of each formula for the whole stack).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fsr_control.planning.trajectory import Reference
+from fsr_sim.model.so3 import Mat3, Vec3
+
+
+def gain_rows(gain: np.ndarray) -> Mat3:
+    """A 3x3 gain matrix as float rows (for :func:`fsr_sim.model.so3.mat_vec3`)."""
+    return tuple(tuple(row) for row in np.asarray(gain, dtype=float).tolist())
+
+
+def tracking_errors(reference: Reference, position: np.ndarray, velocity_world: np.ndarray) -> tuple[Vec3, Vec3]:
+    """``(e_p, e_v) = (p - p_d, v - v_d)`` [m, m/s] (world NED), as float tuples."""
+    px, py, pz = position.tolist()
+    dx, dy, dz = reference.position.tolist()
+    vx, vy, vz = velocity_world.tolist()
+    ux, uy, uz = reference.velocity.tolist()
+    return (px - dx, py - dy, pz - dz), (vx - ux, vy - uy, vz - uz)
+
+
+def linear_feedback(k_a: Mat3, e_a: Vec3, k_b: Mat3, e_b: Vec3, scale: float, feedforward: Vec3) -> Vec3:
+    """``-K_a e_a - K_b e_b + scale * feedforward`` (the PD terms of both laws)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = k_a
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = k_b
+    x, y, z = e_a
+    u, v, w = e_b
+    fx, fy, fz = feedforward
+    return (
+        -(a00 * x + a01 * y + a02 * z) - (b00 * u + b01 * v + b02 * w) + scale * fx,
+        -(a10 * x + a11 * y + a12 * z) - (b10 * u + b11 * v + b12 * w) + scale * fy,
+        -(a20 * x + a21 * y + a22 * z) - (b20 * u + b21 * v + b22 * w) + scale * fz,
+    )

@@ -1,0 +1,55 @@
+"""fsr_sim.recording.cdr_columns: whole topics of CDR bytes -> numpy columns, checked against rclpy."""
+
+from __future__ import annotations
+
+import numpy as np
+from rclpy.serialization import deserialize_message, serialize_message
+
+from fsr_sim.model.so3 import rotation_from_euler_zyx
+from fsr_sim.recording.cdr_columns import decode_columns
+from fsr_sim.ros.conversions import odometry_from_state, rotor_command, wrench_stamped
+from fsr_sim.ros.message_schema import message_class
+
+
+def _field(msg, path: str):
+    for part in path.split("."):
+        msg = msg[int(part)] if part.isdigit() else getattr(msg, part)
+    return msg
+
+
+def test_columns_equal_rclpy_decoding_for_odometry_wrench_and_joint_state() -> None:
+    rng = np.random.default_rng(3)
+    cases = {
+        "nav_msgs/msg/Odometry": (
+            [odometry_from_state(1_000_003 * k, rng.normal(size=3), rotation_from_euler_zyx(rng.normal(size=3)),
+                                 rng.normal(size=3), rng.normal(size=3)) for k in range(40)],
+            ("header.stamp.sec", "header.stamp.nanosec", "pose.pose.position.z", "pose.pose.orientation.w",
+             "twist.twist.linear.y", "twist.twist.angular.x", "pose.covariance"),
+        ),
+        "geometry_msgs/msg/WrenchStamped": (
+            [wrench_stamped(k * 10**6, rng.normal(size=3), rng.normal(size=3)) for k in range(40)],
+            ("header.stamp.nanosec", "wrench.force.x", "wrench.torque.z"),
+        ),
+        "sensor_msgs/msg/JointState": (
+            [rotor_command(k * 10**6, rng.uniform(0, 800, 4), rng.uniform(-1, 1, 4)) for k in range(40)],
+            ("velocity", "position"),
+        ),
+    }
+    for type_name, (messages, paths) in cases.items():
+        payloads = [serialize_message(m) for m in messages]
+        columns = decode_columns(payloads, type_name)
+        cls = message_class(type_name)
+        for index in (0, 17, len(payloads) - 1):
+            msg = deserialize_message(payloads[index], cls)
+            for path in paths:
+                np.testing.assert_array_equal(columns.get(path)[index], np.asarray(_field(msg, path)), err_msg=path)
+        assert columns.strings["header.frame_id"][0] == messages[0].header.frame_id
+
+
+def test_layouts_that_differ_between_messages_are_split() -> None:
+    msgs = [rotor_command(k, np.full(4, float(k)), np.arange(4.0) if k % 3 == 0 else None) for k in range(10)]
+    msgs[5].header.frame_id = "x"  # another string length
+    columns = decode_columns([serialize_message(m) for m in msgs], "sensor_msgs/msg/JointState")
+    np.testing.assert_array_equal(columns.get("velocity")[:, 0], np.arange(10.0))
+    assert np.isnan(columns.get("position")[1, 4]) and columns.get("position")[3, 5] == 1.0
+    assert columns.strings["header.frame_id"][5] == "x" and columns.strings["name.4"][0] == "tilt_1"

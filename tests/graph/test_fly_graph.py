@@ -1,0 +1,231 @@
+"""``fsr-fly`` end to end: the whole node graph as separate processes, faults, fleets and concurrent runs.
+
+Every run takes its own ROS domain (fsr-fly leases one), records to ``tmp_path`` and is checked through
+its recording. Durations are short so the suite stays fast; the physics is checked elsewhere.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fsr_sim.recording.reader import open_recording
+
+pytestmark = pytest.mark.graph
+
+BIN = Path(sys.executable).parent
+BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
+            "step_disturbance")
+
+
+def env() -> dict[str, str]:
+    return {**os.environ, "MPLBACKEND": "Agg", "PYTHONUNBUFFERED": "1"}
+
+
+def fly(args: list[str], timeout: float = 180.0) -> subprocess.CompletedProcess:
+    return subprocess.run([str(BIN / "fsr-fly"), "--quiet", *args], env=env(), capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def start_fly(args: list[str]) -> subprocess.Popen:
+    return subprocess.Popen([str(BIN / "fsr-fly"), *args], env=env(), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def children(pid: int) -> dict[int, str]:
+    """{pid: command line} of the direct children of ``pid``."""
+    found = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+            cmdline = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+            found[int(entry.name)] = cmdline
+    return found
+
+
+def wait_for_text(path: Path, text: str, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if path.is_file() and text in path.read_text(errors="replace"):
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"'{text}' not in {path} after {timeout} s")
+
+
+def node_pid(fly_pid: int, executable: str) -> int:
+    for pid, cmdline in children(fly_pid).items():
+        if f"/{executable} " in cmdline:
+            return pid
+    raise AssertionError(f"no {executable} child of fsr-fly {fly_pid}: {children(fly_pid)}")
+
+
+def odom_positions(recording: Path, topic: str = "odom") -> np.ndarray:
+    return np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]
+                     for _, m in open_recording(recording).messages(topic)])
+
+
+def final_status(recording, namespace: str = "") -> dict:
+    return json.loads(recording.messages(f"{namespace}/sim_status")[-1][1].data)
+
+
+@pytest.mark.parametrize("scenario", BUILT_IN)
+def test_every_built_in_scenario_flies_records_every_step_and_analyses(tmp_path, scenario):
+    out = tmp_path / f"{scenario}.mcap"
+    run = fly([scenario, "--duration", "0.5", "--out", str(out), "--no-analysis"])
+    assert run.returncode == 0, run.stdout + run.stderr
+    recording = open_recording(out)
+    assert not recording.truncated
+    steps = 500
+    # Every simulator step is in the file: odom for t_0..t_N, a command and an estimate per answered state.
+    assert recording.count("odom") == recording.count("wrench_truth") == steps + 1
+    assert recording.count("wrench_cmd") >= steps
+    assert recording.count("wrench_estimate") >= steps
+    assert recording.count("reference") >= steps
+    assert final_status(recording)["state"] == "finished"
+    analysis = subprocess.run([str(BIN / "fsr-analyze"), str(out), "--out", str(tmp_path / "analysis")],
+                              env=env(), capture_output=True, text=True, timeout=120)
+    assert analysis.returncode == 0, analysis.stderr
+    metrics = json.loads((tmp_path / "analysis" / "metrics.json").read_text())
+    assert metrics and list((tmp_path / "analysis").glob("*.png"))
+
+
+def test_graph_and_in_process_runs_agree(tmp_path):
+    for scenario in ("ex4_geometric", "ex5_voliro"):
+        graph, local = tmp_path / f"{scenario}_graph.mcap", tmp_path / f"{scenario}_local.mcap"
+        for out, extra in ((graph, []), (local, ["--in-process"])):
+            run = fly([scenario, "--duration", "0.5", "--out", str(out), "--no-analysis", *extra])
+            assert run.returncode == 0, run.stdout + run.stderr
+        a, b = odom_positions(graph), odom_positions(local)
+        assert a.shape == b.shape == (501, 3)
+        assert np.max(np.abs(a - b)) < 1e-9
+
+
+def test_killed_controller_is_reported_and_the_recording_is_complete(tmp_path):
+    out = tmp_path / "run.mcap"
+    process = start_fly(["ex4_geometric", "--duration", "3", "--out", str(out), "--no-analysis",
+                         "--set", "lockstep.timeout=0.2"])
+    try:
+        wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "stepping")
+        time.sleep(0.3)
+        os.kill(node_pid(process.pid, "controller"), signal.SIGKILL)
+        stdout, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode == 1, stdout + stderr
+    assert "controller died during the flight (killed by SIGKILL)" in stderr
+    recording = open_recording(out)
+    assert not recording.truncated
+    assert recording.count("odom") == 3001  # the simulator finished the flight on its failsafe
+    assert final_status(recording)["state"] == "finished"
+    assert recording.count("wrench_cmd") < 3001
+
+
+@pytest.mark.parametrize("victim", ["estimator", "recorder"])
+def test_killed_estimator_or_recorder_is_reported_and_the_flight_goes_on(tmp_path, victim):
+    out = tmp_path / "run.mcap"
+    process = start_fly(["step_disturbance", "--duration", "2", "--out", str(out), "--no-analysis"])
+    try:
+        wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "stepping")
+        time.sleep(0.3)
+        os.kill(node_pid(process.pid, "estimator" if victim == "estimator" else "fsr-record"), signal.SIGKILL)
+        stdout, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode == 1, stdout + stderr
+    assert f"{victim} died during the flight (killed by SIGKILL)" in stderr
+    wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "finished: reached the scenario duration")
+    recording = open_recording(out)
+    if victim == "estimator":
+        assert not recording.truncated and recording.count("odom") == 2001
+        assert recording.count("wrench_estimate") < 2001
+    else:
+        assert recording.truncated  # cut by SIGKILL: readable up to its last complete chunk
+        assert recording.count("odom") > 0
+
+
+def test_interrupted_run_stops_every_node_and_keeps_a_valid_recording(tmp_path):
+    out = tmp_path / "run.mcap"
+    process = start_fly(["ex4_geometric", "--duration", "20", "--out", str(out), "--no-analysis"])
+    try:
+        wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "stepping")
+        nodes = children(process.pid)
+        assert len(nodes) == 4, nodes
+        time.sleep(0.5)
+        process.send_signal(signal.SIGINT)
+        process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 130
+    assert not any(Path(f"/proc/{pid}").exists() for pid in nodes), "a node outlived fsr-fly"
+    recording = open_recording(out)
+    assert not recording.truncated and 0 < recording.count("odom") < 20001
+
+
+def test_invalid_scenario_is_refused_before_any_process_starts(tmp_path):
+    scenario = tmp_path / "typo.yaml"
+    scenario.write_text("vehicle: quadrotor_ex4\nduration: 1.0\ncontroler: {type: geometric}\n")
+    run = fly([str(scenario), "--out", str(tmp_path / "run.mcap")], timeout=60)
+    assert run.returncode == 2
+    assert "Traceback" not in run.stderr
+    assert str(scenario) in run.stderr and "controler" in run.stderr
+    assert not (tmp_path / "run").exists()
+    for bad in (["ex4_geometric", "--set", "controller.gains.k_p=[1, 2]"],
+                ["ex4_geometric", "--set", "estimator.c0=0"],
+                ["ex5_voliro", "--set", "controller.type=geometric"],
+                ["no_such_scenario"]):
+        run = fly([*bad, "--out", str(tmp_path / "bad.mcap")], timeout=60)
+        assert run.returncode == 2 and "Traceback" not in run.stderr and run.stderr.count("\n") == 1, run.stderr
+
+
+def test_divergence_ends_the_flight_with_the_reason_and_a_recording(tmp_path):
+    out = tmp_path / "crash.mcap"
+    run = fly(["ex4_geometric", "--duration", "2", "--out", str(out), "--no-analysis",
+               "--set", "actuation=rotors",  # rotor limits: it cannot stop in time
+               "--set", "initial_state.position=[0, 0, -0.3]", "--set", "initial_state.velocity=[0, 0, 15]"])
+    assert run.returncode == 3, run.stdout + run.stderr
+    assert "diverged" in run.stderr
+    recording = open_recording(out)
+    status = final_status(recording)
+    assert status["state"] == "diverged" and status["reason"]
+
+
+def test_two_runs_at_once_do_not_see_each_other(tmp_path):
+    runs = {name: (tmp_path / f"{name}.mcap") for name in ("ex4_geometric", "step_disturbance")}
+    processes = [start_fly([name, "--quiet", "--duration", "1", "--out", str(out), "--no-analysis"])
+                 for name, out in runs.items()]
+    for process in processes:
+        stdout, stderr = process.communicate(timeout=180)
+        assert process.returncode == 0, stdout + stderr
+    for name, out in runs.items():
+        positions = odom_positions(out)
+        assert positions.shape == (1001, 3)
+        start = -1.0 if name == "ex4_geometric" else -2.0
+        assert positions[0, 2] == pytest.approx(start)
+
+
+def test_three_vehicles_fly_under_their_namespaces(tmp_path):
+    out = tmp_path / "fleet.mcap"
+    run = fly(["three_vehicles", "--duration", "6", "--out", str(out), "--no-analysis"], timeout=400)
+    assert run.returncode == 0, run.stdout + run.stderr
+    recording = open_recording(out)
+    assert not recording.has("/odom")
+    goals = {"/uav1": [2.0, 0.0, -2.0], "/uav2": [1.0, 4.0, -3.0], "/uav3": [1.0, 7.0, -2.0]}
+    for namespace, goal in goals.items():
+        assert recording.count(f"{namespace}/odom") == 6001
+        assert recording.count(f"{namespace}/rotor_cmd") >= 6000
+        assert final_status(recording, namespace)["state"] == "finished"
+        final = odom_positions(out, f"{namespace}/odom")[-1]
+        assert np.linalg.norm(final - goal) < 0.01, (namespace, final)
