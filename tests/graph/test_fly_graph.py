@@ -100,6 +100,7 @@ def test_every_built_in_scenario_flies_records_every_step_and_analyses(tmp_path,
     assert analysis.returncode == 0, analysis.stderr
     metrics = json.loads((tmp_path / "analysis" / "metrics.json").read_text())
     assert metrics and list((tmp_path / "analysis").glob("*.png"))
+    assert "cannot decode" not in json.dumps(metrics)  # every recorded topic decodes (rotor_cmd included)
 
 
 def test_graph_and_in_process_runs_agree(tmp_path):

@@ -53,3 +53,15 @@ def test_layouts_that_differ_between_messages_are_split() -> None:
     np.testing.assert_array_equal(columns.get("velocity")[:, 0], np.arange(10.0))
     assert np.isnan(columns.get("position")[1, 4]) and columns.get("position")[3, 5] == 1.0
     assert columns.strings["header.frame_id"][5] == "x" and columns.strings["name.4"][0] == "tilt_1"
+
+
+def test_empty_trailing_sequence_without_padding_is_decoded() -> None:
+    # serialize_message pads after the last (empty) sequence's count; Fast DDS publishes the same
+    # JointState 4 bytes shorter, without that padding (seen on rotor_cmd). Both must decode.
+    cls = message_class("sensor_msgs/msg/JointState")
+    msg = cls(name=[f"rotor_{i}" for i in range(1, 9)], position=[0.0] * 8, velocity=[500.0 + i for i in range(8)])
+    padded = serialize_message(msg)
+    for payload in (padded, padded[:-4]):
+        columns = decode_columns([payload], "sensor_msgs/msg/JointState")
+        assert np.array_equal(columns.get("velocity")[0], [500.0 + i for i in range(8)])
+        assert columns.get("effort").shape == (1, 0)

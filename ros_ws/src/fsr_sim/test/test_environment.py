@@ -56,3 +56,23 @@ def test_multirotor_ground_effect_matches_sanchez_cuevas_quadrotor_formula():
     )
     ratio = multirotor_ground_effect_ratio(np.full(4, z), RHO, sep, np.full(4, b), body_factor=kb)
     np.testing.assert_allclose(ratio, expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("model", ["single", "multirotor"])
+def test_per_rotor_float_path_equals_the_vectorised_ratios(model):
+    """The plant's per-stage path (ratios_floats) and ratios() / thrust_ratios() are the same formulas."""
+    from scipy.spatial.transform import Rotation
+
+    from fsr_sim.model.environment import Environment, Surface, ThrustEffects
+    from fsr_sim.model.vehicle import load_vehicle
+
+    vehicle = load_vehicle("octocopter")
+    env = Environment(Surface(True, 0.0, True, 1.5), Surface(True, -0.6, True, 1.4), ground_model=model)
+    effects = ThrustEffects(env, vehicle.positions, vehicle.rotor_radius)
+    rng = np.random.default_rng(5)
+    for rotation, height in zip(Rotation.random(40, random_state=2).as_matrix(), rng.uniform(-0.7, 0.1, 40),
+                                strict=True):
+        position = np.array((0.3, -0.2, height))
+        expected = effects.ratios(position, rotation)
+        assert np.any(expected != 1.0)
+        np.testing.assert_allclose(effects.ratios_floats(height, tuple(rotation[2])), expected, rtol=1e-14)

@@ -81,19 +81,25 @@ def static_tilting_allocation(vehicle: Vehicle) -> np.ndarray:
 
 def rotor_commands_from_static(vehicle: Vehicle, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eq. 5: ``u = [u_v1, u_l1, ...]`` [N] -> (squared speeds ``u_w`` [(rad/s)^2], tilts ``alpha`` [rad])."""
-    pairs = np.asarray(u, dtype=float).reshape(vehicle.rotor_count, 2)
-    speed_sq = np.hypot(pairs[:, 0], pairs[:, 1]) / vehicle.c_f
-    tilt = np.arctan2(pairs[:, 1], pairs[:, 0])
-    return speed_sq, tilt
+    values = np.asarray(u, dtype=float).ravel().tolist()
+    if len(values) != 2 * vehicle.rotor_count:
+        raise ValueError(f"u needs 2 x {vehicle.rotor_count} values, got {len(values)}")
+    # Per rotor on Python floats: one rotor's pair at a time, no numpy per-call overhead (1 kHz loop).
+    pairs = list(zip(values[0::2], values[1::2], strict=True))
+    c_f = vehicle.c_f
+    return (np.array([math.hypot(u_v, u_l) / c_f for u_v, u_l in pairs]),
+            np.array([math.atan2(u_l, u_v) for u_v, u_l in pairs]))
 
 
 def static_from_rotor_commands(vehicle: Vehicle, speed_sq: np.ndarray, tilt: np.ndarray) -> np.ndarray:
     """Inverse of :func:`rotor_commands_from_static`: ``u_v = c_f u_w cos(alpha)``, ``u_l = c_f u_w sin(alpha)``."""
-    thrust = vehicle.c_f * np.asarray(speed_sq, dtype=float)
-    u = np.empty(2 * vehicle.rotor_count)
-    u[0::2] = thrust * np.cos(tilt)
-    u[1::2] = thrust * np.sin(tilt)
-    return u
+    c_f = vehicle.c_f
+    u = []
+    for u_w, alpha in zip(np.asarray(speed_sq, dtype=float).tolist(), np.asarray(tilt, dtype=float).tolist(),
+                          strict=True):
+        thrust = c_f * u_w
+        u += (thrust * math.cos(alpha), thrust * math.sin(alpha))
+    return np.array(u)
 
 
 @dataclass

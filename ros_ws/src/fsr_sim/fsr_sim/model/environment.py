@@ -195,27 +195,35 @@ class ThrustEffects:
         return ratio
 
     def ratios_floats(self, position_down: float, rotation_row2: Vec3) -> list[float]:
-        """:meth:`ratios` on Python floats: ``position_down`` = p_z [m], ``rotation_row2`` = third row of ``R``."""
+        """:meth:`ratios` on Python floats: ``position_down`` = p_z [m], ``rotation_row2`` = third row of ``R``.
+
+        ``a if not a < b else b`` is ``max(a, b)`` that propagates NaN like ``np.maximum``.
+        """
         env = self.environment
         rho = self.rotor_radius
         rho2 = rho * rho
+        ground, ceiling, multirotor = self._ground, self._ceiling, self._multirotor
         ground_height, ceiling_height = env.ground.height, env.ceiling.height
         ground_floor, ceiling_floor = 1.0 / env.ground.max_ratio, 1.0 / env.ceiling.max_ratio
+        body_factor, k1, k2 = env.body_factor, env.ceiling_k1, env.ceiling_k2
         r0, r1, r2 = rotation_row2
         out = []
-        for i, (px, py, pz) in enumerate(self._rotor_positions):
+        for (px, py, pz), others_sq, arm_sq in zip(self._rotor_positions, self._others_sq, self._arm_sq, strict=True):
             rotor_down = position_down + (px * r0 + py * r1 + pz * r2)  # world z of the rotor
             ratio = 1.0
-            if self._ground:
-                z = max(ground_height - rotor_down, MIN_DISTANCE)
+            if ground:
+                z = ground_height - rotor_down
+                z = z if not z < MIN_DISTANCE else MIN_DISTANCE
                 denominator = _ground_denominator(z, rho)
-                if self._multirotor:
+                if multirotor:
                     c, q = _neighbour_scale(z, rho2)
-                    neighbours = sum([c / (d2 + q) ** 1.5 for d2 in self._others_sq[i]])
-                    denominator = denominator - neighbours - _body_term(z, self._arm_sq[i], rho2, env.body_factor)
-                ratio = 1.0 / max(denominator, ground_floor)
-            if self._ceiling:
-                z = max(rotor_down - ceiling_height, MIN_DISTANCE)
-                ratio = ratio * (1.0 / max(_ceiling_denominator(z, rho, env.ceiling_k1, env.ceiling_k2), ceiling_floor))
+                    neighbours = sum([c / (d2 + q) ** 1.5 for d2 in others_sq])
+                    denominator = denominator - neighbours - _body_term(z, arm_sq, rho2, body_factor)
+                ratio = 1.0 / (denominator if not denominator < ground_floor else ground_floor)
+            if ceiling:
+                z = rotor_down - ceiling_height
+                z = z if not z < MIN_DISTANCE else MIN_DISTANCE
+                denominator = _ceiling_denominator(z, rho, k1, k2)
+                ratio = ratio * (1.0 / (denominator if not denominator < ceiling_floor else ceiling_floor))
             out.append(ratio)
         return out

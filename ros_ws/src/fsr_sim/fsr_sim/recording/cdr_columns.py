@@ -101,6 +101,9 @@ class _Walker:
     def numbers(self, path: str, typename: str, count: int | None) -> None:
         dtype = _DTYPES[typename]
         size = np.dtype(dtype).itemsize
+        if count == 0:  # an empty sequence has no element padding (it may end the message)
+            self.layout.numbers[path] = (self.pos, dtype, 0)
+            return
         self.align(size)
         self.layout.numbers[path] = (self.pos, dtype, count)
         self.pos += size * (1 if count is None else count)
