@@ -18,17 +18,6 @@ MODEL_ARGS = ["-p", "mass:=1.5", "-p", "inertia:=[1.2416, 1.2416, 2.4832]", "-p"
               "-p", "control_period:=0.001"]
 
 
-@pytest.fixture
-def ros_graph(tmp_path):
-    from fsr_bringup.testing.graph import GraphHarness
-
-    harness = GraphHarness(tmp_path)
-    try:
-        yield harness
-    finally:
-        harness.close()
-
-
 def messages_for(log, k, stamp_ns):
     """(odom, wrench_cmd) of sample k of a flight log, stamped ``stamp_ns``."""
     from fsr_sim.model.so3 import euler_rate_matrix, rotation_from_euler_zyx

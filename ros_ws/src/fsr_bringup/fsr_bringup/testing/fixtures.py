@@ -1,4 +1,5 @@
-"""Fixtures for graph tests (tests that start real ROS 2 node processes; mark them ``@pytest.mark.graph``).
+"""Pytest fixtures for graph tests, loaded for the whole suite by the repository's ``conftest.py``
+(``pytest_plugins``). Graph tests (tests that start real ROS 2 node processes; mark them ``@pytest.mark.graph``).
 
 * ``ros_graph``: a :class:`fsr_bringup.testing.graph.GraphHarness` — a leased ROS domain (TEST_RANGE), the
   ``env`` for child processes, ``start(name, argv)``, an rclpy test node in its own Context with
