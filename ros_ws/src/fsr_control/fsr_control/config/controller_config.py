@@ -22,7 +22,6 @@ take the report's values for the controller type. Unknown keys are refused with 
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -60,17 +59,6 @@ class ControllerConfig:
     source: str = ""
 
 
-def reject_unknown_with_hint(section: Section) -> None:
-    """Like ``Section.reject_unknown`` but names the closest known key (``k_P`` -> ``k_p``?)."""
-    unknown = sorted(str(k) for k in section.data if k not in section._read)
-    if not unknown:
-        return
-    known = {name.lower(): name for name in sorted(section._read)}
-    close = difflib.get_close_matches(unknown[0].lower(), list(known), n=1, cutoff=0.5)
-    hint = f"did you mean '{known[close[0]]}'? " if close else ""
-    raise section.error(unknown[0], f"unknown key ({hint}known here: {', '.join(sorted(section._read))})")
-
-
 def checked_gain(value: object, key: str, source: str) -> np.ndarray:
     """3 positive numbers or a symmetric positive-definite 3x3 matrix -> 3x3 array."""
     gain = diagonal_or_matrix(value, key, source)
@@ -88,7 +76,7 @@ def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
     for name, default in defaults.items():
         value = section.raw(name)
         gains[name] = default.copy() if value is None else checked_gain(value, section.key(name), section.source)
-    reject_unknown_with_hint(section)
+    section.reject_unknown()
     return gains
 
 
@@ -112,7 +100,7 @@ def _waypoints(section: Section, vehicle: Vehicle) -> list[Waypoint]:
             rotation = rotation_from_euler_zyx(np.deg2rad(rpy))
         duration = entry.number("duration", strictly_positive=True)
         hold = entry.number("hold", 0.0, minimum=0.0)
-        reject_unknown_with_hint(entry)
+        entry.reject_unknown()
         waypoints.append(Waypoint(position, rotation, duration, hold))
     return waypoints
 
@@ -146,11 +134,11 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
         )
         if secondary.exponent % 2:
             raise objective.error("exponent", f"must be an even integer >= 4, got {secondary.exponent}")
-        reject_unknown_with_hint(objective)
-    reject_unknown_with_hint(controller)
+        objective.reject_unknown()
+    controller.reject_unknown()
 
     trajectory = scenario.section("trajectory")
     waypoints = _waypoints(trajectory, vehicle)
     goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
-    reject_unknown_with_hint(trajectory)
+    trajectory.reject_unknown()
     return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source)

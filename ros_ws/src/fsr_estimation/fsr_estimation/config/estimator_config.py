@@ -12,7 +12,6 @@ estimator:
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,11 +39,7 @@ class EstimatorConfig:
 def estimator_config(scenario: Scenario) -> EstimatorConfig:
     """Parse ``scenario``'s ``estimator`` section; defaults for mass and inertia from its vehicle."""
     section = scenario.section(SECTION)
-    unknown = [str(k) for k in section.data if k not in KEYS]
-    if unknown:
-        close = difflib.get_close_matches(unknown[0], KEYS, n=1)
-        hint = f" (did you mean '{close[0]}'?)" if close else ""
-        raise section.error(unknown[0], f"unknown key{hint}; known: {', '.join(KEYS)}")
+    section.reject_unknown(KEYS)  # typos first, before the values are checked
     enabled = section.boolean("enabled", True)
     c0 = section.number("c0", DEFAULT_C0, strictly_positive=True)
     r = section.integer("r", DEFAULT_R, minimum=1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -177,10 +177,17 @@ class Section:
             raise self.missing(name)
         return checked_array(value, (size,), self.key(name), self.source)
 
-    def reject_unknown(self) -> None:
-        unknown = sorted(str(k) for k in self.data if k not in self._read)
-        if unknown:
-            raise self.error(unknown[0], f"unknown key (known here: {', '.join(sorted(self._read))})")
+    def reject_unknown(self, known: Iterable[str] | None = None) -> None:
+        """Refuse the first key not in ``known`` (default: the keys read so far), naming the closest known
+        key (``k_P`` -> ``k_p``, case-insensitive) as a likely typo."""
+        names = sorted(self._read if known is None else known)
+        unknown = sorted(str(k) for k in self.data if k not in names)
+        if not unknown:
+            return
+        lowered = {name.lower(): name for name in names}
+        close = difflib.get_close_matches(unknown[0].lower(), list(lowered), n=1, cutoff=0.5)
+        hint = f"(did you mean '{lowered[close[0]]}'?) " if close else ""
+        raise self.error(unknown[0], f"unknown key {hint}(known here: {', '.join(names)})")
 
 
 def checked_array(value: Any, shape: tuple[int, ...], key: str, source: str = "") -> np.ndarray:
