@@ -88,3 +88,10 @@ def test_project_to_so3_gives_a_rotation():
 def test_shape_errors_name_expected_and_received():
     with pytest.raises(ValueError, match=r"shape \(\.\.\., 3\), got array of shape \(4,\)"):
         so3.skew(np.zeros(4))
+
+
+def test_rotations_from_quaternions_matches_the_single_sample_function():
+    rng = np.random.default_rng(3)
+    quaternions = rng.normal(size=(50, 4))  # not normalised: both functions normalise
+    expected = np.stack([so3.rotation_from_quaternion(q) for q in quaternions])
+    assert np.array_equal(so3.rotations_from_quaternions(quaternions), expected)

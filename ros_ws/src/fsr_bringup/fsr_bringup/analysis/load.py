@@ -20,6 +20,7 @@ import numpy as np
 
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
+from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.recording.cdr_columns import Columns, LayoutError, decode_columns
 from fsr_sim.recording.reader import Recording, open_recording
 
@@ -28,20 +29,6 @@ STANDARD_TOPICS = (
     "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "goal", "wrench_estimate",
     "mass_estimate", "sim_status",
 )
-
-
-def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices (body -> world) of quaternions ``[x, y, z, w]``, shape (n, 4) -> (n, 3, 3)."""
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    x, y, z, w = q.T
-    return np.stack(
-        (
-            np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)), axis=-1),
-            np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)), axis=-1),
-            np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)), axis=-1),
-        ),
-        axis=1,
-    )
 
 
 @dataclass

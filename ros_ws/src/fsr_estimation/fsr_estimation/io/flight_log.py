@@ -27,7 +27,7 @@ from fsr_sim.model.so3 import (
     euler_rate_matrix,
     euler_zyx_from_rotation,
     rotation_from_euler_zyx,
-    rotation_from_quaternion,
+    rotations_from_quaternions,
 )
 
 MIN_SAMPLES = 10
@@ -219,7 +219,7 @@ def load_mcap(path: str | Path) -> FlightLog:
     bad = ~np.isfinite(quaternion).all(axis=1) | (np.einsum("ki,ki->k", quaternion, quaternion) < 1e-12)
     if bad.any():
         raise FlightLogError(f"{path}: odom: invalid orientation at stamp {stamps[np.argmax(bad)]} ns")
-    rotation = np.stack([rotation_from_quaternion(q) for q in quaternion])
+    rotation = rotations_from_quaternions(quaternion)
     eta = euler_zyx_from_rotation(rotation)
     return FlightLog(
         time=stamps * 1e-9,

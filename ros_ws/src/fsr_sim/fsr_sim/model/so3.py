@@ -287,6 +287,25 @@ def rotation_from_quaternion(quaternion: ArrayLike) -> FloatArray:
     return np.array(rotation_rows_from_quaternion(x, y, z, w))
 
 
+def rotations_from_quaternions(quaternions: ArrayLike) -> FloatArray:
+    """Rotation matrices of unit quaternions ``[x, y, z, w]`` (normalised here), shape (n, 4) -> (n, 3, 3).
+
+    The same arithmetic as :func:`rotation_rows_from_quaternion`, over whole logs at once.
+    """
+    q = np.asarray(quaternions, dtype=float)
+    x, y, z, w = q.T
+    scale = 2.0 / (x * x + y * y + z * z + w * w)
+    xx, yy, zz = scale * x * x, scale * y * y, scale * z * z
+    xy, xz, yz = scale * x * y, scale * x * z, scale * y * z
+    wx, wy, wz = scale * w * x, scale * w * y, scale * w * z
+    rows = (
+        (1.0 - (yy + zz), xy - wz, xz + wy),
+        (xy + wz, 1.0 - (xx + zz), yz - wx),
+        (xz - wy, yz + wx, 1.0 - (xx + yy)),
+    )
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=1)
+
+
 def quaternion_from_rotation(rotation: ArrayLike) -> FloatArray:
     """Unit quaternion ``[x, y, z, w]`` with ``w >= 0`` of a rotation matrix (Shepperd's method)."""
     r = np.asarray(rotation, dtype=float)
