@@ -107,16 +107,9 @@ class Flight:
         finals = [s for s in self.statuses if s.get("state") in FINAL_STATES]
         return finals[-1] if finals else None
 
-    def unique_odoms(self) -> list[Any]:
-        """Odometry with repeated stamps removed (the handshake may repeat the t_0 state)."""
-        seen: set[int] = set()
-        out = []
-        for msg in self.odoms:
-            stamp = stamp_ns(msg)
-            if stamp not in seen:
-                seen.add(stamp)
-                out.append(msg)
-        return out
+    def odom_stamps_ns(self) -> list[int]:
+        """Stamps of every odom received, in arrival order (the simulator sends each state once)."""
+        return [stamp_ns(msg) for msg in self.odoms]
 
 
 class GraphHarness:

@@ -8,9 +8,10 @@ wrench``, ``wrench_cmd`` (geometry_msgs/WrenchStamped). Parameters: :mod:`fsr_si
 Lockstep (default):
 
 1. Handshake (both modes): wait until ``odom`` has ``wait_for_subscribers`` subscribers and the command topic has a
-   publisher, then publish the state ``t_0`` and repeat it every 50 ms until the command stamped ``t_0``
-   arrives (the first message can be lost while discovery completes). Subscribers may therefore see
-   ``t_0`` more than once.
+   publisher, then publish the state ``t_0`` once and wait for the command stamped ``t_0``. The state is never
+   sent twice, so every subscriber (the recorder too) sees exactly one message per step: the streams are
+   transient-local (:mod:`fsr_sim.ros.qos`), so a reader whose side of the match completes after ``t_0`` went
+   out (discovery is asynchronous) still receives it from the writer's history.
 2. Step k: wait for the command stamped ``t_k`` (stale stamps ignored, NaN/inf dropped with a warning),
    apply it, run ``physics_substeps`` RK4 steps, publish the state ``t_{k+1}``. A missing command ->
    failsafe (``hold`` the last command or ``cut`` thrust); see :mod:`fsr_sim.nodes.lockstep`.
@@ -55,7 +56,6 @@ from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node
 
 EXIT_DIVERGED = 3
-HANDSHAKE_RESEND = 0.05  # s between repeats of the t_0 state during the handshake
 WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
 BATCH_WALL = 0.05  # s of stepping per spin_once call
 ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last messages
@@ -98,7 +98,6 @@ class SimulatorNode(Node):
         self.warn_bad = RateLimitedWarning(self.get_logger())
         self.warn_saturation = RateLimitedWarning(self.get_logger(), period=2.0)
         self.startup_deadline = time.monotonic() + self.params.startup_timeout
-        self.last_resend = 0.0
         self.wall_start = 0.0
         self.stale_commands = 0
         mode = "lockstep" if self.config.lockstep else f"free-running at {self.config.real_time_factor}x real time"
@@ -159,7 +158,6 @@ class SimulatorNode(Node):
             )
             self._publish_status("running", "")
             self._publish_state()
-            self.last_resend = time.monotonic()
             self.phase = FIRST_COMMAND
             return
         if time.monotonic() > self.startup_deadline:
@@ -171,9 +169,9 @@ class SimulatorNode(Node):
         time.sleep(0.01)  # polling the graph (discovery is asynchronous), not waiting blindly
 
     def _first_command(self, stop: object) -> None:
-        """Repeat the t_0 state until its command arrives (the first message may be lost)."""
+        """Wait (in slices, so that signals are noticed) for the command answering the t_0 state."""
         expected = self.messages.stamp_ns
-        if self._take_commands(expected, HANDSHAKE_RESEND):
+        if self._take_commands(expected, WAIT_SLICE):
             self.have_command = True
             self.phase = RUNNING
             self.wall_start = time.monotonic()
@@ -185,16 +183,9 @@ class SimulatorNode(Node):
             return
         if stop:
             return
-        now = time.monotonic()
-        if now > self.startup_deadline:
+        if time.monotonic() > self.startup_deadline:
             timeout = self.params.startup_timeout
             self._fail_startup(f"no {self.command_topic} answered the first state within {timeout:g} s")
-            return
-        if now - self.last_resend >= HANDSHAKE_RESEND:
-            self.odom_pub.publish(self.messages.odom)
-            if self.clock_pub is not None:
-                self.clock_pub.publish(self.messages.clock)
-            self.last_resend = now
 
     def _refresh_controller_name(self) -> None:
         """Name the command publisher(s) for messages (node names may be discovered after the endpoint)."""
