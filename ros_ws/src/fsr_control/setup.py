@@ -21,5 +21,10 @@ setup(
         "console_scripts": [
             "controller = fsr_control.nodes.controller_node:main",
         ],
+        # Scenario sections this package validates (fsr_sim.config.scenario.registered_sections).
+        "fsr.scenario_sections": [
+            "controller = fsr_control.config.controller_config:controller_config",
+            "trajectory = fsr_control.config.controller_config:controller_config",
+        ],
     },
 )

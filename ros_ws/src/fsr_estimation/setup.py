@@ -22,5 +22,9 @@ setup(
             "estimator = fsr_estimation.nodes.estimator_node:main",
             "fsr-estimate = fsr_estimation.cli.estimate_cli:main",
         ],
+        # Scenario sections this package validates (fsr_sim.config.scenario.registered_sections).
+        "fsr.scenario_sections": [
+            "estimator = fsr_estimation.config.estimator_config:estimator_config",
+        ],
     },
 )

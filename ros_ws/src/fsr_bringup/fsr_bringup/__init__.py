@@ -1,0 +1,18 @@
+"""fsr_bringup: fsr-fly (node graph or in-process), fsr-record, fsr-analyze, and the Python API.
+
+``from fsr_bringup import simulate`` (:func:`fsr_bringup.api.simulate`).
+"""
+
+from typing import Any
+
+
+def __getattr__(name: str) -> Any:
+    # Lazy: importing fsr_bringup (e.g. for a console script) does not import the whole stack.
+    if name in ("simulate", "FlightRun"):
+        from fsr_bringup import api
+
+        return getattr(api, "FlightRun" if name == "FlightRun" else "simulate")
+    raise AttributeError(f"module 'fsr_bringup' has no attribute '{name}'")
+
+
+__all__ = ["FlightRun", "simulate"]

@@ -1,8 +1,9 @@
 """One object that turns a state into an actuator command: planner + control law + allocation.
 
 ``FlightController.command(t, p, R, v_world, w_body)`` evaluates the reference at ``t`` [s], runs the
-configured law (geometric or Voliro) on the nominal vehicle model, and allocates the body wrench to rotor
-speeds (and tilts) or passes it through in wrench actuation. The controller node and the in-process loop
+configured law (:class:`fsr_control.controllers.common.ControlLaw`: geometric or Voliro, both returning a
+body wrench) on the nominal vehicle model, and allocates the wrench to rotor speeds (and tilts) or passes it
+through in wrench actuation. The controller node and the in-process loop
 both call exactly this, once per lockstep step (1 kHz), so it does no allocation beyond small arrays.
 
 Frames: position world NED [m], ``R`` body FRD -> world, velocity world [m/s], angular velocity body
@@ -18,6 +19,7 @@ import numpy as np
 
 from fsr_control.allocation import FixedRotorActuation, TiltingActuation, WrenchActuation
 from fsr_control.config.controller_config import ControllerConfig
+from fsr_control.controllers.common import ControlLaw, WrenchCommand
 from fsr_control.controllers.geometric import GeometricController
 from fsr_control.controllers.voliro import VoliroController
 from fsr_control.planning.trajectory import Reference, Trajectory
@@ -25,6 +27,13 @@ from fsr_sim.model.allocation import SaturationReport
 from fsr_sim.model.vehicle import Vehicle
 
 ROLL_PITCH_TOLERANCE = 1e-4  # rad: a goal for a fixed-rotor vehicle must be level (yaw only)
+
+
+def make_control_law(config: ControllerConfig, vehicle: Vehicle) -> ControlLaw:
+    """The law ``config.type`` names (``geometric`` or ``voliro``) on the nominal ``vehicle``."""
+    if config.type == "voliro":
+        return VoliroController(vehicle, config.gains, config.angular_feedforward)
+    return GeometricController(vehicle, config.gains)
 
 
 def seconds_from_ns(stamp_ns: int) -> float:
@@ -44,6 +53,7 @@ class ControlOutput:
     tilt_angles: np.ndarray | None
     reference: Reference
     saturated: bool
+    desired: WrenchCommand  # the law's wrench before allocation, and the attitude it commands
 
     @property
     def thrust(self) -> float:
@@ -72,16 +82,9 @@ class FlightController:
         self.config = config
         self.vehicle = vehicle
         self.actuation = actuation
-        if config.type == "geometric":
-            if vehicle.is_tilting:
-                raise ValueError(f"the geometric controller needs fixed rotors; '{vehicle.name}' tilts")
-            self.law = GeometricController(vehicle, config.gains)
-        else:
-            if not vehicle.is_tilting:
-                raise ValueError(f"the voliro controller needs tilting rotors; '{vehicle.name}' has fixed rotors")
-            if actuation != "rotors":
-                raise ValueError("the voliro controller needs 'actuation: rotors'")
-            self.law = VoliroController(vehicle, config.gains, config.angular_feedforward)
+        self.law = make_control_law(config, vehicle)
+        if vehicle.is_tilting and actuation != "rotors":
+            raise ValueError("a tilting-rotor vehicle needs 'actuation: rotors' (its wrench is 6-D)")
         if actuation == "wrench":
             self.actuator = WrenchActuation()
         elif vehicle.is_tilting:
@@ -132,18 +135,11 @@ class FlightController:
             self._plan(position, rotation, stamp_s)
         self.last_stamp = stamp_s
         reference = self.trajectory.evaluate(stamp_s)
-        if self.config.type == "geometric":
-            geometric = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body)
-            force_body = np.array((0.0, 0.0, -geometric.thrust))
-            torque_body = geometric.torque_body
-        else:
-            force_body, torque_body = self.law.compute(
-                reference, position, rotation, velocity_world, angular_velocity_body
-            )
-        actuated = self.actuator.allocate(stamp_s, force_body, torque_body)
+        desired = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body)
+        actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
         return ControlOutput(
             stamp_s, actuated.force_body, actuated.torque_body, actuated.rotor_speeds, actuated.tilt_angles,
-            reference, actuated.saturated,
+            reference, actuated.saturated, desired,
         )
 
     def set_goal(

@@ -1,24 +1,49 @@
+import subprocess
+import sys
+
 import numpy as np
 import pytest
-import yaml
 
-from fsr_sim.config.scenario import load_scenario, simulation_config
-from fsr_sim.model.plant import Plant
+from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
+from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.rigid_body import RigidBody, pack_state
 from fsr_sim.model.so3 import rotation_from_quaternion
-from fsr_sim.model.vehicle import GRAVITY
 
 
-def make_plant(tmp_path, **data):
-    scenario = {"vehicle": "quadrotor_ex4", "duration": 2.0, "actuation": "wrench"}
-    scenario.update(data)
-    path = tmp_path / "scenario.yaml"
-    path.write_text(yaml.safe_dump(scenario))
-    return Plant(simulation_config(load_scenario(path)))
+def make_plant(vehicle="quadrotor_ex4", actuation="wrench", **values):
+    """A plant from plain Python values (no scenario file)."""
+    return Plant(load_vehicle(vehicle), **{"dt": 0.001, "actuation": actuation, **values})
 
 
-def test_free_fall_from_rest_matches_half_g_t_squared(tmp_path):
-    plant = make_plant(tmp_path, initial_state={"position": [0.0, 0.0, -50.0]})
+def test_model_imports_neither_yaml_nor_ros():
+    code = ("import sys, fsr_sim.model, fsr_sim.model.allocation; "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('yaml', 'rclpy', 'rosidl_parser') "
+            "or m.endswith(('.msg', '_msgs'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_plant_from_python_values_hovers_with_the_weight_as_thrust():
+    plant = Plant(load_vehicle("quadrotor_ex4"), dt=0.001, actuation="wrench", position=[0, 0, -1])
+    plant.set_wrench(force_body=[0, 0, -11.772], torque_body=[0, 0, 0])
+    for _ in range(100):
+        plant.step()
+    np.testing.assert_allclose(plant.state.position, [0, 0, -1], atol=1e-12)
+    np.testing.assert_allclose(plant.state.rotation, np.eye(3), atol=1e-15)
+    assert plant.time == pytest.approx(0.1)
+
+
+@pytest.mark.parametrize(("values", "named"), [
+    ({"actuation": "thrust"}, "actuation"), ({"dt": 0.0}, "dt"), ({"position": [0, 0]}, "position"),
+    ({"rotation": np.eye(3), "attitude_rpy_deg": [0, 0, 1]}, "rotation"), ({"substeps": 0}, "substeps"),
+])
+def test_bad_plant_values_are_refused_by_name(values, named):
+    with pytest.raises(ValueError, match=named):
+        make_plant(**values)
+
+
+def test_free_fall_from_rest_matches_half_g_t_squared():
+    plant = make_plant(position=[0.0, 0.0, -50.0])
     for _ in range(1500):
         plant.step()
     t = plant.time
@@ -27,8 +52,8 @@ def test_free_fall_from_rest_matches_half_g_t_squared(tmp_path):
     np.testing.assert_allclose(plant.velocity, [0.0, 0.0, GRAVITY * t], atol=1e-12)
 
 
-def test_hover_with_thrust_equal_to_weight_stays_put(tmp_path):
-    plant = make_plant(tmp_path, initial_state={"position": [1.0, 2.0, -3.0], "attitude_rpy_deg": [0, 0, 30]})
+def test_hover_with_thrust_equal_to_weight_stays_put():
+    plant = make_plant(position=[1.0, 2.0, -3.0], attitude_rpy_deg=[0, 0, 30])
     plant.set_wrench_command(plant.vehicle.weight, np.zeros(3))
     for _ in range(2000):
         plant.step()
@@ -37,11 +62,9 @@ def test_hover_with_thrust_equal_to_weight_stays_put(tmp_path):
 
 
 @pytest.mark.parametrize("vehicle", ["octocopter", "quadrotor_ex4", "tilting_quadrotor_ex5"])
-def test_rotor_hover_stays_put_away_from_surfaces(tmp_path, vehicle):
-    plant = make_plant(
-        tmp_path, vehicle=vehicle, actuation="rotors", environment={"ground": {"enabled": False}},
-        initial_state={"position": [0.0, 0.0, -5.0]},
-    )
+def test_rotor_hover_stays_put_away_from_surfaces(vehicle):
+    plant = make_plant(vehicle, "rotors", environment=Environment(ground=Surface(enabled=False)),
+                       position=[0.0, 0.0, -5.0])
     v = plant.vehicle
     plant.set_rotor_command(np.full(v.rotor_count, np.sqrt(v.weight / (v.rotor_count * v.c_f))))
     for _ in range(1000):
@@ -74,8 +97,8 @@ def test_torque_free_spinning_body_conserves_angular_momentum_and_stays_orthonor
     assert np.linalg.norm(state[6:10]) == pytest.approx(1.0, abs=1e-15)
 
 
-def test_ground_stops_the_vehicle(tmp_path):
-    plant = make_plant(tmp_path, initial_state={"position": [0.0, 0.0, -0.5]})
+def test_ground_stops_the_vehicle():
+    plant = make_plant(position=[0.0, 0.0, -0.5])
     for _ in range(1000):
         plant.step()
     assert plant.in_contact
@@ -85,20 +108,19 @@ def test_ground_stops_the_vehicle(tmp_path):
     assert plant.divergence() is None
 
 
-def test_hard_landing_is_reported_as_a_crash(tmp_path):
-    plant = make_plant(tmp_path, initial_state={"position": [0.0, 0.0, -3.0]})
+def test_hard_landing_is_reported_as_a_crash():
+    plant = make_plant(position=[0.0, 0.0, -3.0])
     for _ in range(1000):
         plant.step()
     assert "crashed into the ground" in plant.divergence()
 
 
-def test_constant_world_force_and_body_force_disturbances(tmp_path):
+def test_constant_world_force_and_body_force_disturbances():
     plant = make_plant(
-        tmp_path,
-        initial_state={"position": [0.0, 0.0, -20.0], "attitude_rpy_deg": [0.0, 0.0, 90.0]},
+        position=[0.0, 0.0, -20.0], attitude_rpy_deg=[0.0, 0.0, 90.0],
         disturbances=[
-            {"kind": "constant", "force": [1.2, 0.0, 0.0]},
-            {"kind": "step", "start": 0.5, "frame": "body", "force": [2.4, 0.0, 0.0], "torque": [0, 0, 0.1]},
+            disturbances.constant(force=[1.2, 0.0, 0.0]),
+            disturbances.step(0.5, force=[2.4, 0.0, 0.0], torque=[0, 0, 0.1], frame="body"),
         ],
     )
     plant.set_wrench_command(plant.vehicle.weight, np.zeros(3))
@@ -112,16 +134,15 @@ def test_constant_world_force_and_body_force_disturbances(tmp_path):
     assert force[1] == pytest.approx(2.4, abs=1e-2)
 
 
-def test_ground_effect_raises_thrust_near_the_ground(tmp_path):
-    plant = make_plant(tmp_path, vehicle="octocopter", actuation="rotors",
-                       initial_state={"position": [0.0, 0.0, -0.3]})
+def test_ground_effect_raises_thrust_near_the_ground():
+    plant = make_plant("octocopter", "rotors", position=[0.0, 0.0, -0.3])
     ratios = plant.thrust_ratios()
     distance = 0.3
     np.testing.assert_allclose(ratios, 1.0 / (1.0 - (0.127 / (4 * distance)) ** 2), rtol=1e-12)
 
 
-def test_saturated_rotor_command_is_clamped_and_recorded(tmp_path):
-    plant = make_plant(tmp_path, actuation="rotors")
+def test_saturated_rotor_command_is_clamped_and_recorded():
+    plant = make_plant(actuation="rotors")
     assert plant.set_rotor_command(np.array((500.0, 1500.0, 500.0, 500.0)))
     assert plant.rotor_speeds[1] == 1000.0
     assert plant.saturation.worst_rotor == 2

@@ -7,8 +7,7 @@ import pytest
 import yaml
 from sensor_msgs.msg import JointState
 
-from fsr_sim.config.scenario import load_scenario, simulation_config
-from fsr_sim.model.plant import Plant
+from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
 from fsr_sim.nodes.commands import RotorCommandReader, wrench_command
 from fsr_sim.nodes.state_messages import StateMessages
 from fsr_sim.ros.conversions import rotor_command, state_from_odometry, wrench_stamped
@@ -59,7 +58,7 @@ def make_plant(tmp_path, **data):
     scenario.update(data)
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(scenario))
-    return Plant(simulation_config(load_scenario(path)))
+    return plant_from_config(simulation_config(load_scenario(path)))
 
 
 def test_state_messages_round_trip_the_plant_state(tmp_path):
@@ -98,5 +97,5 @@ def test_state_messages_stamp_past_one_second(tmp_path):
     messages.fill()
     assert (messages.odom.header.stamp.sec, messages.odom.header.stamp.nanosec) == (1, 230_000_000)
     assert messages.is_finite()
-    plant.state[0] = math.nan
+    plant.state_vector[0] = math.nan
     assert not messages.is_finite()

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 import yaml
 
-from fsr_sim.config.validation import ConfigError, builtin_names
+from fsr_sim.config.validation import ConfigError, builtin_names, resolve_config_path
 from fsr_sim.model.vehicle import load_vehicle
 
 
@@ -18,7 +18,7 @@ def test_builtin_vehicles_load():
 
 
 def write_vehicle(tmp_path, **changes):
-    data = yaml.safe_load(open(load_vehicle.__globals__["resolve_config_path"]("quadrotor_ex4", "vehicles")))
+    data = yaml.safe_load(open(resolve_config_path("quadrotor_ex4", "vehicles")))
     data.update(changes)
     path = tmp_path / "v.yaml"
     path.write_text(yaml.safe_dump(data))

@@ -116,9 +116,9 @@ def main(argv: list[str] | None = None) -> int:
     duration = max(m.checked.simulation.duration for m in members)
 
     if args.in_process:
-        from fsr_bringup.runner.in_process_flight import fly_in_process
+        from fsr_bringup.api import simulate
 
-        result = fly_in_process(members[0].checked.scenario, recording)
+        result = simulate(members[0].checked.scenario, record=recording)
     else:
         try:
             domain = fixed_domain(args.domain_id) if args.domain_id is not None else acquire_domain()

@@ -21,12 +21,9 @@ from pathlib import Path
 
 from fsr_bringup.runner.domains import DomainLease
 from fsr_bringup.runner.processes import ProcessGroup, describe_exit, executable
-from fsr_sim.ros.runtime import configure_environment
+from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_INTERRUPTED, configure_environment
 
-EXIT_NODE_FAILED = 1
-EXIT_DIVERGED = 3
-EXIT_INTERRUPTED = 130
-SIMULATOR_DIVERGED = 3  # the simulator's exit code when the flight diverged
+EXIT_NODE_FAILED = EXIT_FAILURE
 
 
 @dataclass
@@ -227,7 +224,7 @@ def fly_graph(
     exit_code = EXIT_NODE_FAILED if failures else 0
     for name in simulators:
         code = group.get(name).returncode
-        if code == SIMULATOR_DIVERGED:
+        if code == EXIT_DIVERGED:
             failures.append(f"{name}: the flight diverged (see {group.get(name).log_path} for the reason)")
             exit_code = EXIT_DIVERGED
         elif code not in (0, None):

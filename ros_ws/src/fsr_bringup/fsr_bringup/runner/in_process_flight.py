@@ -2,24 +2,23 @@
 
 Per step ``k`` (``t_k = k * control_period``, stamps in integer ns as ``Plant.stamp_ns``):
 
-1. the simulator's ``odom`` round trip: quaternion from the plant state (sign fixed to ``w >= 0``),
-   ``R = rotation_from_quaternion(q)``, twist ``v_body = R^T v_world``, then the controller's
-   ``state_from_odometry``: ``v_world = R v_body`` (the same float arithmetic as
-   ``fsr_sim.nodes.state_messages`` + ``fsr_sim.ros.conversions``, so results agree with the graph to
-   rounding);
+1. the ``odom`` round trip: :func:`fsr_sim.model.odometry.odometry_values` (what the simulator publishes)
+   and :func:`fsr_sim.model.odometry.state_from_odometry_values` (what the nodes read back), the same
+   arithmetic as the graph, so results agree with it to rounding;
 2. ``FlightController.command(t_k, ...)`` -> wrench (what is applied), rotor speeds / tilts, reference;
-3. the estimator (``fsr_estimation.core.observer.MomentumObserver``) takes the state at ``t_k`` and the
-   wrench command stamped ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd`` by stamp;
+3. the estimator: :class:`fsr_estimation.core.stamped.StampedEstimator` gets the state and the command
+   stamped ``t_k``, as the estimator node does with ``odom`` and ``wrench_cmd``;
 4. the plant holds the command over ``[t_k, t_k+1]`` (``physics_substeps`` RK4 steps); a state that
    diverges (``Plant.divergence()``) ends the flight, as the simulator does.
 
 The final state ``t_N`` is published and answered (the controller does not know it is the last) but not
-applied. With ``recording`` the same topics as the graph's recorder are written (log time = stamp).
+applied. With a recording, :class:`fsr_bringup.recording.flight_recording.FlightRecorder` writes what the
+nodes publish, with their own message functions. Ctrl-C (KeyboardInterrupt) ends the flight as
+``stopped``: the arrays and the recording hold every step flown.
 """
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,21 +28,39 @@ import numpy as np
 
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController, seconds_from_ns
-from fsr_sim.config.scenario import Scenario, simulation_config
-from fsr_sim.model.plant import Plant
-from fsr_sim.model.so3 import euler_rate_matrix, euler_zyx_from_rotation, rotation_from_quaternion
-
-EXIT_DIVERGED = 3
+from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
+from fsr_sim.model.odometry import odometry_values, state_from_odometry_values
+from fsr_sim.model.so3 import rotations_from_quaternions
+from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_INTERRUPTED
 
 
 @dataclass
-class InProcessResult:
-    """Arrays over the published states ``k = 0..K`` (K = step count, or the step before a divergence).
+class FlightRun:
+    """One flight as arrays over the published states ``k = 0..K`` (K = step count, or the last step flown).
 
-    state: (K+1, 13) position world, velocity world, quaternion [x, y, z, w], angular velocity body.
-    reference_*: the controller's reference; force_cmd / torque_cmd: the wrench it commanded (body);
-    rotor_speeds / tilt_angles: (K+1, n) or None; external_*: true external wrench (body, as
-    ``wrench_truth``); estimate_* and mass_estimate: the estimator's outputs (None when it is disabled).
+    Attributes
+    ----------
+    time : numpy.ndarray, shape (K+1,)
+        Simulated time [s] of each state.
+    state : numpy.ndarray, shape (K+1, 13)
+        Position world [m], velocity world [m/s], quaternion ``[x, y, z, w]`` (``w >= 0``, as published),
+        angular velocity body [rad/s].
+    reference_position, reference_velocity, reference_acceleration : numpy.ndarray, shape (K+1, 3)
+        The planner's reference, world NED [m, m/s, m/s^2]; ``reference_rotation`` (K+1, 3, 3).
+    rotation_commanded : numpy.ndarray, shape (K+1, 3, 3)
+        The attitude the control law commanded (geometric: ``R_d`` from the thrust direction).
+    force_desired, torque_desired : numpy.ndarray, shape (K+1, 3)
+        The law's body wrench before allocation [N, N m].
+    force_cmd, torque_cmd : numpy.ndarray, shape (K+1, 3)
+        The body wrench commanded after allocation (what ``wrench_cmd`` carries) [N, N m].
+    rotor_speeds, tilt_angles : numpy.ndarray, shape (K+1, n), or None
+        [rad/s], [rad] (None in wrench actuation / for fixed rotors).
+    external_force_body, external_torque_body : numpy.ndarray, shape (K+1, 3)
+        The true external wrench, body frame (as ``wrench_truth``) [N, N m].
+    estimate_force_body, estimate_torque_body, mass_estimate : numpy.ndarray or None
+        The estimator's outputs (None when it is disabled).
+    end_reason : str
+        ``finished``, ``diverged`` or ``stopped`` (interrupted); ``reason`` says why.
     """
 
     time: np.ndarray
@@ -66,6 +83,10 @@ class InProcessResult:
     end_reason: str  # "finished" | "diverged"
     reason: str
     wall_time: float
+    rotation_commanded: np.ndarray | None = None
+    force_desired: np.ndarray | None = None
+    torque_desired: np.ndarray | None = None
+    scenario: Scenario | None = None
     failures: list[str] = field(default_factory=list)
     interrupted: bool = False
 
@@ -75,6 +96,8 @@ class InProcessResult:
 
     @property
     def exit_code(self) -> int:
+        if self.interrupted:
+            return EXIT_INTERRUPTED
         return EXIT_DIVERGED if self.end_reason == "diverged" else 0
 
     @property
@@ -92,148 +115,109 @@ class InProcessResult:
     @property
     def rotation(self) -> np.ndarray:
         """(K+1, 3, 3) body -> world."""
-        return np.array([rotation_from_quaternion(q) for q in self.state[:, 6:10]])
+        return rotations_from_quaternions(self.state[:, 6:10])
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        """(K+1, 3) [rad/s], body FRD."""
+        return self.state[:, 10:13]
 
     @property
     def thrust(self) -> np.ndarray:
         return -self.force_cmd[:, 2]
 
-
-def odometry_round_trip(state: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(quaternion as published, position, R, velocity world, angular velocity body) as the controller node
-    sees the plant state after ``odom`` (see the module docstring)."""
-    x, y, z, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz = state.tolist()
-    if qw < 0.0:
-        qx, qy, qz, qw = -qx, -qy, -qz, -qw
-    rotation = rotation_from_quaternion((qx, qy, qz, qw))
-    velocity_body = rotation.T @ state[3:6]  # twist.linear of the odom
-    # state_from_odometry rebuilds R from the same quaternion (bit-identical) and rotates the twist back.
-    velocity_world = rotation @ velocity_body
-    return np.array((qx, qy, qz, qw)), np.array((x, y, z)), rotation, velocity_world, np.array((wx, wy, wz))
-
-
-def _make_estimator(scenario: Scenario, control_period: float):
-    """The momentum observer configured by the scenario, or None (disabled or fsr_estimation missing)."""
-    try:
-        from fsr_estimation.config.estimator_config import estimator_config
-        from fsr_estimation.core.observer import MomentumObserver
-    except ImportError:
-        return None
-    config = estimator_config(scenario)
-    if not config.enabled:
-        return None
-    return MomentumObserver(config.mass, config.inertia, config.c0, config.r, control_period)
+    def save_mcap(self, path: str | Path) -> Path:
+        """Write this flight's recording, the file ``fsr-fly --in-process`` writes: the flight is flown again
+        (it is deterministic, bit for bit) with the recorder on, up to the last step of this run."""
+        if self.scenario is None:
+            raise ValueError("this run has no scenario to fly again")
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        again = fly_in_process(self.scenario, path, max_steps=len(self.time) - 1)
+        if again.state.shape != self.state.shape or not np.array_equal(again.state, self.state):
+            raise RuntimeError("the flight flown again differs from this run (is the scenario deterministic?)")
+        return path
 
 
-class _Recorder:
-    """Writes the graph's topics with ``RecordingWriter.write_message`` (log time = the message stamp)."""
-
-    def __init__(self, path: Path, scenario: Scenario, rotors: bool) -> None:
-        from fsr_sim.recording.writer import RecordingWriter
-
-        self.writer = RecordingWriter(path, metadata={"fsr_scenario": {"yaml": scenario.dump()}})
-        self.rotors = rotors
-
-    def step(self, stamp_ns: int, quaternion, position, velocity_world, rotation, angular_velocity,
-             external: tuple[np.ndarray, np.ndarray], output, estimate) -> None:
-        from nav_msgs.msg import Odometry
-        from std_msgs.msg import Float64
-
-        from fsr_control.nodes.messages import reference_message
-        from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME, rotor_command, time_from_ns, wrench_stamped
-
-        odom = Odometry()
-        odom.header.stamp = time_from_ns(stamp_ns)
-        odom.header.frame_id = WORLD_FRAME
-        odom.child_frame_id = BODY_FRAME
-        pose = odom.pose.pose
-        pose.position.x, pose.position.y, pose.position.z = position.tolist()
-        pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = quaternion.tolist()
-        twist = odom.twist.twist
-        twist.linear.x, twist.linear.y, twist.linear.z = (rotation.T @ velocity_world).tolist()
-        twist.angular.x, twist.angular.y, twist.angular.z = angular_velocity.tolist()
-        write = self.writer.write_message
-        write("/odom", odom, stamp_ns)
-        write("/wrench_truth", wrench_stamped(stamp_ns, external[0], external[1]), stamp_ns)
-        if self.rotors:
-            write("/rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles), stamp_ns)
-        write("/wrench_cmd", wrench_stamped(stamp_ns, output.force_body, output.torque_body), stamp_ns)
-        write("/reference", reference_message(stamp_ns, output.reference), stamp_ns)
-        if estimate is not None:
-            write("/wrench_estimate", wrench_stamped(stamp_ns, estimate[0], estimate[1]), stamp_ns)
-            write("/mass_estimate", Float64(data=float(estimate[2])), stamp_ns)
-
-    def status(self, stamp_ns: int, state: str, reason: str, steps: int) -> None:
-        from std_msgs.msg import String
-
-        text = json.dumps({"state": state, "reason": reason, "sim_time": stamp_ns * 1e-9, "steps": steps})
-        self.writer.write_message("/sim_status", String(data=text), stamp_ns)
-
-    def close(self) -> None:
-        self.writer.close()
+InProcessResult = FlightRun  # the name before the Python API
 
 
-def fly_in_process(scenario: Any, recording: Path | None = None) -> InProcessResult:
-    """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process."""
+def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None) -> FlightRun:
+    """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process.
+
+    ``recording``: write the MCAP file there. ``max_steps``: stop after that many steps (default: the
+    scenario's duration). Ctrl-C ends the flight early (``end_reason`` ``stopped``, ``interrupted``).
+    """
+    from fsr_estimation.config.estimator_config import estimator_config
+    from fsr_estimation.core.stamped import StampedEstimator
+
     scenario = getattr(scenario, "scenario", scenario)
     sim = simulation_config(scenario)
     config = controller_config(scenario)
-    plant = Plant(sim)
+    estimation = estimator_config(scenario)
+    plant = plant_from_config(sim)
     controller = FlightController(config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation)
-    observer = _make_estimator(scenario, sim.control_period)
+    estimator = (StampedEstimator(estimation.mass, estimation.inertia, estimation.c0, estimation.r, sim.control_period)
+                 if estimation.enabled else None)
     rotors = sim.actuation == "rotors"
     n = sim.vehicle.rotor_count
-    steps = sim.step_count
+    steps = sim.step_count if max_steps is None else min(sim.step_count, int(max_steps))
     size = steps + 1
-    times = np.zeros(size)
-    states = np.zeros((size, 13))
-    ref = {key: np.zeros((size, 3)) for key in ("p", "v", "a")}
-    ref_rotation = np.zeros((size, 3, 3))
-    force_cmd, torque_cmd = np.zeros((size, 3)), np.zeros((size, 3))
+    arrays = {key: np.zeros((size, 3)) for key in ("p", "v", "a", "force", "torque", "force_desired",
+                                                    "torque_desired", "ext_force", "ext_torque")}
+    times, states = np.zeros(size), np.zeros((size, 13))
+    ref_rotation, rotation_commanded = np.zeros((size, 3, 3)), np.zeros((size, 3, 3))
     speeds = np.zeros((size, n)) if rotors else None
     tilts = np.zeros((size, n)) if rotors and sim.vehicle.is_tilting else None
-    ext_force, ext_torque = np.zeros((size, 3)), np.zeros((size, 3))
-    est_force = np.zeros((size, 3)) if observer is not None else None
-    est_torque = np.zeros((size, 3)) if observer is not None else None
-    mass_est = np.zeros(size) if observer is not None else None
-    recorder = _Recorder(Path(recording), scenario, rotors) if recording is not None else None
-    end_reason, reason = "finished", "end of scenario"
+    est_force = np.zeros((size, 3)) if estimator is not None else None
+    est_torque = np.zeros((size, 3)) if estimator is not None else None
+    mass_est = np.zeros(size) if estimator is not None else None
+    recorder = None
+    if recording is not None:
+        from fsr_bringup.recording.flight_recording import FlightRecorder
+
+        recorder = FlightRecorder(Path(recording), scenario.dump(), rotors)
+    end_reason, reason, interrupted = "finished", f"reached the scenario duration {sim.duration:g} s", False
+    if steps < sim.step_count:
+        reason = f"stopped after {steps} steps"
     start = time.perf_counter()
-    last = 0
+    last = -1
     try:
         if recorder is not None:
             recorder.status(0, "running", "", 0)
         for k in range(size):
             stamp_ns = plant.stamp_ns
-            quaternion, position, rotation, velocity_world, angular_velocity = odometry_round_trip(plant.state)
+            position, rotation, velocity_world, angular_velocity = state_from_odometry_values(
+                *odometry_values(plant.state_vector))
             output = controller.command(seconds_from_ns(stamp_ns), position, rotation, velocity_world,
                                         angular_velocity)
             force_world, torque_body = plant.external_wrench()
             external = (rotation.T @ force_world if sim.disturbances else np.zeros(3),
                         np.asarray(torque_body, dtype=float))
             estimate = None
-            if observer is not None:
-                eta = euler_zyx_from_rotation(rotation)
-                eta_dot = np.linalg.solve(euler_rate_matrix(eta), angular_velocity)
-                observer.update(velocity_world, eta, eta_dot, output.force_body, output.torque_body)
-                f_est, t_est = observer.wrench_body()
-                estimate = (f_est, t_est, observer.mass_estimate)
-                est_force[k], est_torque[k], mass_est[k] = estimate
+            if estimator is not None:
+                estimator.add_state(stamp_ns, rotation, velocity_world, angular_velocity)
+                estimate = estimator.add_command(stamp_ns, output.force_body, output.torque_body)
+                est_force[k], est_torque[k], mass_est[k] = estimate.force_body, estimate.torque_body, estimate.mass
             times[k] = seconds_from_ns(stamp_ns)
-            states[k] = plant.state
-            states[k, 6:10] = quaternion
+            states[k] = plant.state_vector
+            states[k, 6:10] = odometry_values(plant.state_vector)[1]
             reference = output.reference
-            ref["p"][k], ref["v"][k], ref["a"][k] = reference.position, reference.velocity, reference.acceleration
+            arrays["p"][k], arrays["v"][k], arrays["a"][k] = (reference.position, reference.velocity,
+                                                              reference.acceleration)
             ref_rotation[k] = reference.rotation
-            force_cmd[k], torque_cmd[k] = output.force_body, output.torque_body
+            rotation_commanded[k] = output.desired.rotation_commanded
+            arrays["force_desired"][k], arrays["torque_desired"][k] = (output.desired.force_body,
+                                                                       output.desired.torque_body)
+            arrays["force"][k], arrays["torque"][k] = output.force_body, output.torque_body
             if speeds is not None:
                 speeds[k] = output.rotor_speeds
             if tilts is not None:
                 tilts[k] = output.tilt_angles
-            ext_force[k], ext_torque[k] = external
+            arrays["ext_force"][k], arrays["ext_torque"][k] = external
             if recorder is not None:
-                recorder.step(stamp_ns, quaternion, position, velocity_world, rotation, angular_velocity,
-                              external, output, estimate)
+                recorder.step(stamp_ns, plant.state_vector, plant.external_wrench() if sim.disturbances else None,
+                              output, estimate)
             last = k
             if k == steps:
                 break
@@ -246,25 +230,31 @@ def fly_in_process(scenario: Any, recording: Path | None = None) -> InProcessRes
             if divergence is not None:
                 end_reason, reason = "diverged", divergence
                 break
-        if recorder is not None:
-            recorder.status(plant.stamp_ns, end_reason, reason, plant.step_index)
+    except KeyboardInterrupt:
+        end_reason, reason, interrupted = "stopped", "received SIGINT", True
     finally:
         if recorder is not None:
-            recorder.close()
+            try:
+                final_ns = int(round(times[max(last, 0)] * 1e9)) if last >= 0 else 0
+                recorder.status(final_ns, end_reason, reason, max(last, 0))
+            finally:
+                recorder.close()
     wall = time.perf_counter() - start
     keep = slice(0, last + 1)
 
     def cut(array: np.ndarray | None) -> np.ndarray | None:
         return None if array is None else array[keep]
 
-    return InProcessResult(
-        time=times[keep], state=states[keep], reference_position=ref["p"][keep],
-        reference_velocity=ref["v"][keep], reference_acceleration=ref["a"][keep],
-        reference_rotation=ref_rotation[keep], force_cmd=force_cmd[keep], torque_cmd=torque_cmd[keep],
-        rotor_speeds=cut(speeds), tilt_angles=cut(tilts), external_force_body=ext_force[keep],
-        external_torque_body=ext_torque[keep], estimate_force_body=cut(est_force),
+    failures = {"diverged": [f"flight diverged: {reason}"], "stopped": ["flight interrupted (SIGINT)"]}
+    return FlightRun(
+        time=times[keep], state=states[keep], reference_position=arrays["p"][keep],
+        reference_velocity=arrays["v"][keep], reference_acceleration=arrays["a"][keep],
+        reference_rotation=ref_rotation[keep], force_cmd=arrays["force"][keep], torque_cmd=arrays["torque"][keep],
+        rotor_speeds=cut(speeds), tilt_angles=cut(tilts), external_force_body=arrays["ext_force"][keep],
+        external_torque_body=arrays["ext_torque"][keep], estimate_force_body=cut(est_force),
         estimate_torque_body=cut(est_torque), mass_estimate=cut(mass_est),
         saturation=controller.saturation.as_dict(), tilt_saturation=controller.tilt_saturation.as_dict(),
-        end_reason=end_reason, reason=reason, wall_time=wall,
-        failures=[f"flight diverged: {reason}"] if end_reason == "diverged" else [],
+        end_reason=end_reason, reason=reason, wall_time=wall, rotation_commanded=rotation_commanded[keep],
+        force_desired=arrays["force_desired"][keep], torque_desired=arrays["torque_desired"][keep],
+        scenario=scenario, failures=failures.get(end_reason, []), interrupted=interrupted,
     )

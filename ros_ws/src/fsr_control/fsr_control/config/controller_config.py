@@ -29,7 +29,7 @@ import numpy as np
 from fsr_control.controllers import geometric, voliro
 from fsr_control.planning.trajectory import Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for
-from fsr_sim.config.validation import ConfigError, Section, diagonal_or_matrix
+from fsr_sim.config.validation import Section, checked_spd
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
@@ -59,23 +59,12 @@ class ControllerConfig:
     source: str = ""
 
 
-def checked_gain(value: object, key: str, source: str) -> np.ndarray:
-    """3 positive numbers or a symmetric positive-definite 3x3 matrix -> 3x3 array."""
-    gain = diagonal_or_matrix(value, key, source)
-    if not np.allclose(gain, gain.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(gain).max()))):
-        raise ConfigError(key, f"must be symmetric, got {gain.tolist()}", source)
-    eigenvalues = np.linalg.eigvalsh(gain)
-    if eigenvalues.min() <= 0.0:
-        raise ConfigError(key, f"must be positive definite, got eigenvalues {eigenvalues.tolist()}", source)
-    return gain
-
-
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
     defaults = DEFAULT_GAINS[controller_type]
     gains = {}
     for name, default in defaults.items():
         value = section.raw(name)
-        gains[name] = default.copy() if value is None else checked_gain(value, section.key(name), section.source)
+        gains[name] = default.copy() if value is None else checked_spd(value, section.key(name), section.source)
     section.reject_unknown()
     return gains
 

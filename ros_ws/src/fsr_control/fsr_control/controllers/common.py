@@ -1,16 +1,55 @@
-"""What the control laws share: gains as float rows and the tracking errors, on Python floats (1 kHz).
+"""What the control laws share: their interface, gains as float rows and the tracking errors (1 kHz).
 
-Both laws take ``(reference, position, R, velocity_world, angular_velocity_body)`` and start from the
+The interface (:class:`ControlLaw`): ``compute(reference, position, rotation, velocity_world,
+angular_velocity_body) -> WrenchCommand``, the body wrench to produce and the attitude it commands;
+allocation (fsr_control.allocation) turns the wrench into rotor speeds and tilts. Both laws start from the
 position and velocity errors ``e_p = p - p_d``, ``e_v = v - v_d`` (world NED); the 3-vector algebra is
 fsr_sim.model.so3's single-sample float functions (one definition of each formula for the whole stack).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Protocol
+
 import numpy as np
 
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.model.so3 import Mat3, Vec3
+
+
+@dataclass
+class WrenchCommand:
+    """What a control law asks for at one state.
+
+    Attributes
+    ----------
+    force_body : numpy.ndarray, shape (3,)
+        Body force [N], FRD (a fixed-rotor vehicle: ``[0, 0, -u_T]``).
+    torque_body : numpy.ndarray, shape (3,)
+        Body torque [N m], FRD.
+    rotation_commanded : numpy.ndarray, shape (3, 3)
+        The attitude the law steers to, body FRD -> world NED (geometric: ``R_d`` built from the thrust
+        direction; Voliro: the reference attitude).
+    """
+
+    force_body: np.ndarray
+    torque_body: np.ndarray
+    rotation_commanded: np.ndarray
+
+    @property
+    def thrust(self) -> float:
+        """``u_T = -f_z`` [N] (thrust along ``-z_b``)."""
+        return -float(self.force_body[2])
+
+
+class ControlLaw(Protocol):
+    """A control law on the nominal vehicle model (frames: position and velocity world NED [m, m/s],
+    ``rotation`` body FRD -> world NED, angular velocity body FRD [rad/s])."""
+
+    def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
+                angular_velocity_body: np.ndarray) -> WrenchCommand:
+        """The body wrench for this state and reference."""
 
 
 def gain_rows(gain: np.ndarray) -> Mat3:

@@ -11,10 +11,11 @@ World NED, body FRD, ``e3 = [0, 0, 1]`` (down), ``g = 9.81``:
 
 ``w_d`` and ``w_dot_d`` are the exact rates of this ``R_d`` (:mod:`fsr_control.planning.flatness`): with
 ``a_dot = -K_p e_v - K_v e_a + m p_dddot_d`` and ``a_ddot = -K_p e_a - K_v e_j + m p_ddddot_d``, where the
-acceleration error ``e_a`` uses the acceleration measured by differencing consecutive velocities (the
+acceleration error ``e_a`` uses the *measured* acceleration, from differencing consecutive velocities (the
 model's ``g e3 - u_T R_b e3 / m`` would miss unmodelled forces: with a constant disturbance it predicts
-an acceleration that never comes and keeps ``R_d`` turning) and the jerk error ``e_j`` the model's
-``p_dddot = -(u_T_dot R_b e3 + u_T R_b S(w_b) e3) / m`` (zero at any equilibrium). Without the
+an acceleration that never comes and keeps ``R_d`` turning; the model's value is used only at the first
+step), and the jerk error ``e_j`` the model's ``p_dddot = -(u_T_dot R_b e3 + u_T R_b S(w_b) e3) / m``
+(zero at any equilibrium). Without the
 feedback part of these rates (only the reference's) the attitude loop lags the outer loop and, with the
 report's gains and the exercise-4 inertia (1.24 kg m^2), the lateral loop is unstable:
 ``1.49 s^4 + 12 s^3 + 12 s^2 + 200 s + 200`` fails Routh's test. The controller uses the nominal model (mass, inertia).
@@ -23,15 +24,14 @@ Report gains: ``K_p = K_v = diag(20, 20, 100)``, ``K_R = K_w = diag(10, 10, 100)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from fsr_control.controllers.common import gain_rows, linear_feedback, tracking_errors
+from fsr_control.controllers.common import WrenchCommand, gain_rows, linear_feedback, tracking_errors
 from fsr_control.planning.flatness import attitude_rows_from_thrust_vector
 from fsr_control.planning.trajectory import Reference
+from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.so3 import Vec3, attitude_error3, cross3, dot3, mat_t_mat3, mat_vec3
-from fsr_sim.model.vehicle import GRAVITY, Vehicle
+from fsr_sim.model.vehicle import Vehicle
 
 REPORT_GAINS = {
     "k_p": np.diag((20.0, 20.0, 100.0)),
@@ -41,19 +41,21 @@ REPORT_GAINS = {
 }
 
 
-@dataclass
-class GeometricCommand:
-    """Thrust ``u_T`` [N] along ``-z_b``, body torque [N m], and the desired attitude used."""
-
-    thrust: float
-    torque_body: np.ndarray
-    rotation_desired: np.ndarray
-
-
 class GeometricController:
-    """``compute(reference, state) -> GeometricCommand`` with the equations of the module docstring."""
+    """The geometric law of the module docstring on the nominal ``vehicle`` (fixed rotors).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Nominal model: mass [kg] and inertia [kg m^2] (must have fixed rotors).
+    gains : dict
+        ``k_p``, ``k_v`` [N/m, N s/m], ``k_r``, ``k_w`` [N m/rad, N m s/rad]: (3, 3) arrays (or anything
+        ``np.asarray`` makes one of).
+    """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray]) -> None:
+        if vehicle.is_tilting:
+            raise ValueError(f"the geometric controller needs fixed rotors; '{vehicle.name}' tilts")
         self.mass = vehicle.mass
         self.inertia = np.array(vehicle.inertia, dtype=float)
         self.k_p, self.k_v = np.asarray(gains["k_p"], float), np.asarray(gains["k_v"], float)
@@ -70,7 +72,25 @@ class GeometricController:
         rotation: np.ndarray,
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
-    ) -> GeometricCommand:
+    ) -> WrenchCommand:
+        """Body wrench ``[0, 0, -u_T]``, ``tau_b`` and ``R_d`` for the state (frames: module docstring).
+
+        Parameters
+        ----------
+        reference : Reference
+            The planner's desired state at this time.
+        position, velocity_world : numpy.ndarray, shape (3,)
+            [m], [m/s], world NED.
+        rotation : numpy.ndarray, shape (3, 3)
+            Body FRD -> world NED.
+        angular_velocity_body : numpy.ndarray, shape (3,)
+            [rad/s], body FRD.
+
+        Returns
+        -------
+        WrenchCommand
+            ``force_body = [0, 0, -u_T]`` [N], ``torque_body`` [N m], ``rotation_commanded = R_d``.
+        """
         m = self.mass
         k_p, k_v, inertia = self._k_p, self._k_v, self._inertia
         e_p, e_v = tracking_errors(reference, position, velocity_world)
@@ -79,7 +99,7 @@ class GeometricController:
         r = rotation.tolist()
         z_b = (r[0][2], r[1][2], r[2][2])
         thrust = -dot3(a, z_b)
-        # R_d and its rates: differentiate a with the model-predicted acceleration and jerk of this thrust.
+        # R_d and its rates: differentiate a with the measured acceleration and the model's jerk of this thrust.
         w = angular_velocity_body.tolist()
         z_b_dot = mat_vec3(r, (w[1], -w[0], 0.0))  # R S(w) e3
         acceleration = self._measured_acceleration(reference.time, velocity_world.tolist(), thrust, z_b)
@@ -103,7 +123,7 @@ class GeometricController:
         e_r = attitude_error3(r, rotation_desired)
         feedback = linear_feedback(self._k_r, e_r, self._k_w, e_w, 0.0, (0.0, 0.0, 0.0))
         torque = tuple(feedback[i] + gyro[i] - feedforward[i] for i in range(3))
-        return GeometricCommand(thrust, np.array(torque), np.array(rotation_desired))
+        return WrenchCommand(np.array((0.0, 0.0, -thrust)), np.array(torque), np.array(rotation_desired))
 
     def _measured_acceleration(self, t: float, velocity_world: Vec3, thrust: float, z_b: Vec3) -> Vec3:
         """Acceleration [m/s^2] from consecutive velocities (includes unmodelled forces); the model's

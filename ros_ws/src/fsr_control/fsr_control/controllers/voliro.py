@@ -24,10 +24,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import gain_rows, linear_feedback, tracking_errors
+from fsr_control.controllers.common import WrenchCommand, gain_rows, linear_feedback, tracking_errors
 from fsr_control.planning.trajectory import Reference
+from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.so3 import attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3
-from fsr_sim.model.vehicle import GRAVITY, Vehicle
+from fsr_sim.model.vehicle import Vehicle
 
 REPORT_GAINS = {
     "k_p": np.diag((50.0, 50.0, 100.0)),
@@ -39,9 +40,21 @@ ANGULAR_FEEDFORWARDS = ("consistent", "report")
 
 
 class VoliroController:
-    """``compute(reference, state) -> (force_body [N], torque_body [N m])`` (module docstring)."""
+    """The Voliro law of the module docstring on the nominal ``vehicle`` (tilting rotors).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Nominal model: mass [kg] and inertia [kg m^2] (must have tilting rotors).
+    gains : dict
+        ``k_p``, ``k_d`` [1/s^2, 1/s], ``k_r``, ``k_w`` [1/s^2, 1/s]: (3, 3) arrays (acceleration gains).
+    angular_feedforward : {"consistent", "report"}
+        The feed-forward of ``w`` (module docstring).
+    """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforward: str = "consistent") -> None:
+        if not vehicle.is_tilting:
+            raise ValueError(f"the voliro controller needs tilting rotors; '{vehicle.name}' has fixed rotors")
         if angular_feedforward not in ANGULAR_FEEDFORWARDS:
             raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
         self.mass = vehicle.mass
@@ -60,7 +73,25 @@ class VoliroController:
         rotation: np.ndarray,
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> WrenchCommand:
+        """Body wrench ``B^-1 (-b + [v; w])`` for the state (module docstring).
+
+        Parameters
+        ----------
+        reference : Reference
+            The planner's desired state (full attitude) at this time.
+        position, velocity_world : numpy.ndarray, shape (3,)
+            [m], [m/s], world NED.
+        rotation : numpy.ndarray, shape (3, 3)
+            Body FRD -> world NED.
+        angular_velocity_body : numpy.ndarray, shape (3,)
+            [rad/s], body FRD.
+
+        Returns
+        -------
+        WrenchCommand
+            ``force_body`` [N] and ``torque_body`` [N m] (body FRD), ``rotation_commanded = R_d``.
+        """
         e_p, e_v = tracking_errors(reference, position, velocity_world)
         v = linear_feedback(self._k_p, e_p, self._k_d, e_v, 1.0, reference.acceleration.tolist())
         r = rotation.tolist()
@@ -83,5 +114,5 @@ class VoliroController:
         force_body = mat_t_vec3(r, (v[0], v[1], v[2] - GRAVITY))
         inertia_w = mat_vec3(inertia, w)
         gyro = cross3(w_b, mat_vec3(inertia, w_b))
-        return (np.array((m * force_body[0], m * force_body[1], m * force_body[2])),
-                np.array(tuple(inertia_w[i] + gyro[i] for i in range(3))))
+        return WrenchCommand(np.array((m * force_body[0], m * force_body[1], m * force_body[2])),
+                             np.array(tuple(inertia_w[i] + gyro[i] for i in range(3))), reference.rotation)

@@ -25,15 +25,13 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController, seconds_from_ns
-from fsr_control.nodes.messages import goal_from_message, reference_message
+from fsr_control.nodes.messages import controller_messages, goal_from_message
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.ros.conversions import (
     ns_from_time,
     odometry_is_finite,
-    rotor_command,
     state_from_odometry,
-    wrench_stamped,
 )
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, run_node
@@ -82,9 +80,12 @@ class ControllerNode(Node):
             config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation
         )
         self.rotors = sim.actuation == "rotors"
-        self.rotor_pub = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS) if self.rotors else None
-        self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS)
-        self.reference_pub = self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS)
+        self.publishers_by_topic = {
+            "wrench_cmd": self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS),
+            "reference": self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS),
+        }
+        if self.rotors:
+            self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
         self.warn = RateLimitedWarning(self.get_logger())
@@ -109,10 +110,8 @@ class ControllerNode(Node):
         except (ValueError, ArithmeticError) as error:  # never crash mid-flight; the simulator holds/fails safe
             self.warn(f"no command for odom at {stamp_ns * 1e-9:.3f} s: {error}")
             return
-        if self.rotor_pub is not None:
-            self.rotor_pub.publish(rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles))
-        self.wrench_pub.publish(wrench_stamped(stamp_ns, output.force_body, output.torque_body))
-        self.reference_pub.publish(reference_message(stamp_ns, output.reference))
+        for topic, message in controller_messages(stamp_ns, output, self.rotors):
+            self.publishers_by_topic[topic].publish(message)
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1
 

@@ -11,14 +11,16 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped, Transform, Twist
 from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
 
+from fsr_control.flight_controller import ControlOutput
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.model.so3 import quaternion_from_rotation, rotation_from_quaternion
-from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME, time_from_ns
+from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME, rotor_command, time_from_ns, wrench_stamped
 
 
 def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTrajectory:
@@ -44,6 +46,18 @@ def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTraje
     point = MultiDOFJointTrajectoryPoint(transforms=[transform], velocities=[velocity], accelerations=[acceleration])
     msg.points = [point]
     return msg
+
+
+def controller_messages(stamp_ns: int, output: ControlOutput, rotors: bool) -> list[tuple[str, Any]]:
+    """(topic, message) of everything the controller publishes for the state stamped ``stamp_ns``: ``rotor_cmd``
+    (rotor actuation only), ``wrench_cmd``, ``reference``. The node publishes these; a recording of an
+    in-process flight writes them."""
+    messages: list[tuple[str, Any]] = []
+    if rotors:
+        messages.append(("rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles)))
+    messages.append(("wrench_cmd", wrench_stamped(stamp_ns, output.force_body, output.torque_body)))
+    messages.append(("reference", reference_message(stamp_ns, output.reference)))
+    return messages
 
 
 def goal_from_message(msg: PoseStamped) -> tuple[np.ndarray, np.ndarray]:

@@ -25,8 +25,8 @@ import math
 
 import numpy as np
 
+from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.so3 import Mat3, Vec3, cross3, dot3
-from fsr_sim.model.vehicle import GRAVITY
 
 Vec = Vec3
 

@@ -30,9 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_control.planning.polynomial import SepticSegment
+from fsr_sim.model.frames import E3
 from fsr_sim.model.so3 import rotation_exp, rotation_log, skew
-
-E3 = np.array((0.0, 0.0, 1.0))
 
 
 def yaw_rotation(yaw_rad: float) -> np.ndarray:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_sim.config.scenario import Scenario, load_vehicle_for
-from fsr_sim.model.vehicle import checked_inertia
+from fsr_sim.config.validation import checked_spd
 
 SECTION = "estimator"
 KEYS = ("enabled", "c0", "r", "mass", "inertia")
@@ -45,10 +45,10 @@ def estimator_config(scenario: Scenario) -> EstimatorConfig:
     r = section.integer("r", DEFAULT_R, minimum=1)
     if section.has("mass") and section.has("inertia"):
         mass = section.number("mass", strictly_positive=True)
-        inertia = checked_inertia(section.raw("inertia"), section.key("inertia"), scenario.source)
+        inertia = checked_spd(section.raw("inertia"), section.key("inertia"), scenario.source)
     else:
         vehicle = load_vehicle_for(scenario)
         mass = section.number("mass", vehicle.mass, strictly_positive=True)
-        inertia = checked_inertia(section.raw("inertia", vehicle.inertia), section.key("inertia"), scenario.source)
+        inertia = checked_spd(section.raw("inertia", vehicle.inertia), section.key("inertia"), scenario.source)
     section.reject_unknown()
     return EstimatorConfig(enabled=enabled, mass=mass, inertia=inertia, c0=c0, r=r)

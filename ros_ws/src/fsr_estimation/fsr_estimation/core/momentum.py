@@ -20,15 +20,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from fsr_sim.model.frames import E3, GRAVITY
 from fsr_sim.model.so3 import (
     euler_coriolis_matrix,
     euler_mass_matrix,
     euler_rate_matrix,
     rotation_from_euler_zyx,
 )
-
-GRAVITY = 9.81  # m/s^2, SPEC §2
-E3 = np.array((0.0, 0.0, 1.0))
 
 
 def generalized_momentum(mass: float, inertia: ArrayLike, velocity_world: ArrayLike, eta: ArrayLike,

@@ -26,6 +26,7 @@ from scipy.signal import sosfilt
 
 from fsr_estimation.core.filter_design import cascade_sections, check_filter_parameters, gain_chain
 from fsr_estimation.core.momentum import E3, GRAVITY, observer_input
+from fsr_sim.model.checks import symmetric_positive_definite
 from fsr_sim.model.so3 import (
     euler_rate_derivative_rows,
     euler_rate_matrix,
@@ -42,16 +43,7 @@ def checked_model(mass: float, inertia: ArrayLike) -> tuple[float, np.ndarray]:
     """(mass [kg] > 0, inertia 3x3 [kg m^2] symmetric positive definite); a 3-vector is the diagonal."""
     if isinstance(mass, bool) or not np.isfinite(mass) or mass <= 0.0:
         raise ValueError(f"mass: must be a finite number > 0 [kg], got {mass!r}")
-    matrix = np.asarray(inertia, dtype=float)
-    if matrix.shape == (3,):
-        matrix = np.diag(matrix)
-    if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)):
-        raise ValueError(f"inertia: expected 3 finite numbers (diagonal) or a 3x3 matrix, got {inertia!r}")
-    if not np.allclose(matrix, matrix.T, rtol=0.0, atol=1e-12 * max(1.0, np.abs(matrix).max())):
-        raise ValueError(f"inertia: must be symmetric, got {matrix.tolist()}")
-    if np.linalg.eigvalsh(matrix).min() <= 0.0:
-        raise ValueError(f"inertia: must be positive definite, got {matrix.tolist()}")
-    return float(mass), matrix
+    return float(mass), symmetric_positive_definite(inertia, "inertia")
 
 
 @dataclass(frozen=True)

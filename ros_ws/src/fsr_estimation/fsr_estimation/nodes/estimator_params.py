@@ -23,8 +23,7 @@ import numpy as np
 from fsr_estimation.config.estimator_config import DEFAULT_C0, DEFAULT_R, EstimatorConfig, estimator_config
 from fsr_estimation.core.filter_design import check_filter_parameters
 from fsr_sim.config.scenario import load_scenario, simulation_config
-from fsr_sim.config.validation import ConfigError, Section
-from fsr_sim.model.vehicle import checked_inertia
+from fsr_sim.config.validation import ConfigError, Section, checked_spd
 
 PARAMETER_SOURCE = "ROS parameter"
 PARAMETER_NAMES = ("scenario", "c0", "r", "mass", "inertia", "control_period")
@@ -47,7 +46,7 @@ def node_settings(values: dict[str, Any]) -> EstimatorNodeSettings:
     inertia = None
     if section.has("inertia"):
         raw = np.asarray(list(section.raw("inertia")), dtype=float)
-        inertia = checked_inertia(raw.reshape(3, 3) if raw.size == 9 else raw, "inertia", PARAMETER_SOURCE)
+        inertia = checked_spd(raw.reshape(3, 3) if raw.size == 9 else raw, "inertia", PARAMETER_SOURCE)
     period = section.number("control_period", strictly_positive=True) if section.has("control_period") else None
     section.reject_unknown()
     if scenario:

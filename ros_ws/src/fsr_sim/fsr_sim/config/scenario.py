@@ -2,9 +2,10 @@
 
 Each package reads (and validates) its own sections: ``fsr_sim`` the plant side (this module:
 ``vehicle``, ``duration``, ``physics_dt``, ``actuation``, ``initial_state``, ``plant``, ``environment``,
-``disturbances``, ``lockstep``), ``fsr_control`` the ``trajectory`` and ``controller`` sections, and
-``fsr_estimation`` the ``estimator`` section. Unknown keys are refused everywhere, with the file and the
-dotted key in the message.
+``disturbances``, ``lockstep``); other packages register theirs under the entry-point group
+``fsr.scenario_sections`` (name = top-level key, value = the function that validates the section from a
+:class:`Scenario`), so this module names none of their keys (:func:`registered_sections`). Unknown keys are
+refused everywhere, with the file and the dotted key in the message.
 
 Overrides use dotted paths with YAML values: ``apply_override(data, "disturbances.0.force", "[1, 0, 0]")``.
 """
@@ -19,22 +20,39 @@ from typing import Any
 import numpy as np
 import yaml
 
+from fsr_sim.config.plant_sections import disturbance_from_section, environment_from_section
 from fsr_sim.config.validation import (
     ConfigError,
     Section,
+    checked_spd,
     load_yaml_file,
     resolve_config_path,
 )
-from fsr_sim.model.disturbances import DisturbanceProfile, disturbance_from_section
-from fsr_sim.model.environment import Environment, environment_from_section
+from fsr_sim.config.vehicle_file import load_vehicle_file
+from fsr_sim.model.disturbances import DisturbanceProfile
+from fsr_sim.model.environment import Environment
+from fsr_sim.model.plant import Plant
 from fsr_sim.model.so3 import rotation_from_euler_zyx
-from fsr_sim.model.vehicle import Vehicle, checked_inertia, load_vehicle
+from fsr_sim.model.vehicle import Vehicle
 
-TOP_LEVEL_KEYS = (
+SECTION_GROUP = "fsr.scenario_sections"
+PLANT_KEYS = (
     "name", "description", "vehicle", "duration", "physics_dt", "physics_substeps", "actuation",
-    "initial_state", "plant", "environment", "disturbances", "lockstep", "trajectory", "controller",
-    "estimator",
+    "initial_state", "plant", "environment", "disturbances", "lockstep",
 )
+
+
+def registered_sections() -> dict[str, Any]:
+    """Top-level scenario sections other installed packages validate: name -> entry point (``.load()`` gives
+    the validator ``f(scenario) -> config``)."""
+    from importlib.metadata import entry_points
+
+    return {point.name: point for point in entry_points(group=SECTION_GROUP)}
+
+
+def top_level_keys() -> tuple[str, ...]:
+    """Every key a scenario may have at its top level: fsr_sim's own and the registered sections."""
+    return (*PLANT_KEYS, *sorted(registered_sections()))
 
 
 @dataclass
@@ -62,19 +80,36 @@ class Scenario:
         return yaml.safe_dump(data, sort_keys=False)
 
 
-def load_scenario(name_or_path: str | Path, overrides: list[str] | None = None) -> Scenario:
-    """Load a built-in scenario (``ex4_geometric``) or a YAML file, then apply ``KEY=VALUE`` overrides."""
+def load_scenario(name_or_path: str | Path, overrides: list[str] | None = None,
+                  values: dict[str, Any] | None = None) -> Scenario:
+    """Load a built-in scenario (``ex4_geometric``) or a YAML file, then apply overrides.
+
+    ``overrides``: ``KEY=VALUE`` strings with YAML values (``--set``); ``values``: ``{dotted key: Python value}``
+    (the Python API), applied after them. Unknown top-level keys raise :class:`ConfigError`.
+    """
     path = resolve_config_path(str(name_or_path), "scenarios")
-    data = load_yaml_file(path)
+    return scenario_from_mapping(load_yaml_file(path), str(path), path.parent, overrides, values)
+
+
+def scenario_from_mapping(data: dict[str, Any], source: str = "<python>", base_dir: Path | None = None,
+                          overrides: list[str] | None = None, values: dict[str, Any] | None = None) -> Scenario:
+    """A scenario from a mapping (a copy is taken), with ``KEY=VALUE`` ``overrides`` and dotted-key ``values``;
+    relative vehicle paths are resolved from ``base_dir`` (default: the working directory)."""
+    if not isinstance(data, dict):
+        raise ConfigError("", f"a scenario must be a mapping, got {type(data).__name__}", source)
+    data = copy.deepcopy(data)
     for item in overrides or []:
         key, sep, value = item.partition("=")
         if not sep or not key:
-            raise ConfigError("--set", f"expected KEY=VALUE, got '{item}'", str(path))
-        apply_override(data, key.strip(), value, str(path))
-    unknown = sorted(str(k) for k in data if k not in TOP_LEVEL_KEYS)
+            raise ConfigError("--set", f"expected KEY=VALUE, got '{item}'", source)
+        apply_override(data, key.strip(), value, source)
+    for key, value in (values or {}).items():
+        set_value(data, str(key), copy.deepcopy(value), source)
+    known = top_level_keys()
+    unknown = sorted(str(k) for k in data if k not in known)
     if unknown:
-        raise ConfigError(unknown[0], f"unknown key (known: {', '.join(TOP_LEVEL_KEYS)})", str(path))
-    return Scenario(data=data, source=str(path), base_dir=path.parent)
+        raise ConfigError(unknown[0], f"unknown key (known: {', '.join(known)})", source)
+    return Scenario(data=data, source=source, base_dir=Path.cwd() if base_dir is None else Path(base_dir))
 
 
 def apply_override(data: dict[str, Any], dotted_key: str, yaml_value: str, source: str = "") -> None:
@@ -83,6 +118,11 @@ def apply_override(data: dict[str, Any], dotted_key: str, yaml_value: str, sourc
         value = yaml.safe_load(yaml_value)
     except yaml.YAMLError as error:
         raise ConfigError(dotted_key, f"override value is not valid YAML ({error})", source) from None
+    set_value(data, dotted_key, value, source)
+
+
+def set_value(data: dict[str, Any], dotted_key: str, value: Any, source: str = "") -> None:
+    """Set ``data[a][b][0]...`` from the dotted key ``a.b.0`` to ``value`` (in place; missing mappings made)."""
     parts = dotted_key.split(".")
     node: Any = data
     for depth, part in enumerate(parts[:-1]):
@@ -146,10 +186,11 @@ class SimulationConfig:
 
 
 def load_vehicle_for(scenario: Scenario) -> Vehicle:
+    """The scenario's nominal vehicle (a built-in name, or a YAML path relative to the scenario file)."""
     name = Section(scenario.data, "", scenario.source).string("vehicle")
     candidate = scenario.base_dir / name
     try:
-        return load_vehicle(candidate if name.endswith((".yaml", ".yml")) and candidate.is_file() else name)
+        return load_vehicle_file(candidate if name.endswith((".yaml", ".yml")) and candidate.is_file() else name)
     except ConfigError as error:
         raise ConfigError("vehicle", str(error), scenario.source) from None
 
@@ -160,7 +201,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     root = Section(scenario.data, "", source)
     vehicle = load_vehicle_for(scenario)
     root.raw("vehicle")
-    for key in ("name", "description", "trajectory", "controller", "estimator"):
+    for key in ("name", "description"):
         root.raw(key)
     duration = root.number("duration", strictly_positive=True)
     physics_dt = root.number("physics_dt", 0.001, strictly_positive=True, maximum=0.1)
@@ -176,7 +217,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
 
     plant = root.section("plant")
     mass = plant.number("mass", vehicle.mass, strictly_positive=True)
-    inertia = checked_inertia(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
+    inertia = checked_spd(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
     plant.reject_unknown()
 
     environment = environment_from_section(root.section("environment"))
@@ -194,7 +235,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     failsafe = lockstep.string("failsafe", "hold", choices=("hold", "cut"))
     real_time_factor = lockstep.number("real_time_factor", 1.0, strictly_positive=True)
     lockstep.reject_unknown()
-    root.reject_unknown()
+    root.reject_unknown(known=(*PLANT_KEYS, *registered_sections()))
 
     duration_steps = duration / (physics_dt * substeps)
     if abs(duration_steps - round(duration_steps)) > 1e-6:
@@ -214,4 +255,14 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
         lockstep_timeout=timeout,
         failsafe=failsafe,
         real_time_factor=real_time_factor,
+    )
+
+
+def plant_from_config(config: SimulationConfig) -> Plant:
+    """The :class:`fsr_sim.model.plant.Plant` a scenario's plant side describes (true mass and inertia)."""
+    initial = config.initial
+    return Plant(
+        config.plant_vehicle, dt=config.physics_dt, actuation=config.actuation, position=initial.position,
+        rotation=initial.rotation, velocity=initial.velocity, angular_velocity=initial.angular_velocity,
+        environment=config.environment, disturbances=config.disturbances, substeps=config.physics_substeps,
     )

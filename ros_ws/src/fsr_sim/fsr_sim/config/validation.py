@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from fsr_sim.model.checks import InvalidValueError, finite_array, symmetric_positive_definite
+
 
 class ConfigError(ValueError):
     """A configuration value (YAML file, ROS parameter or command-line override) was refused.
@@ -193,27 +195,19 @@ class Section:
 def checked_array(value: Any, shape: tuple[int, ...], key: str, source: str = "") -> np.ndarray:
     """``value`` as a finite float array of ``shape``, or :class:`ConfigError` naming ``key``."""
     try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(key, f"must be numbers of shape {shape}, got {value!r}", source) from None
-    if array.shape != shape:
-        raise ConfigError(key, f"expected shape {shape}, got {array.shape} ({value!r})", source)
-    if not np.all(np.isfinite(array)):
-        raise ConfigError(key, f"must be finite, got {value!r}", source)
-    return array
+        return finite_array(value, shape, key)
+    except InvalidValueError as error:
+        raise ConfigError(key, error.reason, source) from None
 
 
-def diagonal_or_matrix(value: Any, key: str, source: str = "") -> np.ndarray:
-    """A 3-vector (the diagonal) or a 3x3 matrix -> 3x3 float matrix."""
-    array = np.asarray(value, dtype=float) if _is_numeric_list(value) else None
-    if array is not None and array.shape == (3,):
-        return np.diag(checked_array(value, (3,), key, source))
-    return checked_array(value, (3, 3), key, source)
+def checked_spd(value: Any, key: str, source: str = "") -> np.ndarray:
+    """3 numbers (the diagonal) or a 3x3 matrix, symmetric positive definite (an inertia, a gain) -> (3, 3).
 
-
-def _is_numeric_list(value: Any) -> bool:
+    The check is :func:`fsr_sim.model.checks.symmetric_positive_definite`; this adds the file and the key.
+    """
+    if value is None:
+        raise ConfigError(key, "is required", source)
     try:
-        np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return False
-    return True
+        return symmetric_positive_definite(value, key)
+    except InvalidValueError as error:
+        raise ConfigError(key, error.reason, source) from None

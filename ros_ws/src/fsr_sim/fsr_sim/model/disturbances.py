@@ -3,7 +3,8 @@
 Each profile gives a force [N] in its ``frame`` (``world`` NED or ``body`` FRD) and a torque [N m] in the
 body frame as a function of simulated time ``t`` [s]. Several profiles add up.
 
-Scenario syntax (a list under ``disturbances``)::
+From Python: :func:`constant`, :func:`step`, :func:`sinusoid`, :func:`table`. Scenario syntax (a list under
+``disturbances``, parsed by :mod:`fsr_sim.config.plant_sections`)::
 
     - {kind: constant, force: [1, 1, 0], torque: [0, 0, -0.4]}          # frame: world (default)
     - {kind: step, start: 10.0, force: [2, 0, 0]}                         # zero before start
@@ -16,11 +17,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from fsr_sim.config.validation import Section, checked_array
+from fsr_sim.model.checks import InvalidValueError, finite_array
 from fsr_sim.model.so3 import Mat3, mat_vec3
 
 ZERO3 = np.zeros(3)
+FRAMES = ("world", "body")
 
 
 @dataclass(frozen=True)
@@ -52,40 +55,51 @@ class DisturbanceProfile:
         return self.force, self.torque
 
 
-def disturbance_from_section(section: Section) -> DisturbanceProfile:
-    """Parse one entry of the scenario's ``disturbances`` list (unknown keys refused)."""
-    kind = section.string("kind", choices=("constant", "step", "sinusoid", "table"))
-    frame = section.string("frame", "world", choices=("world", "body"))
-    if kind == "table":
-        times = section.raw("time")
-        if not isinstance(times, list) or len(times) < 1:
-            raise section.error("time", "must be a non-empty list of times [s]")
-        times_array = checked_array(times, (len(times),), section.key("time"), section.source)
-        if np.any(np.diff(times_array) <= 0.0):
-            raise section.error("time", "must be strictly increasing")
-        shape = (len(times), 3)
-        zeros = np.zeros(shape).tolist()
-        force = checked_array(section.raw("force", zeros), shape, section.key("force"), section.source)
-        torque = checked_array(section.raw("torque", zeros), shape, section.key("torque"), section.source)
-        section.reject_unknown()
-        return DisturbanceProfile(kind, frame, force, torque, times=times_array)
-    force = section.vector("force", 3, [0.0, 0.0, 0.0])
-    torque = section.vector("torque", 3, [0.0, 0.0, 0.0])
-    start = section.number("start", 0.0, minimum=0.0) if kind != "constant" else 0.0
-    end = section.number("end") if kind != "constant" and section.has("end") else float("inf")
-    if end <= start:
-        raise section.error("end", f"must be after start ({start}), got {end}")
-    frequency = phase = 0.0
-    offset_force = offset_torque = ZERO3
-    if kind == "sinusoid":
-        frequency = section.number("frequency_hz", strictly_positive=True)
-        phase = np.deg2rad(section.number("phase_deg", 0.0))
-        offset_force = section.vector("offset_force", 3, [0.0, 0.0, 0.0])
-        offset_torque = section.vector("offset_torque", 3, [0.0, 0.0, 0.0])
-    section.reject_unknown()
-    return DisturbanceProfile(
-        kind, frame, force, torque, start, end, frequency, phase, offset_force, offset_torque
-    )
+def constant(force: ArrayLike = ZERO3, torque: ArrayLike = ZERO3, frame: str = "world") -> DisturbanceProfile:
+    """A wrench that acts all the time: ``force`` [N] in ``frame``, ``torque`` [N m] body."""
+    return _profile("constant", frame, force, torque)
+
+
+def step(start: float, force: ArrayLike = ZERO3, torque: ArrayLike = ZERO3, end: float = float("inf"),
+         frame: str = "world") -> DisturbanceProfile:
+    """A wrench acting for ``start <= t < end`` [s] (zero outside)."""
+    return _profile("step", frame, force, torque, start=start, end=end)
+
+
+def sinusoid(frequency_hz: float, force: ArrayLike = ZERO3, torque: ArrayLike = ZERO3, phase_deg: float = 0.0,
+             offset_force: ArrayLike = ZERO3, offset_torque: ArrayLike = ZERO3, start: float = 0.0,
+             end: float = float("inf"), frame: str = "world") -> DisturbanceProfile:
+    """``offset + amplitude sin(2 pi f (t - start) + phase)`` for ``start <= t < end`` [s]."""
+    if not frequency_hz > 0.0:
+        raise InvalidValueError("frequency_hz", f"must be > 0, got {frequency_hz}")
+    return _profile("sinusoid", frame, force, torque, start=start, end=end, frequency_hz=float(frequency_hz),
+                    phase=float(np.deg2rad(phase_deg)), offset_force=finite_array(offset_force, (3,), "offset_force"),
+                    offset_torque=finite_array(offset_torque, (3,), "offset_torque"))
+
+
+def table(times: ArrayLike, force: ArrayLike | None = None, torque: ArrayLike | None = None,
+          frame: str = "world") -> DisturbanceProfile:
+    """Piecewise-linear in time: ``force``/``torque`` shape (k, 3) at the ``k`` strictly increasing ``times`` [s],
+    held at the ends."""
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    if times.ndim != 1 or len(times) < 1 or np.any(np.diff(times) <= 0.0) or not np.all(np.isfinite(times)):
+        raise InvalidValueError("time", f"must be non-empty and strictly increasing [s], got {times.tolist()}")
+    shape = (len(times), 3)
+    force = finite_array(np.zeros(shape) if force is None else force, shape, "force")
+    torque = finite_array(np.zeros(shape) if torque is None else torque, shape, "torque")
+    if frame not in FRAMES:
+        raise InvalidValueError("frame", f"must be one of {', '.join(FRAMES)}, got '{frame}'")
+    return DisturbanceProfile("table", frame, force, torque, times=times)
+
+
+def _profile(kind: str, frame: str, force: ArrayLike, torque: ArrayLike, **fields: float) -> DisturbanceProfile:
+    if frame not in FRAMES:
+        raise InvalidValueError("frame", f"must be one of {', '.join(FRAMES)}, got '{frame}'")
+    start, end = fields.get("start", 0.0), fields.get("end", float("inf"))
+    if not end > start:
+        raise InvalidValueError("end", f"must be after start ({start}), got {end}")
+    return DisturbanceProfile(kind, frame, finite_array(force, (3,), "force"), finite_array(torque, (3,), "torque"),
+                              **fields)
 
 
 def total_external_wrench(

@@ -27,32 +27,48 @@ removed and the vehicle is held (no sliding, no spin) while the net force pushes
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from fsr_sim.config.validation import Section
 from fsr_sim.model.so3 import Vec3
 
 MIN_DISTANCE = 1e-3  # m, floor for surface distances
+GROUND_MODELS = ("single", "multirotor")
 
 
 @dataclass(frozen=True)
 class Surface:
-    enabled: bool
-    height: float  # down-coordinate of the plane in world NED [m]
-    effect: bool  # thrust change near it (ground / ceiling effect)
-    max_ratio: float  # bound of T / T_OGE
+    """A horizontal plane: ``height`` its down-coordinate in world NED [m]; ``effect`` the thrust change near
+    it (ground / ceiling effect) bounded by ``max_ratio`` (``T / T_OGE``, >= 1)."""
+
+    enabled: bool = True
+    height: float = 0.0
+    effect: bool = True
+    max_ratio: float = 1.5
+
+    def __post_init__(self) -> None:
+        if not self.max_ratio >= 1.0:
+            raise ValueError(f"max_ratio must be >= 1, got {self.max_ratio}")
 
 
 @dataclass(frozen=True)
 class Environment:
-    ground: Surface
-    ceiling: Surface
+    """The surfaces around the vehicle. ``Environment()``: the ground at ``z = 0`` with ground effect (single-
+    rotor model), no ceiling. ``Environment(ground=Surface(enabled=False))``: free space."""
+
+    ground: Surface = field(default_factory=Surface)
+    ceiling: Surface = field(default_factory=lambda: Surface(enabled=False, height=-3.0))
     ground_model: str = "single"  # "single" (one-rotor images) or "multirotor" (Sanchez-Cuevas 2017)
     body_factor: float = 2.0  # K_b of the multirotor model (their fitted value)
     ceiling_k1: float = 6.924  # empirical constants of the ceiling model (Hsiao & Chirarattananon 2019)
     ceiling_k2: float = 0.03782  # m
+
+    def __post_init__(self) -> None:
+        if self.ground_model not in GROUND_MODELS:
+            raise ValueError(f"ground_model must be one of {', '.join(GROUND_MODELS)}, got '{self.ground_model}'")
+        if self.ground.enabled and self.ceiling.enabled and self.ceiling.height >= self.ground.height:
+            raise ValueError("the ceiling must be above the ground (smaller NED z)")
 
     @property
     def has_thrust_effects(self) -> bool:
@@ -123,34 +139,6 @@ def ceiling_effect_ratio(
     """``T_CE / T_OGE = 1 / (1 - (1/k1) (rho / (z + k2))^2)`` for distances ``z`` [m] to the ceiling."""
     z = np.maximum(distance, MIN_DISTANCE)
     return bounded_ratio(_ceiling_denominator(z, rotor_radius, k1, k2), max_ratio)
-
-
-def environment_from_section(section: Section) -> Environment:
-    """Parse the scenario's ``environment`` section (see module docstring); unknown keys are refused."""
-    ground = section.section("ground")
-    ground_surface = Surface(
-        enabled=ground.boolean("enabled", True),
-        height=ground.number("height", 0.0),
-        effect=ground.boolean("effect", True),
-        max_ratio=ground.number("max_ratio", 1.5, minimum=1.0),
-    )
-    ground_model = ground.string("model", "single", choices=("single", "multirotor"))
-    body_factor = ground.number("body_factor", 2.0, minimum=0.0)
-    ground.reject_unknown()
-    ceiling = section.section("ceiling")
-    ceiling_surface = Surface(
-        enabled=ceiling.boolean("enabled", False),
-        height=ceiling.number("height", -3.0),
-        effect=ceiling.boolean("effect", True),
-        max_ratio=ceiling.number("max_ratio", 1.5, minimum=1.0),
-    )
-    k1 = ceiling.number("k1", 6.924, strictly_positive=True)
-    k2 = ceiling.number("k2", 0.03782, minimum=0.0)
-    ceiling.reject_unknown()
-    section.reject_unknown()
-    if ground_surface.enabled and ceiling_surface.enabled and ceiling_surface.height >= ground_surface.height:
-        raise section.error("ceiling.height", "the ceiling must be above the ground (smaller NED z)")
-    return Environment(ground_surface, ceiling_surface, ground_model, body_factor, k1, k2)
 
 
 class ThrustEffects:

@@ -16,8 +16,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from fsr_sim.model.so3 import Mat3, Vec3, quaternion_from_rotation, rotation_rows_from_quaternion
-from fsr_sim.model.vehicle import GRAVITY
+from fsr_sim.model.frames import GRAVITY
+from fsr_sim.model.so3 import (
+    Mat3,
+    Vec3,
+    quaternion_from_rotation,
+    rotation_from_quaternion,
+    rotation_rows_from_quaternion,
+)
 
 POSITION = slice(0, 3)
 VELOCITY = slice(3, 6)
@@ -40,6 +46,41 @@ def float_wrench(wrench: WrenchFunction) -> FloatWrenchFunction:
         return (*np.asarray(force_world, dtype=float).tolist(), *np.asarray(torque_body, dtype=float).tolist())
 
     return adapted
+
+
+class RigidBodyState:
+    """One state as named parts (copies): ``position`` [m] and ``velocity`` [m/s] world NED, ``quaternion``
+    ``[x, y, z, w]`` and ``rotation`` ``R`` (body FRD -> world NED), ``angular_velocity`` [rad/s] body FRD;
+    ``vector`` is the flat 13-number state."""
+
+    __slots__ = ("vector",)
+
+    def __init__(self, vector: np.ndarray) -> None:
+        self.vector = vector
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.vector[POSITION].copy()
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return self.vector[VELOCITY].copy()
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        return self.vector[QUATERNION].copy()
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return rotation_from_quaternion(self.vector[QUATERNION])
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        return self.vector[ANGULAR_VELOCITY].copy()
+
+    def __repr__(self) -> str:
+        return (f"RigidBodyState(position={self.position.tolist()}, velocity={self.velocity.tolist()}, "
+                f"quaternion={self.quaternion.tolist()}, angular_velocity={self.angular_velocity.tolist()})")
 
 
 def pack_state(

@@ -244,6 +244,16 @@ def euler_rate_matrix(eta: ArrayLike) -> FloatArray:
     )
 
 
+def euler_rates(eta: ArrayLike, angular_velocity_body: ArrayLike) -> FloatArray:
+    """``eta_dot = Q(eta)^-1 omega_body`` [rad/s]: ZYX Euler-angle rates from the body angular velocity.
+
+    eta: shape (..., 3) [rad]; angular_velocity_body: shape (..., 3) [rad/s]. Returns shape (..., 3).
+    Singular at pitch = +-pi/2 (gimbal lock: ``numpy.linalg.LinAlgError``).
+    """
+    omega = np.asarray(angular_velocity_body, dtype=float)
+    return np.linalg.solve(euler_rate_matrix(eta), omega[..., None])[..., 0]
+
+
 def euler_rate_matrix_derivative(eta: ArrayLike, eta_dot: ArrayLike) -> FloatArray:
     """Time derivative ``Q_dot(eta, eta_dot)`` of :func:`euler_rate_matrix`. Shapes (..., 3) -> (..., 3, 3)."""
     e = _as_vector3(eta, "eta")

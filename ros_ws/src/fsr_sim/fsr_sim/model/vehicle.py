@@ -4,38 +4,54 @@ Frames: rotor positions ``p_i`` are in the body frame (FRD, metres, from the cen
 thrust acts along its axis ``z_i = Rot(a_i, alpha_i) [0, 0, -1]`` (``-z_b`` when untilted). ``spin``
 is ``k_i``: +1 counter-clockwise, -1 clockwise seen from above (SPEC §3.2).
 
-A YAML file gives either a ``layout`` (``count`` rotors on a circle of radius ``arm_length``, rotor ``i``
-at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW, optional
-``tilting: true`` for a tilt axis along each arm) or an explicit ``rotors`` list.
+A :class:`Vehicle` is built from plain Python values (arrays are checked and copied) or read from a
+YAML file by :func:`load_vehicle` (the file format: :mod:`fsr_sim.config.vehicle_file`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from fsr_sim.config.validation import (
-    ConfigError,
-    Section,
-    checked_array,
-    diagonal_or_matrix,
-    load_yaml_file,
-    resolve_config_path,
-)
-
-GRAVITY = 9.81  # m/s^2, along +z of the NED world frame
+from fsr_sim.model.checks import InvalidValueError, finite_array, symmetric_positive_definite
+from fsr_sim.model.frames import GRAVITY
 
 
 @dataclass(frozen=True)
 class Vehicle:
-    """A multirotor's physical description (SI units; arrays are read-only by convention).
+    """A multirotor's physical description (SI units; arrays are checked, copied and made read-only).
 
-    positions: shape (n, 3), rotor centres in body FRD [m].
-    spins: shape (n,), ``k_i`` (+1 CCW, -1 CW).
-    tilt_axes: shape (n, 3) unit vectors in body FRD, or None for fixed rotors.
+    Parameters
+    ----------
+    name : str
+    mass : float
+        [kg], > 0.
+    inertia : array-like, shape (3,) or (3, 3)
+        [kg m^2] about the centre of mass, body FRD; 3 numbers are the diagonal. Symmetric positive definite.
+    c_f, c_m : float
+        Thrust [N s^2] and drag-torque [N m s^2] coefficients: a rotor at ``w`` rad/s gives ``c_f w^2`` and
+        ``c_m w^2``.
+    rotor_radius : float
+        [m], for the ground and ceiling effect.
+    rotor_speed_min, rotor_speed_max : float
+        [rad/s], ``0 <= min < max``.
+    positions : array-like, shape (n, 3)
+        Rotor centres in body FRD [m], ``n >= 3``.
+    spins : array-like, shape (n,)
+        ``k_i``: +1 counter-clockwise, -1 clockwise seen from above.
+    tilt_axes : array-like, shape (n, 3), optional
+        Unit tilt axes in the body x-y plane (tilting rotors), or None for fixed rotors.
+    tilt_angle_max : float
+        [rad], tilt limits ``+-tilt_angle_max``.
+    contact_height : float
+        [m], distance from the centre of mass down to the landing gear's feet.
+
+    Raises
+    ------
+    ValueError
+        (:class:`fsr_sim.model.checks.InvalidValueError`) naming the field for any invalid value.
     """
 
     name: str
@@ -52,6 +68,46 @@ class Vehicle:
     tilt_angle_max: float = np.pi
     contact_height: float = 0.1
     description: str = ""
+
+    def __post_init__(self) -> None:
+        def put(name: str, value: object) -> None:
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            object.__setattr__(self, name, value)
+
+        for name in ("mass", "c_f", "rotor_radius", "rotor_speed_max", "tilt_angle_max"):
+            value = float(getattr(self, name))
+            if not value > 0.0 or not np.isfinite(value):
+                raise InvalidValueError(name, f"must be > 0, got {value}")
+            put(name, value)
+        for name in ("c_m", "rotor_speed_min", "contact_height"):
+            value = float(getattr(self, name))
+            if not value >= 0.0 or not np.isfinite(value):
+                raise InvalidValueError(name, f"must be >= 0, got {value}")
+            put(name, value)
+        if self.rotor_speed_max <= self.rotor_speed_min:
+            raise InvalidValueError("rotor_speed_max", f"must be > rotor_speed_min ({self.rotor_speed_min}), got "
+                                                  f"{self.rotor_speed_max}")
+        put("inertia", symmetric_positive_definite(self.inertia, "inertia"))
+        positions = np.array(self.positions, dtype=float)
+        if positions.ndim != 2 or positions.shape[0] < 3:
+            raise InvalidValueError("positions", f"expected shape (n, 3) with n >= 3, got {positions.shape}")
+        n = positions.shape[0]
+        put("positions", finite_array(positions, (n, 3), "positions"))
+        spins = finite_array(self.spins, (n,), "spins")
+        if not np.all(np.abs(spins) == 1.0):
+            raise InvalidValueError("spins", f"each must be +1 (CCW) or -1 (CW), got {spins.tolist()}")
+        put("spins", spins)
+        if self.tilt_axes is not None:
+            axes = finite_array(self.tilt_axes, (n, 3), "tilt_axes")
+            norms = np.linalg.norm(axes, axis=1)
+            if np.any(norms < 1e-9):
+                raise InvalidValueError("tilt_axes", "every tilt axis must be a non-zero vector")
+            axes = axes / norms[:, None]
+            # The static (linear) tilting allocation needs each tilt axis normal to the untilted thrust axis.
+            if np.any(np.abs(axes[:, 2]) > 1e-9):
+                raise InvalidValueError("tilt_axes", "tilt axes must lie in the body x-y plane")
+            put("tilt_axes", axes)
 
     @property
     def rotor_count(self) -> int:
@@ -81,107 +137,18 @@ class Vehicle:
 
 
 def load_vehicle(name_or_path: str | Path) -> Vehicle:
-    """Load a built-in vehicle by name (``octocopter``, ``quadrotor_ex4``, ``tilting_quadrotor_ex5``) or
-    from a YAML file path. Raises :class:`ConfigError` naming the file and key of any invalid value."""
-    path = resolve_config_path(str(name_or_path), "vehicles")
-    return vehicle_from_mapping(load_yaml_file(path), source=str(path), default_name=path.stem)
+    """Load a built-in vehicle (``octocopter``, ``quadrotor_ex4``, ``tilting_quadrotor_ex5``) or a YAML file.
 
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A built-in name or the path of a vehicle YAML file (format: :mod:`fsr_sim.config.vehicle_file`).
 
-def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: str = "vehicle") -> Vehicle:
-    """Build and validate a :class:`Vehicle` from a mapping (the YAML file's content)."""
-    root = Section(data, "", source)
-    name = root.string("name", default_name)
-    description = root.string("description", "")
-    mass = root.number("mass", strictly_positive=True)
-    inertia = checked_inertia(root.raw("inertia"), "inertia", source)
-    c_f = root.number("c_f", strictly_positive=True)
-    c_m = root.number("c_m", minimum=0.0)
-    rotor_radius = root.number("rotor_radius", strictly_positive=True)
-    speed_min = root.number("rotor_speed_min", 0.0, minimum=0.0)
-    speed_max = root.number("rotor_speed_max", strictly_positive=True)
-    if speed_max <= speed_min:
-        raise root.error("rotor_speed_max", f"must be > rotor_speed_min ({speed_min}), got {speed_max}")
-    tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
-    contact_height = root.number("contact_height", 0.1, minimum=0.0)
+    Raises
+    ------
+    fsr_sim.config.validation.ConfigError
+        A ``ValueError`` naming the file and the key of any invalid value.
+    """
+    from fsr_sim.config.vehicle_file import load_vehicle_file  # YAML is read only when a file is loaded
 
-    if root.has("layout") == root.has("rotors"):
-        raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
-    if root.has("layout"):
-        positions, spins, tilt_axes = _rotors_from_layout(root.section("layout"))
-    else:
-        positions, spins, tilt_axes = _rotors_from_list(root.raw("rotors"), source)
-    root.reject_unknown()
-
-    if tilt_axes is not None:
-        # The static (linear) tilting allocation needs each tilt axis normal to the untilted thrust axis.
-        if np.any(np.abs(tilt_axes[:, 2]) > 1e-9):
-            raise ConfigError("rotors.tilt_axis", "tilt axes must lie in the body x-y plane", source)
-    return Vehicle(
-        name=name,
-        mass=mass,
-        inertia=inertia,
-        c_f=c_f,
-        c_m=c_m,
-        rotor_radius=rotor_radius,
-        rotor_speed_min=speed_min,
-        rotor_speed_max=speed_max,
-        positions=positions,
-        spins=spins,
-        tilt_axes=tilt_axes,
-        tilt_angle_max=float(tilt_max),
-        contact_height=contact_height,
-        description=description,
-    )
-
-
-def checked_inertia(value: Any, key: str, source: str = "") -> np.ndarray:
-    """A diagonal (3 numbers) or a full 3x3 inertia [kg m^2], symmetric and positive definite."""
-    if value is None:
-        raise ConfigError(key, "is required", source)
-    inertia = diagonal_or_matrix(value, key, source)
-    if not np.allclose(inertia, inertia.T, rtol=0.0, atol=1e-12 * max(1.0, np.abs(inertia).max())):
-        raise ConfigError(key, f"must be symmetric, got {inertia.tolist()}", source)
-    eigenvalues = np.linalg.eigvalsh(inertia)
-    if eigenvalues.min() <= 0.0:
-        raise ConfigError(key, f"must be positive definite, got eigenvalues {eigenvalues.tolist()}", source)
-    return inertia
-
-
-def _rotors_from_layout(layout: Section) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    count = layout.integer("count", minimum=3)
-    arm = layout.number("arm_length", strictly_positive=True)
-    first = np.deg2rad(layout.number("first_angle_deg", 0.0))
-    first_spin = layout.string("first_spin", "cw", choices=("cw", "ccw"))
-    tilting = layout.boolean("tilting", False)
-    layout.reject_unknown()
-    angles = first + 2.0 * np.pi * np.arange(count) / count
-    radial = np.column_stack((np.cos(angles), np.sin(angles), np.zeros(count)))
-    radial[np.abs(radial) < 1e-12] = 0.0  # exact zeros where cos/sin of multiples of 90 deg are 0
-    sign = -1.0 if first_spin == "cw" else 1.0
-    spins = sign * (-1.0) ** np.arange(count)  # k_i = (-1)^i with rotor 1 CW
-    return arm * radial, spins, (radial.copy() if tilting else None)
-
-
-def _rotors_from_list(value: Any, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    if not isinstance(value, list) or len(value) < 3:
-        raise ConfigError("rotors", "must be a list of at least 3 rotors", source)
-    positions, spins, axes = [], [], []
-    for index, entry in enumerate(value):
-        rotor = Section(entry, f"rotors[{index}]", source)
-        positions.append(rotor.vector("position", 3))
-        spin = rotor.integer("spin")
-        if spin not in (-1, 1):
-            raise rotor.error("spin", f"must be +1 (CCW) or -1 (CW), got {spin}")
-        spins.append(float(spin))
-        axis = rotor.raw("tilt_axis")
-        if axis is not None:
-            axis = checked_array(axis, (3,), rotor.key("tilt_axis"), source)
-            if np.linalg.norm(axis) < 1e-9:
-                raise rotor.error("tilt_axis", "must be a non-zero vector")
-            axis = axis / np.linalg.norm(axis)
-        axes.append(axis)
-        rotor.reject_unknown()
-    if any(a is None for a in axes) and not all(a is None for a in axes):
-        raise ConfigError("rotors", "either every rotor has a tilt_axis or none has", source)
-    tilt_axes = None if axes[0] is None else np.array(axes)
-    return np.array(positions), np.array(spins), tilt_axes
+    return load_vehicle_file(name_or_path)

@@ -40,7 +40,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
-from fsr_sim.model.plant import Plant
+from fsr_sim.config.scenario import plant_from_config
 from fsr_sim.nodes.commands import RotorCommandReader, wrench_command
 from fsr_sim.nodes.lockstep import (
     AHEAD,
@@ -53,9 +53,8 @@ from fsr_sim.nodes.lockstep import (
 from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
 from fsr_sim.nodes.state_messages import StateMessages
 from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_QOS
-from fsr_sim.ros.runtime import EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node
+from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node
 
-EXIT_DIVERGED = 3
 WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
 BATCH_WALL = 0.05  # s of stepping per spin_once call
 ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last messages
@@ -72,7 +71,7 @@ class SimulatorNode(Node):
         values = {name: self.declare_parameter(name, None, dynamic).value for name in PARAMETER_NAMES}
         self.params = parse_parameters(values)
         self.scenario, self.config = load_simulation(self.params)
-        self.plant = Plant(self.config)
+        self.plant = plant_from_config(self.config)
         self.messages = StateMessages(self.plant)
         vehicle = self.config.plant_vehicle
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.is_tilting)

@@ -7,7 +7,8 @@
   force ``R^T f_ext,world`` [N] and torque ``tau_ext,body`` [N m].
 * ``/clock`` (rosgraph_msgs/Clock): the simulated time of the state.
 
-Every stamp is the physics time ``t_k`` of the state, in exact integer nanoseconds (``Plant.stamp_ns``).
+Every stamp is the physics time ``t_k`` of the state, in exact integer nanoseconds (``Plant.stamp_ns``). The
+odometry arithmetic is :func:`fsr_sim.model.odometry.odometry_values`.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
+from fsr_sim.model.odometry import odometry_values
 from fsr_sim.model.plant import Plant
 from fsr_sim.model.so3 import rotation_from_quaternion
 from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME
@@ -27,7 +29,7 @@ NS_PER_S = 1_000_000_000
 class StateMessages:
     """Preallocated ``Odometry``, ``WrenchStamped`` and ``Clock`` filled by :meth:`fill`."""
 
-    def __init__(self, plant: Plant) -> None:
+    def __init__(self, plant: Plant | None = None) -> None:
         self.plant = plant
         self.odom = Odometry()
         self.odom.header.frame_id = WORLD_FRAME
@@ -35,21 +37,21 @@ class StateMessages:
         self.wrench = WrenchStamped()
         self.wrench.header.frame_id = BODY_FRAME
         self.clock = Clock()
-        self.has_disturbances = bool(plant.config.disturbances)
+        self.has_disturbances = plant is not None and bool(plant.disturbances)
         self.stamp_ns = -1
 
     def fill(self) -> None:
         """Refill all three messages with the plant's current state and time."""
         plant = self.plant
-        stamp_ns = plant.stamp_ns
+        external = plant.external_wrench() if self.has_disturbances else None
+        self.fill_from(plant.stamp_ns, plant.state_vector, external)
+
+    def fill_from(self, stamp_ns: int, state_vector: np.ndarray,
+                  external: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """Refill the messages from a state vector (13,) and the true external wrench (force world [N], torque
+        body [N m]; None: zero) at ``stamp_ns``: the simulator's conversion, also used to record a flight."""
         sec, nanosec = divmod(stamp_ns, NS_PER_S)
-        state = plant.state
-        x, y, z, vx, vy, vz, qx, qy, qz, qw = state[:10].tolist()
-        if qw < 0.0:
-            qx, qy, qz, qw = -qx, -qy, -qz, -qw
-        rotation = rotation_from_quaternion((qx, qy, qz, qw))
-        vbx, vby, vbz = (rotation.T @ state[3:6]).tolist()
-        wx, wy, wz = state[10:13].tolist()
+        (x, y, z), (qx, qy, qz, qw), (vbx, vby, vbz), (wx, wy, wz) = odometry_values(state_vector)
 
         odom = self.odom
         odom.header.stamp.sec = sec
@@ -65,8 +67,9 @@ class StateMessages:
         wrench = self.wrench
         wrench.header.stamp.sec = sec
         wrench.header.stamp.nanosec = nanosec
-        if self.has_disturbances:
-            force_world, torque_body = plant.external_wrench()
+        if external is not None:
+            force_world, torque_body = external
+            rotation = rotation_from_quaternion((qx, qy, qz, qw))
             fx, fy, fz = (rotation.T @ force_world).tolist()
             tx, ty, tz = np.asarray(torque_body, dtype=float).tolist()
             w = wrench.wrench
@@ -79,4 +82,4 @@ class StateMessages:
 
     def is_finite(self) -> bool:
         """False when the plant state holds NaN/inf (such a state is never published)."""
-        return bool(np.isfinite(self.plant.state).all())
+        return bool(np.isfinite(self.plant.state_vector).all())

@@ -19,7 +19,8 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
-from fsr_sim.model.so3 import quaternion_from_rotation, rotation_from_quaternion
+from fsr_sim.model.odometry import state_from_odometry_values
+from fsr_sim.model.so3 import quaternion_from_rotation
 
 WORLD_FRAME = "world_ned"
 BODY_FRAME = "base_link_frd"
@@ -58,14 +59,14 @@ def odometry_from_state(
 
 
 def state_from_odometry(msg: Odometry) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(position world [m], R body->world, velocity world [m/s], angular velocity body [rad/s])."""
+    """(position world [m], R body->world, velocity world [m/s], angular velocity body [rad/s]): the
+    arithmetic of :func:`fsr_sim.model.odometry.state_from_odometry_values`."""
     p = msg.pose.pose.position
     o = msg.pose.pose.orientation
     lin = msg.twist.twist.linear
     ang = msg.twist.twist.angular
-    rotation = rotation_from_quaternion((o.x, o.y, o.z, o.w))
-    velocity_world = rotation @ np.array((lin.x, lin.y, lin.z))
-    return np.array((p.x, p.y, p.z)), rotation, velocity_world, np.array((ang.x, ang.y, ang.z))
+    return state_from_odometry_values((p.x, p.y, p.z), (o.x, o.y, o.z, o.w), (lin.x, lin.y, lin.z),
+                                      (ang.x, ang.y, ang.z))
 
 
 def odometry_is_finite(msg: Odometry) -> bool:

@@ -17,9 +17,12 @@ import time
 from collections.abc import Callable
 from importlib import resources
 
+# Exit codes of every fsr command and node (one place): fsr-fly passes the simulator's on.
 EXIT_OK = 0
-EXIT_FAILURE = 1
-EXIT_CONFIG_ERROR = 2
+EXIT_FAILURE = 1  # a node failed (or a file could not be written)
+EXIT_CONFIG_ERROR = 2  # invalid scenario, parameter or argument; nothing was started
+EXIT_DIVERGED = 3  # the flight diverged (NaN state, beyond physical bounds, crash)
+EXIT_INTERRUPTED = 130  # fsr-fly stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention)
 
 
 def configure_environment() -> None:

@@ -10,7 +10,7 @@ from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.model.so3 import euler_zyx_from_rotation
 
-EX5 = Path(__file__).parent / "scenarios" / "ex5_voliro.yaml"
+EX5 = Path(__file__).parents[2] / "ros_ws" / "src" / "fsr_control" / "test" / "scenarios" / "ex5_voliro.yaml"
 GOAL = np.array((1.0, 1.0, -4.0))
 # 10 s travel + 5 s hold instead of 20 + 10 (each 30 s flight costs ~15 s here); same checks.
 SHORT = ["duration=15.0", "trajectory.waypoints.0.duration=10.0", "trajectory.waypoints.0.hold=5.0"]

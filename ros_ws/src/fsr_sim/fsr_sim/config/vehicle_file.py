@@ -1,0 +1,120 @@
+"""Vehicle YAML files: the format, and parsing into a :class:`fsr_sim.model.vehicle.Vehicle`.
+
+A file gives ``name``, ``mass`` [kg], ``inertia`` (3 numbers or 3x3) [kg m^2], ``c_f``, ``c_m``,
+``rotor_radius`` [m], ``rotor_speed_min``/``rotor_speed_max`` [rad/s], optional ``tilt_angle_max_deg`` and
+``contact_height`` [m], and either a ``layout`` (``count`` rotors on a circle of radius ``arm_length``,
+rotor ``i`` at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW, optional
+``tilting: true`` for a tilt axis along each arm) or an explicit ``rotors`` list of
+``{position, spin, tilt_axis}``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fsr_sim.config.validation import (
+    ConfigError,
+    Section,
+    checked_array,
+    checked_spd,
+    load_yaml_file,
+    resolve_config_path,
+)
+from fsr_sim.model.checks import InvalidValueError
+from fsr_sim.model.vehicle import Vehicle
+
+
+def load_vehicle_file(name_or_path: str | Path) -> Vehicle:
+    """A built-in vehicle name or a YAML path -> :class:`Vehicle` (ConfigError naming file and key)."""
+    path = resolve_config_path(str(name_or_path), "vehicles")
+    return vehicle_from_mapping(load_yaml_file(path), source=str(path), default_name=path.stem)
+
+
+def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: str = "vehicle") -> Vehicle:
+    """Build and validate a :class:`Vehicle` from a mapping (the YAML file's content)."""
+    root = Section(data, "", source)
+    name = root.string("name", default_name)
+    description = root.string("description", "")
+    mass = root.number("mass", strictly_positive=True)
+    inertia = checked_spd(root.raw("inertia"), "inertia", source)
+    c_f = root.number("c_f", strictly_positive=True)
+    c_m = root.number("c_m", minimum=0.0)
+    rotor_radius = root.number("rotor_radius", strictly_positive=True)
+    speed_min = root.number("rotor_speed_min", 0.0, minimum=0.0)
+    speed_max = root.number("rotor_speed_max", strictly_positive=True)
+    if speed_max <= speed_min:
+        raise root.error("rotor_speed_max", f"must be > rotor_speed_min ({speed_min}), got {speed_max}")
+    tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
+    contact_height = root.number("contact_height", 0.1, minimum=0.0)
+
+    if root.has("layout") == root.has("rotors"):
+        raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
+    if root.has("layout"):
+        positions, spins, tilt_axes = _rotors_from_layout(root.section("layout"))
+    else:
+        positions, spins, tilt_axes = _rotors_from_list(root.raw("rotors"), source)
+    root.reject_unknown()
+
+    try:
+        return Vehicle(
+            name=name,
+            mass=mass,
+            inertia=inertia,
+            c_f=c_f,
+            c_m=c_m,
+            rotor_radius=rotor_radius,
+            rotor_speed_min=speed_min,
+            rotor_speed_max=speed_max,
+            positions=positions,
+            spins=spins,
+            tilt_axes=tilt_axes,
+            tilt_angle_max=float(tilt_max),
+            contact_height=contact_height,
+            description=description,
+        )
+    except InvalidValueError as error:  # a check of the model itself (e.g. tilt axes out of the x-y plane)
+        key = {"tilt_axes": "rotors.tilt_axis", "positions": "rotors.position"}.get(error.name, error.name)
+        raise ConfigError(key, error.reason, source) from None
+
+
+def _rotors_from_layout(layout: Section) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    count = layout.integer("count", minimum=3)
+    arm = layout.number("arm_length", strictly_positive=True)
+    first = np.deg2rad(layout.number("first_angle_deg", 0.0))
+    first_spin = layout.string("first_spin", "cw", choices=("cw", "ccw"))
+    tilting = layout.boolean("tilting", False)
+    layout.reject_unknown()
+    angles = first + 2.0 * np.pi * np.arange(count) / count
+    radial = np.column_stack((np.cos(angles), np.sin(angles), np.zeros(count)))
+    radial[np.abs(radial) < 1e-12] = 0.0  # exact zeros where cos/sin of multiples of 90 deg are 0
+    sign = -1.0 if first_spin == "cw" else 1.0
+    spins = sign * (-1.0) ** np.arange(count)  # k_i = (-1)^i with rotor 1 CW
+    return arm * radial, spins, (radial.copy() if tilting else None)
+
+
+def _rotors_from_list(value: Any, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    if not isinstance(value, list) or len(value) < 3:
+        raise ConfigError("rotors", "must be a list of at least 3 rotors", source)
+    positions, spins, axes = [], [], []
+    for index, entry in enumerate(value):
+        rotor = Section(entry, f"rotors[{index}]", source)
+        positions.append(rotor.vector("position", 3))
+        spin = rotor.integer("spin")
+        if spin not in (-1, 1):
+            raise rotor.error("spin", f"must be +1 (CCW) or -1 (CW), got {spin}")
+        spins.append(float(spin))
+        axis = rotor.raw("tilt_axis")
+        if axis is not None:
+            axis = checked_array(axis, (3,), rotor.key("tilt_axis"), source)
+            if np.linalg.norm(axis) < 1e-9:
+                raise rotor.error("tilt_axis", "must be a non-zero vector")
+            axis = axis / np.linalg.norm(axis)
+        axes.append(axis)
+        rotor.reject_unknown()
+    if any(a is None for a in axes) and not all(a is None for a in axes):
+        raise ConfigError("rotors", "either every rotor has a tilt_axis or none has", source)
+    tilt_axes = None if axes[0] is None else np.array(axes)
+    return np.array(positions), np.array(spins), tilt_axes

@@ -1,0 +1,14 @@
+"""Frames and gravity: the one place where fsr states them (SPEC §2).
+
+World frame NED (``world_ned``: x north, y east, z down), body frame FRD (``base_link_frd``: x forward,
+y right, z down). Gravity acts along ``+e3`` of the world frame with ``g = 9.81`` m/s^2, so the weight of
+a mass ``m`` is ``m g e3`` [N] (world).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+GRAVITY = 9.81  # m/s^2, along +z (down) of the NED world frame
+E3 = np.array((0.0, 0.0, 1.0))  # world down axis (NED) / body down axis (FRD)
+E3.flags.writeable = False
