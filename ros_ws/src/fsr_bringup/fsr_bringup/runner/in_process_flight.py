@@ -158,6 +158,7 @@ class _Recorder:
         if self.rotors:
             write("/rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles), stamp_ns)
         write("/wrench_cmd", wrench_stamped(stamp_ns, output.force_body, output.torque_body), stamp_ns)
+        write("/wrench_shortfall", wrench_stamped(stamp_ns, output.shortfall[:3], output.shortfall[3:]), stamp_ns)
         write("/reference", reference_message(stamp_ns, output.reference), stamp_ns)
         if estimate is not None:
             write("/wrench_estimate", wrench_stamped(stamp_ns, estimate[0], estimate[1]), stamp_ns)
