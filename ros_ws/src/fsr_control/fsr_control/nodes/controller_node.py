@@ -134,7 +134,7 @@ class ControllerNode(Node):
         saturation = self.controller.saturation
         if saturation.count:
             self.get_logger().warning(
-                f"rotor saturation: {saturation.count} commands clamped, first at {saturation.first_time:.3f} s, "
+                f"rotor saturation: {saturation.count} commands saturated, first at {saturation.first_time:.3f} s, "
                 f"worst rotor {saturation.worst_rotor} ({saturation.worst_excess:.1f} rad/s beyond its limit)"
             )
             gave_way = [f"{axis} {steps} steps (max {largest:.3g})" for axis, steps, largest in
