@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsr_control.allocation import ALLOCATION_STRATEGIES
 from fsr_control.controllers import geometric, voliro
 from fsr_control.planning.trajectory import Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for
@@ -37,8 +38,7 @@ from fsr_sim.model.vehicle import Vehicle
 CONTROLLER_TYPES = ("geometric", "voliro")
 DEFAULT_GAINS = {"geometric": geometric.REPORT_GAINS, "voliro": voliro.REPORT_GAINS}
 SECONDARY_TYPES = ("none", "min_peak_speed")
-ALLOCATION_STRATEGIES = ("clamp", "priority")  # fsr_control.allocation: per-rotor clamp | priority desaturation
-DEFAULT_ALLOCATION = "priority"
+DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
 DEFAULT_GOAL_DURATION = 10.0  # s
 
 
