@@ -91,7 +91,7 @@ def test_every_built_in_scenario_flies_records_every_step_and_analyses(tmp_path,
     steps = 500
     # Every simulator step is in the file: odom for t_0..t_N, a command and an estimate per answered state.
     assert recording.count("odom") == recording.count("wrench_truth") == steps + 1
-    assert recording.count("wrench_cmd") >= steps
+    assert recording.count("wrench_cmd") == recording.count("wrench_shortfall") >= steps
     assert recording.count("wrench_estimate") >= steps
     assert recording.count("reference") >= steps
     assert final_status(recording)["state"] == "finished"

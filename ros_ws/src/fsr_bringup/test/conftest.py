@@ -43,6 +43,8 @@ EXPECTED = {
     "position_final": 0.3, "position_peak": 0.5, "position_peak_time": 1.0,
     "attitude_final": 10.0, "attitude_peak": 10.0, "velocity_error": 0.2, "angular_velocity_error": 0.1,
     "saturation_steps": 210, "saturation_first": 0.5, "worst_rotor": 3, "at_max": 200, "at_min": 10,
+    # wrench_shortfall: axis -> (steps that gave way, max |shortfall|, its time); rounding-size values do not count
+    "gave_way": {"torque_z": (200, 0.3, 0.6), "force_z": (10, 0.5, 1.5), "torque_x": (0, 0.0, None)},
     "mass_final": 1.26, "mass_true": 1.25, "mass_nominal": 1.2,
     "ground_ratio": [1 / (1 - (RADIUS / 8.0) ** 2), 1 / (1 - (RADIUS / 4.0) ** 2)],
 }
@@ -127,6 +129,13 @@ def write_synthetic(path: Path, *, topics: tuple[str, ...] | None = None, scenar
             if wanted("wrench_cmd"):
                 thrust = 12.5 - (12.5 - 11.772) * t / 2.0
                 writer.write_message("/wrench_cmd", _wrench(stamp, [0.0, 0.0, -thrust], [0.0, 0.0, 0.0]), stamp_ns)
+            if wanted("wrench_shortfall"):
+                shortfall = [0.0, 0.0, 0.0, 1e-15, 0.0, 0.0]  # rounding, not giving way
+                if 500 <= k < 700:
+                    shortfall[5] = 0.3 if k == 600 else -0.1  # yaw gave way while rotor 3 was at its maximum
+                if 1500 <= k < 1510:
+                    shortfall[2] = -0.5  # thrust gave way while rotor 1 was at its minimum
+                writer.write_message("/wrench_shortfall", _wrench(stamp, shortfall[:3], shortfall[3:]), stamp_ns)
             if wanted("wrench_truth"):
                 writer.write_message("/wrench_truth", _wrench(stamp, TRUE_FORCE, TRUE_TORQUE), stamp_ns)
             if wanted("wrench_estimate"):

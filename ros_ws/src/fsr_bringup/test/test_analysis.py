@@ -40,6 +40,12 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
     assert saturation["rotor_speed"]["first_time_s"] == pytest.approx(EXPECTED["saturation_first"])
     assert saturation["rotor_speed"]["worst_rotor"] == EXPECTED["worst_rotor"]
     assert saturation["at_max_steps"] == EXPECTED["at_max"] and saturation["at_min_steps"] == EXPECTED["at_min"]
+    shortfall = m["wrench_shortfall"]
+    assert shortfall["steps"] == STEPS + 1 and shortfall["any_axis_steps"] == 210
+    for axis, (steps, largest, when) in EXPECTED["gave_way"].items():
+        assert shortfall[axis]["steps"] == steps and shortfall[axis]["max_shortfall"] == pytest.approx(largest)
+        assert shortfall[axis]["max_time_s"] == (None if when is None else pytest.approx(when))
+    assert all(shortfall[axis]["steps"] == 0 for axis in ("force_x", "force_y", "torque_y"))
     wrench = m["external_wrench"]
     np.testing.assert_allclose(wrench["truth_mean_last_s"], [1, 1, 0, 0, 0, -0.4], atol=1e-12)
     np.testing.assert_allclose(wrench["estimate_mean_last_s"], [1.02, 0.99, 0, 0, 0, -0.395], atol=1e-12)
@@ -67,6 +73,8 @@ def test_all_figures_and_files_are_written(synthetic_recording: Path, tmp_path: 
     summary = (tmp_path / "summary.md").read_text()
     assert "| position error [m] final / peak (at t) / RMS | 0.300 / 0.500 (at 1.00 s)" in summary
     assert "210 steps, first at 0.500 s, worst rotor 3" in summary
+    assert ("| gave way at the rotor limits [N, N m] | force_z 10 steps (max 0.500 at 1.50 s), "
+            "torque_z 200 steps (max 0.300 at 0.60 s) |") in summary
 
 
 def test_missing_topics_and_scenario_are_skipped_with_notes(tmp_path: Path, write_flight) -> None:
@@ -74,7 +82,7 @@ def test_missing_topics_and_scenario_are_skipped_with_notes(tmp_path: Path, writ
     result = analyze_recording(path, tmp_path / "out")
     m = result.metrics
     assert m["tracking"] is None and m["saturation"] is None and m["external_wrench"] is None
-    assert m["mass"] is None and m["thrust_ratio"] is None and m["sim_status"] is None
+    assert m["mass"] is None and m["thrust_ratio"] is None and m["sim_status"] is None and m["wrench_shortfall"] is None
     assert m["duration_s"] == pytest.approx(2.0) and m["scenario"] == "odom_only"
     notes = "\n".join(m["notes"])
     for expected in ("no scenario", "no messages on /reference", "tracking errors skipped", "figure errors.png"):

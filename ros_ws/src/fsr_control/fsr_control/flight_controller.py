@@ -54,6 +54,7 @@ class ControlOutput:
     reference: Reference
     saturated: bool
     desired: WrenchCommand  # the law's wrench before allocation, and the attitude it commands
+    shortfall: np.ndarray | None = None  # (6,) demanded - produced body wrench [N, N m] (wrench_shortfall)
 
     @property
     def thrust(self) -> float:
@@ -90,10 +91,10 @@ class FlightController:
         elif vehicle.is_tilting:
             objective = config.secondary_objective
             self.actuator = TiltingActuation.with_objective(
-                vehicle, objective.type, objective.exponent, objective.iterations
+                vehicle, objective.type, objective.exponent, objective.iterations, config.allocation
             )
         else:
-            self.actuator = FixedRotorActuation(vehicle)
+            self.actuator = FixedRotorActuation(vehicle, config.allocation)
         self.trajectory: Trajectory | None = None
         self._pending_goal: tuple[np.ndarray, np.ndarray, float] | None = None
         self.last_stamp = start_time
@@ -139,7 +140,7 @@ class FlightController:
         actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
         return ControlOutput(
             stamp_s, actuated.force_body, actuated.torque_body, actuated.rotor_speeds, actuated.tilt_angles,
-            reference, actuated.saturated, desired,
+            reference, actuated.saturated, desired, actuated.shortfall,
         )
 
     def set_goal(

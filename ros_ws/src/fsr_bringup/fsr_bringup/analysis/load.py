@@ -26,7 +26,7 @@ from fsr_sim.recording.reader import Recording, open_recording
 
 NS_PER_S = 1_000_000_000
 STANDARD_TOPICS = (
-    "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "goal", "wrench_estimate",
+    "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "wrench_shortfall", "reference", "goal", "wrench_estimate",
     "mass_estimate", "sim_status",
 )
 
@@ -89,6 +89,7 @@ class Flight:
     reference: Reference | None = None
     wrench_truth: Wrench | None = None
     wrench_cmd: Wrench | None = None
+    wrench_shortfall: Wrench | None = None  # demanded - commanded body wrench (which axis gave way)
     wrench_estimate: Wrench | None = None
     rotor_cmd: RotorCommand | None = None
     mass_estimate: Scalar | None = None
@@ -139,6 +140,7 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
         flight.message_counts[topic] = recording.count(topic)
     loaders = {
         "odom": _odometry, "reference": _reference, "wrench_truth": _wrench, "wrench_cmd": _wrench,
+        "wrench_shortfall": _wrench,
         "wrench_estimate": _wrench, "rotor_cmd": _rotor_command, "mass_estimate": _scalar,
     }
     for name, loader in loaders.items():

@@ -10,9 +10,11 @@ stamp has no exact partner):
 
 Each is summarised as final (last sample), peak (max of the norm, with its time) and RMS of the norm.
 Saturation counts the rotor commands at or beyond the vehicle's limits (speed ``<= rotor_speed_min`` or
-``>= rotor_speed_max``, tilt ``|alpha| >= tilt_angle_max``). The external-wrench estimate is compared with
-the truth at the estimate's stamps: mean of each over the last second, RMS of the error after a settling
-time. Thrust ratios ``T / T_OGE`` near the ground and the ceiling follow the odometry through the
+``>= rotor_speed_max``, tilt ``|alpha| >= tilt_angle_max``); which wrench axis gave way comes from
+``wrench_shortfall`` (demanded minus commanded body wrench): per axis the steps with ``|shortfall|`` above
+``SHORTFALL_TOLERANCE`` and the largest ``|shortfall|`` (N or N m) with its time. The external-wrench
+estimate is compared with the truth at the estimate's stamps: mean of each over the last second, RMS of the
+error after a settling time. Thrust ratios ``T / T_OGE`` near the ground and the ceiling follow the odometry through the
 scenario's environment (:mod:`fsr_sim.model.environment`).
 
 Every value is JSON-ready (NaN -> None); a metric whose topics or scenario are missing is None and the
@@ -29,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from fsr_bringup.analysis.load import Flight, hold, load_flight
+from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
 from fsr_sim.model.environment import (
     ThrustEffects,
     ceiling_effect_ratio,
@@ -128,6 +131,28 @@ def saturation(flight: Flight) -> dict[str, Any] | None:
         tilts = np.abs(np.nan_to_num(cmd.tilts))
         result["tilt"] = _limit_hits(tilts, cmd.t, tilts >= vehicle.tilt_angle_max * (1 - LIMIT_TOLERANCE))
         result["tilt"]["limit_deg"] = math.degrees(vehicle.tilt_angle_max)
+    return result
+
+
+def wrench_shortfall(flight: Flight) -> dict[str, Any] | None:
+    """Per body axis (``force_x`` .. ``torque_z``): steps that gave way (``|demanded - commanded| >
+    SHORTFALL_TOLERANCE``), their fraction, and the largest shortfall [N or N m] with its time; None without
+    ``wrench_shortfall``."""
+    shortfall = flight.wrench_shortfall
+    if shortfall is None:
+        return None
+    values = np.abs(np.hstack((shortfall.force, shortfall.torque)))  # (n, 6)
+    gave_way = values > SHORTFALL_TOLERANCE
+    result: dict[str, Any] = {"steps": len(values), "any_axis_steps": int(gave_way.any(axis=1).sum())}
+    for axis, name in enumerate(WRENCH_AXES):
+        steps = int(gave_way[:, axis].sum())
+        worst = int(np.argmax(values[:, axis])) if len(values) else 0
+        result[name] = {
+            "steps": steps,
+            "fraction": steps / len(values) if len(values) else 0.0,
+            "max_shortfall": float(values[worst, axis]) if steps else 0.0,
+            "max_time_s": float(shortfall.t[worst]) if steps else None,
+        }
     return result
 
 
@@ -249,6 +274,9 @@ def flight_metrics(
     metrics["saturation"] = saturation(flight)
     if metrics["saturation"] is None:
         notes.append("saturation skipped: rotor_cmd or scenario missing")
+    metrics["wrench_shortfall"] = wrench_shortfall(flight)
+    if metrics["wrench_shortfall"] is None:
+        notes.append("wrench shortfall skipped: wrench_shortfall missing")
     metrics["external_wrench"] = wrench_comparison(flight, settle_time)
     if metrics["external_wrench"] is None:
         notes.append("wrench estimate comparison skipped: wrench_estimate or wrench_truth missing")

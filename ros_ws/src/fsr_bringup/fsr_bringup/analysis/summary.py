@@ -50,6 +50,13 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
         rows.append(("rotor speed saturation", text))
         if saturation.get("tilt"):
             rows.append(("tilt saturation", f"{saturation['tilt']['steps']} steps"))
+    shortfall = metrics.get("wrench_shortfall")
+    if shortfall:
+        gave_way = [
+            f"{axis} {item['steps']} steps (max {_num(item['max_shortfall'])} at {_num(item['max_time_s'], 2)} s)"
+            for axis, item in shortfall.items() if isinstance(item, dict) and item["steps"]
+        ]
+        rows.append(("gave way at the rotor limits [N, N m]", ", ".join(gave_way) or "no axis"))
     wrench = metrics.get("external_wrench")
     if wrench:
         rows.append(("external wrench estimate, mean last 1 s", _vector(wrench["estimate_mean_last_s"])))

@@ -5,8 +5,8 @@
 
 Subscribes up front (so nothing published after the simulator's handshake is missed), without
 deserialising (``raw=True``), to ``/clock`` and, under each namespace (default: the node's own, so
-``-r __ns:=/uav1`` works), to ``odom``, ``wrench_truth``, ``rotor_cmd``, ``wrench_cmd``, ``reference``,
-``goal``, ``wrench_estimate``, ``mass_estimate`` and ``sim_status``. Messages are taken in batches from a
+``-r __ns:=/uav1`` works), to ``odom``, ``wrench_truth``, ``rotor_cmd``, ``wrench_cmd``, ``wrench_shortfall``,
+``reference``, ``goal``, ``wrench_estimate``, ``mass_estimate`` and ``sim_status``. Messages are taken in batches from a
 wait set (no executor callback per message: a 1 kHz lockstep graph publishes ~8 k messages/s) and written
 in arrival order.
 
@@ -38,6 +38,7 @@ STANDARD_TOPICS: dict[str, str] = {
     "wrench_truth": "geometry_msgs/msg/WrenchStamped",
     "rotor_cmd": "sensor_msgs/msg/JointState",
     "wrench_cmd": "geometry_msgs/msg/WrenchStamped",
+    "wrench_shortfall": "geometry_msgs/msg/WrenchStamped",
     "reference": "trajectory_msgs/msg/MultiDOFJointTrajectory",
     "goal": "geometry_msgs/msg/PoseStamped",
     "wrench_estimate": "geometry_msgs/msg/WrenchStamped",

@@ -14,6 +14,7 @@ controller:
   gains: {k_p: [20, 20, 100], k_v: [20, 20, 100], k_r: [10, 10, 100], k_w: [10, 10, 100]}
   angular_feedforward: consistent   # voliro only: consistent | report
   secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
+  allocation: priority              # beyond the rotor limits: priority (yaw gives way first) | clamp
 ```
 
 Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix; gains not given
@@ -26,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsr_control.allocation import ALLOCATION_STRATEGIES
 from fsr_control.controllers import geometric, voliro
 from fsr_control.planning.trajectory import Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for
@@ -36,6 +38,7 @@ from fsr_sim.model.vehicle import Vehicle
 CONTROLLER_TYPES = ("geometric", "voliro")
 DEFAULT_GAINS = {"geometric": geometric.REPORT_GAINS, "voliro": voliro.REPORT_GAINS}
 SECONDARY_TYPES = ("none", "min_peak_speed")
+DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
 DEFAULT_GOAL_DURATION = 10.0  # s
 
 
@@ -57,6 +60,7 @@ class ControllerConfig:
     secondary_objective: SecondaryObjectiveConfig = field(default_factory=SecondaryObjectiveConfig)
     goal_duration: float = DEFAULT_GOAL_DURATION
     source: str = ""
+    allocation: str = DEFAULT_ALLOCATION  # clamp | priority (fsr_control.allocation)
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
@@ -111,6 +115,7 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
         raise controller.error("type", "voliro commands a full 6-D wrench; it needs 'actuation: rotors' "
                                        "(wrench actuation applies only u_T along -z_b and tau_b)")
     gains = _gains(controller.section("gains"), controller_type)
+    allocation = controller.string("allocation", DEFAULT_ALLOCATION, choices=ALLOCATION_STRATEGIES)
     feedforward = "consistent"
     secondary = SecondaryObjectiveConfig()
     if controller_type == "voliro":
@@ -130,4 +135,5 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     waypoints = _waypoints(trajectory, vehicle)
     goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
     trajectory.reject_unknown()
-    return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source)
+    return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source,
+                            allocation)

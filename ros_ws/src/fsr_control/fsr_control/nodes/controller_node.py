@@ -5,7 +5,9 @@ Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``t
 ``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal). An invalid value exits with code 2 and names it.
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
-``rotor_cmd`` (rotor actuation), ``wrench_cmd`` and ``reference``, all stamped ``t_k`` (lockstep contract).
+``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
+axis gave way at the rotor limits, see fsr_control.allocation) and ``reference``, all stamped ``t_k`` (lockstep
+contract).
 NaN/inf odom or goals are dropped with a rate-limited warning. At exit it logs the saturation summary and
 the callback's cost.
 """
@@ -28,6 +30,7 @@ from fsr_control.flight_controller import FlightController, seconds_from_ns
 from fsr_control.nodes.messages import controller_messages, goal_from_message
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
+from fsr_sim.model.allocation import WRENCH_AXES
 from fsr_sim.ros.conversions import (
     ns_from_time,
     odometry_is_finite,
@@ -83,6 +86,7 @@ class ControllerNode(Node):
         self.publishers_by_topic = {
             "wrench_cmd": self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS),
             "reference": self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS),
+            "wrench_shortfall": self.create_publisher(WrenchStamped, "wrench_shortfall", STREAM_QOS),
         }
         if self.rotors:
             self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
@@ -128,9 +132,13 @@ class ControllerNode(Node):
         saturation = self.controller.saturation
         if saturation.count:
             self.get_logger().warning(
-                f"rotor saturation: {saturation.count} commands clamped, first at {saturation.first_time:.3f} s, "
+                f"rotor saturation: {saturation.count} commands saturated, first at {saturation.first_time:.3f} s, "
                 f"worst rotor {saturation.worst_rotor} ({saturation.worst_excess:.1f} rad/s beyond its limit)"
             )
+            gave_way = [f"{axis} {steps} steps (max {largest:.3g})" for axis, steps, largest in
+                        zip(WRENCH_AXES, saturation.axis_steps, saturation.axis_max_shortfall, strict=True) if steps]
+            self.get_logger().warning(f"gave way ({self.controller.config.allocation} allocation): "
+                                      + (", ".join(gave_way) or "no axis"))
         else:
             self.get_logger().info("rotor saturation: none")
         if self.callbacks:

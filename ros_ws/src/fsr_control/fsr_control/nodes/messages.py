@@ -50,12 +50,14 @@ def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTraje
 
 def controller_messages(stamp_ns: int, output: ControlOutput, rotors: bool) -> list[tuple[str, Any]]:
     """(topic, message) of everything the controller publishes for the state stamped ``stamp_ns``: ``rotor_cmd``
-    (rotor actuation only), ``wrench_cmd``, ``reference``. The node publishes these; a recording of an
-    in-process flight writes them."""
+    (rotor actuation only), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus produced wrench),
+    ``reference``. The node publishes these; a recording of an in-process flight writes them."""
     messages: list[tuple[str, Any]] = []
     if rotors:
         messages.append(("rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles)))
     messages.append(("wrench_cmd", wrench_stamped(stamp_ns, output.force_body, output.torque_body)))
+    if output.shortfall is not None:
+        messages.append(("wrench_shortfall", wrench_stamped(stamp_ns, output.shortfall[:3], output.shortfall[3:])))
     messages.append(("reference", reference_message(stamp_ns, output.reference)))
     return messages
 

@@ -102,9 +102,14 @@ def static_from_rotor_commands(vehicle: Vehicle, speed_sq: np.ndarray, tilt: np.
     return np.array(u)
 
 
+WRENCH_AXES = ("force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z")  # body FRD
+SHORTFALL_TOLERANCE = 1e-9  # N or N m: a larger |commanded - achieved| on an axis means that axis gave way
+
+
 @dataclass
 class SaturationReport:
-    """Running record of rotor-speed (and tilt) saturation: how often, since when, and which rotor."""
+    """Running record of rotor-speed (and tilt) saturation: how often, since when, which rotor, and which
+    wrench axis gave way (:meth:`record_shortfall`) by how much."""
 
     count: int = 0
     first_time: float | None = None
@@ -112,6 +117,19 @@ class SaturationReport:
     worst_rotor: int | None = None  # 1-based rotor index of the largest excess
     worst_excess: float = 0.0  # rad/s beyond the limit
     per_rotor: dict[int, int] = field(default_factory=dict)
+    axis_steps: list[int] = field(default_factory=lambda: [0] * len(WRENCH_AXES))  # steps each axis gave way
+    axis_max_shortfall: list[float] = field(default_factory=lambda: [0.0] * len(WRENCH_AXES))  # N / N m
+
+    def record_shortfall(self, shortfall: np.ndarray) -> None:
+        """Record one saturated step's ``commanded - achieved`` body wrench ``[f; tau]`` (shape (6,), N and N m):
+        every axis with ``|shortfall| > SHORTFALL_TOLERANCE`` gave way on this step."""
+        steps, largest = self.axis_steps, self.axis_max_shortfall
+        for axis, value in enumerate(shortfall.tolist()):
+            magnitude = abs(value)
+            if magnitude > SHORTFALL_TOLERANCE:
+                steps[axis] += 1
+                if magnitude > largest[axis]:
+                    largest[axis] = magnitude
 
     def record(self, time: float, excess: np.ndarray) -> bool:
         """Record one command; ``excess`` per rotor [rad/s] (0 where within limits). True if it saturated."""
@@ -138,6 +156,10 @@ class SaturationReport:
             "worst_rotor": self.worst_rotor,
             "worst_excess_rad_s": self.worst_excess,
             "per_rotor": {str(k): v for k, v in sorted(self.per_rotor.items())},
+            "gave_way": {
+                axis: {"steps": steps, "max_shortfall": largest}
+                for axis, steps, largest in zip(WRENCH_AXES, self.axis_steps, self.axis_max_shortfall, strict=True)
+            },
         }
 
 
