@@ -9,6 +9,11 @@ surfaces, time-varying disturbances) are evaluated at every RK4 stage. Two actua
   thrust ratio ``r_i`` of :mod:`fsr_sim.model.environment` (drag torque is not scaled).
 * ``wrench``: the commanded body wrench directly, ``f_b = -u_T e3`` and ``tau_b`` (the report's exercises 3
   and 4); surfaces then only act through contact.
+
+Ground and ceiling are solid (contact geometry in :mod:`fsr_sim.model.environment`); an impact faster
+than ``crash_speed`` is a divergence. ``ground_cap_steps`` / ``ceiling_cap_steps`` count the control steps
+in which a rotor's thrust ratio was held at the surface's ``max_ratio`` (the effect model's validity ends
+there).
 """
 
 from __future__ import annotations
@@ -55,6 +60,10 @@ class Plant:
         self.crash_speed = crash_speed
         self.max_impact_speed = 0.0
         self.in_contact = False
+        self.max_ceiling_impact_speed = 0.0  # [m/s] upward speed at ceiling contact
+        self.at_ceiling = False
+        self.ground_cap_steps = 0
+        self.ceiling_cap_steps = 0
         n = vehicle.rotor_count
         self.rotor_speeds = np.zeros(n)
         self.tilt_angles = np.zeros(n) if vehicle.is_tilting else None
@@ -212,7 +221,17 @@ class Plant:
             t = self.time + sub * self.dt
             self.state = self.body.step_floats(t, self.state, self.dt, self._wrench)
             self._apply_ground_contact()
+            self._apply_ceiling_contact()
+        effects = self.effects
+        if effects.ground_capped or effects.ceiling_capped:
+            self._count_capped_steps()
         self.step_index += 1
+
+    def _count_capped_steps(self) -> None:
+        effects = self.effects
+        self.ground_cap_steps += effects.ground_capped
+        self.ceiling_cap_steps += effects.ceiling_capped
+        effects.ground_capped = effects.ceiling_capped = False
 
     def _apply_ground_contact(self) -> None:
         ground = self.config.environment.ground
@@ -230,6 +249,23 @@ class Plant:
         self.state[VELOCITY] = 0.0  # held by the ground (no bounce, no sliding)
         self.state[ANGULAR_VELOCITY] = 0.0
 
+    def _apply_ceiling_contact(self) -> None:
+        """The top of the vehicle (``top_height`` above the centre) stops at the ceiling, like the ground."""
+        ceiling = self.config.environment.ceiling
+        self.at_ceiling = False
+        if not ceiling.enabled:
+            return
+        rest_z = ceiling.height + self.vehicle.top_height
+        if self.state[2] > rest_z:
+            return
+        self.at_ceiling = True
+        impact = -self.state[5]  # upward (negative NED z) speed
+        if impact > self.max_ceiling_impact_speed:
+            self.max_ceiling_impact_speed = float(impact)
+        self.state[2] = rest_z
+        self.state[VELOCITY] = 0.0  # held against the ceiling while the net force pushes up
+        self.state[ANGULAR_VELOCITY] = 0.0
+
     def divergence(self) -> str | None:
         """Why the simulation cannot go on (NaN state, beyond physical bounds, crash), or None."""
         s = self.state.tolist()
@@ -243,4 +279,7 @@ class Plant:
             return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
         if self.max_impact_speed > self.crash_speed:
             return f"crashed into the ground at {self.max_impact_speed:.2f} m/s (limit {self.crash_speed} m/s)"
+        if self.max_ceiling_impact_speed > self.crash_speed:
+            return (f"crashed into the ceiling at {self.max_ceiling_impact_speed:.2f} m/s "
+                    f"(limit {self.crash_speed} m/s)")
         return None

@@ -50,7 +50,8 @@ class Vehicle:
     spins: np.ndarray
     tilt_axes: np.ndarray | None = None
     tilt_angle_max: float = np.pi
-    contact_height: float = 0.1
+    contact_height: float = 0.1  # [m] centre of mass above the landing gear's feet (ground contact)
+    top_height: float = 0.1  # [m] top of the vehicle above the centre of mass (ceiling contact)
     description: str = ""
 
     @property
@@ -103,6 +104,7 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
         raise root.error("rotor_speed_max", f"must be > rotor_speed_min ({speed_min}), got {speed_max}")
     tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
     contact_height = root.number("contact_height", 0.1, minimum=0.0)
+    top_height = root.number("top_height", contact_height, minimum=0.0)  # default: symmetric about the CoM
 
     if root.has("layout") == root.has("rotors"):
         raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
@@ -130,6 +132,7 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
         tilt_axes=tilt_axes,
         tilt_angle_max=float(tilt_max),
         contact_height=contact_height,
+        top_height=top_height,
         description=description,
     )
 
