@@ -6,8 +6,10 @@ Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``t
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd`` and ``reference``, all stamped ``t_k`` (lockstep contract).
-NaN/inf odom or goals are dropped with a rate-limited warning. At exit it logs the saturation summary and
-the callback's cost.
+NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
+final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
+for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation
+summary and the callback's cost.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from fsr_sim.ros.conversions import (
     state_from_odometry,
     wrench_stamped,
 )
+from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, run_node
 
@@ -87,6 +90,8 @@ class ControllerNode(Node):
         self.reference_pub = self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
+        self.flight_end = FlightEnd(self)
+        self.answered_ns: int | None = None  # stamp of the last odom handled
         self.warn = RateLimitedWarning(self.get_logger())
         self.callback_seconds = 0.0
         self.callbacks = 0
@@ -108,11 +113,13 @@ class ControllerNode(Node):
             )
         except (ValueError, ArithmeticError) as error:  # never crash mid-flight; the simulator holds/fails safe
             self.warn(f"no command for odom at {stamp_ns * 1e-9:.3f} s: {error}")
+            self.answered_ns = stamp_ns
             return
         if self.rotor_pub is not None:
             self.rotor_pub.publish(rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles))
         self.wrench_pub.publish(wrench_stamped(stamp_ns, output.force_body, output.torque_body))
         self.reference_pub.publish(reference_message(stamp_ns, output.reference))
+        self.answered_ns = stamp_ns
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1
 
@@ -126,6 +133,8 @@ class ControllerNode(Node):
         self.get_logger().info(f"new goal {position.tolist()} from t = {self.controller.last_stamp:.3f} s")
 
     def close(self) -> None:
+        publishers = [p for p in (self.rotor_pub, self.wrench_pub, self.reference_pub) if p is not None]
+        self.flight_end.drain(self, lambda: self.answered_ns, publishers)
         saturation = self.controller.saturation
         if saturation.count:
             self.get_logger().warning(

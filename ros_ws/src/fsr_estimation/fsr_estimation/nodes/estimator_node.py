@@ -6,6 +6,9 @@ header stamp, runs :class:`fsr_estimation.core.observer.MomentumObserver` once p
 pair's stamp) and ``mass_estimate`` (Float64, kg). Time is the stamps' simulated time; the sample time is
 the stamp difference, which must equal the control period (a gap or a jump back resets the observer).
 Messages with NaN/inf are dropped with a rate-limited warning. Service ``~/reset`` (std_srvs/Trigger).
+Asked to stop after the simulator ended (its final ``sim_status``), it first estimates every pair still
+queued up to the simulator's last state and waits for its subscribers' acknowledgements
+(:mod:`fsr_sim.ros.flight_end`).
 Parameters: :mod:`fsr_estimation.nodes.estimator_params`.
 """
 
@@ -32,6 +35,7 @@ from fsr_sim.ros.conversions import (
     wrench_is_finite,
     wrench_stamped,
 )
+from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, run_node
 
@@ -65,6 +69,7 @@ class EstimatorNode(Node):
         self.create_subscription(Odometry, "odom", self._on_odom, STREAM_QOS)
         self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS)
         self.create_service(Trigger, "~/reset", self._on_reset)
+        self.flight_end = FlightEnd(self)
         c = self.config
         self.get_logger().info(
             f"estimator: c0 = {c.c0} rad/s, r = {c.r}, mass = {c.mass} kg, inertia diag = "
@@ -74,6 +79,11 @@ class EstimatorNode(Node):
 
     def done(self) -> bool:
         return not self.enabled
+
+    def close(self) -> None:
+        """Estimate every pair up to the simulator's last state before exiting (see the module docstring)."""
+        if self.enabled:
+            self.flight_end.drain(self, lambda: self._last_stamp, [self.wrench_pub, self.mass_pub])
 
     def _make_observer(self, period: float) -> MomentumObserver:
         c = self.config
