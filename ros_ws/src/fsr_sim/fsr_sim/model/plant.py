@@ -217,11 +217,13 @@ class Plant:
 
     def step(self) -> None:
         """Advance one period: ``physics_substeps`` RK4 steps of ``physics_dt``, with ground contact."""
+        ceiling = self.config.environment.ceiling.enabled
         for sub in range(self.substeps):
             t = self.time + sub * self.dt
             self.state = self.body.step_floats(t, self.state, self.dt, self._wrench)
             self._apply_ground_contact()
-            self._apply_ceiling_contact()
+            if ceiling:
+                self._apply_ceiling_contact()
         effects = self.effects
         if effects.ground_capped or effects.ceiling_capped:
             self._count_capped_steps()
@@ -250,11 +252,10 @@ class Plant:
         self.state[ANGULAR_VELOCITY] = 0.0
 
     def _apply_ceiling_contact(self) -> None:
-        """The top of the vehicle (``top_height`` above the centre) stops at the ceiling, like the ground."""
+        """The top of the vehicle (``top_height`` above the centre) stops at the ceiling, like the ground
+        (called only when the ceiling is enabled)."""
         ceiling = self.config.environment.ceiling
         self.at_ceiling = False
-        if not ceiling.enabled:
-            return
         rest_z = ceiling.height + self.vehicle.top_height
         if self.state[2] > rest_z:
             return
