@@ -16,8 +16,7 @@ from pathlib import Path
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController
-from fsr_sim.config.scenario import load_scenario, simulation_config
-from fsr_sim.model.plant import Plant
+from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
 from fsr_sim.model.so3 import rotation_from_quaternion
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "ros_ws/src/fsr_control/test/scenarios"
@@ -42,7 +41,7 @@ def bench(file: str, overrides: list[str], seconds: float) -> tuple[float, float
         s = result.state[k]
         controller.command(result.time[k], s[0:3], rotations[k], s[3:6], s[10:13])
     control = (time.perf_counter() - start) / steps * 1e6
-    plant = Plant(sim)
+    plant = plant_from_config(sim)
     start = time.perf_counter()
     for k in range(steps - 1):
         if sim.actuation == "rotors":

@@ -100,13 +100,12 @@ def run_controller(vehicle: str, steps: int, out: Path) -> None:
 
 def in_process_step_cost(scenario_path: Path, vehicle: str, repeats: int = 2000) -> tuple[float, float]:
     """Mean plant step and message fill time [s] (no ROS transport)."""
-    from fsr_sim.config.scenario import load_scenario, simulation_config
-    from fsr_sim.model.plant import Plant
+    from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
     from fsr_sim.nodes.state_messages import StateMessages
 
     config = simulation_config(load_scenario(scenario_path))
     config.duration = repeats * config.control_period
-    plant = Plant(config)
+    plant = plant_from_config(config)
     plant.set_rotor_command(hover_speeds(vehicle))
     messages = StateMessages(plant)
     start = time.perf_counter()

@@ -1,8 +1,20 @@
-"""Fuzz: mutated scenario files either fly (in process, a few steps) or are refused with a ConfigError.
+"""Fuzz: mutated scenario files, each with the outcome its kind of mutation calls for.
 
-Mutations: a key deleted, a key misspelt, a value replaced by a value of another kind or an out-of-range
-number, a list shortened, the YAML text cut or corrupted. A refusal must be a ConfigError whose message
-names the file; anything else (a traceback from deep inside numpy, a hang) fails the test.
+Mutations and what each must do (decided from the mutation, never from the outcome):
+
+* a key misspelt -> refused: a ConfigError that names the file and the misspelt key (every section
+  rejects unknown keys);
+* the YAML text broken (an unclosed ``[``, the first ``:`` removed, a leading tab) -> refused: a
+  ConfigError naming the file;
+* a key deleted, a list shortened, a value replaced by a value of another kind or an out-of-range number
+  -> refused with a ConfigError naming the file and the mutated key, or accepted and flown (in process, a
+  few steps) to the end: ``finished``. Only a replacement by a huge finite number (``1e12``: a speed, a
+  position or a gain nobody flies) may also end ``diverged``;
+* the YAML text cut short -> refused naming the file, or (cut at a line boundary: a shorter, valid
+  scenario) flown to the end.
+
+Anything else (a traceback from deep inside numpy, a hang, a divergence of a sane scenario, a refusal that
+does not say which key) fails the test.
 """
 
 from __future__ import annotations
@@ -10,6 +22,7 @@ from __future__ import annotations
 import copy
 import math
 import random
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -50,25 +63,46 @@ def parent_of(data: Any, path: tuple) -> Any:
     return data
 
 
-def mutate(data: dict, rng: random.Random) -> str:
-    """Mutate ``data`` in place (or return broken YAML text); returns the YAML text to write."""
+HUGE = 1e12  # the one replacement that may make a valid scenario diverge
+
+
+@dataclass(frozen=True)
+class Mutation:
+    text: str  # the YAML text to write
+    kind: str  # typo | broken_text | cut_text | delete | shorten | replace
+    key: str = ""  # the key a refusal must name: the misspelt key, or the nearest key on the mutated path
+    value: Any = None  # the replacement
+
+
+def nearest_key(path: tuple) -> str:
+    """The last mapping key on a path (``("trajectory", "waypoints", 0, "position", 1)`` -> ``position``)."""
+    return next(str(part) for part in reversed(path) if isinstance(part, str))
+
+
+def mutate(data: dict, rng: random.Random) -> Mutation:
+    """Mutate ``data`` in place (or break its YAML text); returns the text to write and what was done."""
     target = rng.choice(paths(data))
     parent, last = parent_of(data, target), target[-1]
     operation = rng.choice(("delete", "typo", "replace", "replace", "replace", "shorten", "text"))
     if operation == "delete":
         del parent[last]
-    elif operation == "typo" and isinstance(last, str) and len(last) > 2:
+        return Mutation(yaml.safe_dump(data, sort_keys=False), "delete", nearest_key(target))
+    if operation == "typo" and isinstance(last, str) and len(last) > 2:
         position = rng.randrange(len(last))
-        parent[last[:position] + last[position + 1:]] = parent.pop(last)
-    elif operation == "shorten" and isinstance(parent[last], list) and parent[last]:
+        misspelt = last[:position] + last[position + 1:]
+        parent[misspelt] = parent.pop(last)
+        return Mutation(yaml.safe_dump(data, sort_keys=False), "typo", misspelt)
+    if operation == "shorten" and isinstance(parent[last], list) and parent[last]:
         parent[last] = parent[last][:-1]
-    elif operation == "text":
+        return Mutation(yaml.safe_dump(data, sort_keys=False), "shorten", nearest_key(target))
+    if operation == "text":
         text = yaml.safe_dump(data, sort_keys=False)
         cut = rng.randrange(1, len(text))
-        return rng.choice((text[:cut], text[:cut] + ": [\n", text.replace(":", "", 1), "\t" + text))
-    else:
-        parent[last] = copy.deepcopy(rng.choice(REPLACEMENTS))
-    return yaml.safe_dump(data, sort_keys=False)
+        broken = rng.choice((None, text[:cut] + ": [\n", text.replace(":", "", 1), "\t" + text))
+        return Mutation(text[:cut], "cut_text") if broken is None else Mutation(broken, "broken_text")
+    value = copy.deepcopy(rng.choice(REPLACEMENTS))
+    parent[last] = value
+    return Mutation(yaml.safe_dump(data, sort_keys=False), "replace", nearest_key(target), value)
 
 
 def mutants() -> list[tuple[str, int]]:
@@ -76,18 +110,34 @@ def mutants() -> list[tuple[str, int]]:
 
 
 @pytest.mark.parametrize(("base", "seed"), mutants())
-def test_mutated_scenario_flies_or_is_refused_cleanly(tmp_path: Path, base: str, seed: int):
+def test_mutated_scenario_does_what_its_mutation_calls_for(tmp_path: Path, base: str, seed: int):
     rng = random.Random(f"{base}-{seed}")
     data = yaml.safe_load((builtin_config_dir("scenarios") / f"{base}.yaml").read_text())
     path = tmp_path / f"{base}_{seed}.yaml"
-    path.write_text(mutate(data, rng))
+    mutation = mutate(data, rng)
+    path.write_text(mutation.text)
     try:
         checked = check_scenario(load_scenario(path))
     except ConfigError as error:
         assert str(path) in str(error), f"the message does not name the file: {error}"
+        if mutation.key:
+            assert mutation.key in str(error), f"{mutation}: the message does not name '{mutation.key}': {error}"
         return
+    assert mutation.kind not in ("typo", "broken_text"), f"{mutation}: accepted, must be refused"
     # Valid: fly a few steps (a mutated duration could be hours long).
     period = checked.simulation.control_period
     short = check_scenario(load_scenario(path, [f"duration={FLY_STEPS * period!r}"]))
     result = fly_in_process(short.scenario)
-    assert result.end_reason in ("finished", "diverged"), result.end_reason
+    may_diverge = mutation.kind == "replace" and mutation.value == HUGE
+    expected = ("finished", "diverged") if may_diverge else ("finished",)
+    assert result.end_reason in expected, f"{mutation}: {result.end_reason} ({result.reason})"
+    assert len(result.time) == FLY_STEPS + 1 or result.end_reason == "diverged"
+
+
+def test_mutation_kinds_are_all_exercised():
+    """The fixed seeds cover every kind of mutation (so each expectation above is checked)."""
+    kinds = set()
+    for base, seed in mutants():
+        data = yaml.safe_load((builtin_config_dir("scenarios") / f"{base}.yaml").read_text())
+        kinds.add(mutate(data, random.Random(f"{base}-{seed}")).kind)
+    assert kinds == {"typo", "broken_text", "cut_text", "delete", "shorten", "replace"}

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fsr_sim.recording.reader import open_recording
+from fsr_sim.recording.reader import RecordingError, open_recording
 
 pytestmark = pytest.mark.graph
 
@@ -63,6 +63,21 @@ def wait_for_text(path: Path, text: str, timeout: float = 60.0) -> None:
             return
         time.sleep(0.05)
     raise AssertionError(f"'{text}' not in {path} after {timeout} s")
+
+
+def wait_for_recorded(path: Path, topic: str, count: int, timeout: float = 60.0) -> int:
+    """Wait until the recording being written (flushed every 0.5 s) holds ``count`` messages of ``topic``."""
+    deadline = time.monotonic() + timeout
+    recorded = 0
+    while time.monotonic() < deadline:
+        try:
+            recorded = open_recording(path).count(topic)
+        except RecordingError:  # not created yet, or the topic's channel not written yet
+            recorded = 0
+        if recorded >= count:
+            return recorded
+        time.sleep(0.1)  # polling a file another process writes
+    raise AssertionError(f"{path}: {recorded} of {count} '{topic}' messages after {timeout} s")
 
 
 def node_pid(fly_pid: int, executable: str) -> int:
@@ -116,11 +131,10 @@ def test_graph_and_in_process_runs_agree(tmp_path):
 
 def test_killed_controller_is_reported_and_the_recording_is_complete(tmp_path):
     out = tmp_path / "run.mcap"
-    process = start_fly(["ex4_geometric", "--duration", "3", "--out", str(out), "--no-analysis",
+    process = start_fly(["ex4_geometric", "--duration", "5", "--out", str(out), "--no-analysis",
                          "--set", "lockstep.timeout=0.2"])
     try:
-        wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "stepping")
-        time.sleep(0.3)
+        wait_for_recorded(out, "odom", 300)  # mid-flight, from the recording (the kill must precede the end)
         os.kill(node_pid(process.pid, "controller"), signal.SIGKILL)
         stdout, stderr = process.communicate(timeout=120)
     finally:
@@ -129,18 +143,17 @@ def test_killed_controller_is_reported_and_the_recording_is_complete(tmp_path):
     assert "controller died during the flight (killed by SIGKILL)" in stderr
     recording = open_recording(out)
     assert not recording.truncated
-    assert recording.count("odom") == 3001  # the simulator finished the flight on its failsafe
+    assert recording.count("odom") == 5001  # the simulator finished the flight on its failsafe
     assert final_status(recording)["state"] == "finished"
-    assert recording.count("wrench_cmd") < 3001
+    assert 300 <= recording.count("wrench_cmd") < 5001  # answered until killed, not to the end
 
 
 @pytest.mark.parametrize("victim", ["estimator", "recorder"])
 def test_killed_estimator_or_recorder_is_reported_and_the_flight_goes_on(tmp_path, victim):
     out = tmp_path / "run.mcap"
-    process = start_fly(["step_disturbance", "--duration", "2", "--out", str(out), "--no-analysis"])
+    process = start_fly(["step_disturbance", "--duration", "5", "--out", str(out), "--no-analysis"])
     try:
-        wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "stepping")
-        time.sleep(0.3)
+        wait_for_recorded(out, "odom", 300)  # mid-flight, from the recording (the kill must precede the end)
         os.kill(node_pid(process.pid, "estimator" if victim == "estimator" else "fsr-record"), signal.SIGKILL)
         stdout, stderr = process.communicate(timeout=120)
     finally:
@@ -150,29 +163,42 @@ def test_killed_estimator_or_recorder_is_reported_and_the_flight_goes_on(tmp_pat
     wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "finished: reached the scenario duration")
     recording = open_recording(out)
     if victim == "estimator":
-        assert not recording.truncated and recording.count("odom") == 2001
-        assert recording.count("wrench_estimate") < 2001
+        assert not recording.truncated and recording.count("odom") == 5001
+        assert recording.count("wrench_estimate") < 5001
     else:
         assert recording.truncated  # cut by SIGKILL: readable up to its last complete chunk
         assert recording.count("odom") > 0
 
 
-def test_interrupted_run_stops_every_node_and_keeps_a_valid_recording(tmp_path):
+def test_interrupted_run_records_every_message_up_to_the_last_step_and_says_interrupted(tmp_path):
+    """Issue #14: after Ctrl-C the recording used to miss the last ~0.1 s of commands and ~1 s of estimates."""
     out = tmp_path / "run.mcap"
-    process = start_fly(["ex4_geometric", "--duration", "20", "--out", str(out), "--no-analysis"])
+    process = start_fly(["ex4_geometric", "--set", "actuation=rotors", "--duration", "120", "--out", str(out)])
     try:
         wait_for_text(tmp_path / "run" / "logs" / "simulator.log", "stepping")
         nodes = children(process.pid)
         assert len(nodes) == 4, nodes
-        time.sleep(0.5)
+        wait_for_recorded(out, "odom", 2000)  # ~2 s in, from the recorder's own flushed file
         process.send_signal(signal.SIGINT)
-        process.communicate(timeout=60)
+        stdout, stderr = process.communicate(timeout=180)
     finally:
         process.kill()
-    assert process.returncode == 130
+    assert process.returncode == 130, stdout + stderr
     assert not any(Path(f"/proc/{pid}").exists() for pid in nodes), "a node outlived fsr-fly"
     recording = open_recording(out)
-    assert not recording.truncated and 0 < recording.count("odom") < 20001
+    assert not recording.truncated
+    status = final_status(recording)
+    assert status["state"] == "stopped" and status["reason"] == "received SIGINT"
+    steps = status["steps"]
+    assert 2000 <= steps < 120_000
+    expected = [k * 1_000_000 for k in range(steps + 1)]  # t_0 .. t_K, the last state the simulator published
+    for topic in ("odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "wrench_estimate"):
+        stamps = [t for t, _ in recording.raw(topic)]
+        assert sorted(set(stamps)) == expected, f"{topic}: {len(set(stamps))} of {steps + 1} stamps"
+        assert all(t == 0 for t in stamps[len(expected):]) or len(stamps) == len(expected)  # repeats: t_0 only
+    assert recording.count("mass_estimate") == recording.count("wrench_estimate")
+    summary = (tmp_path / "run" / "summary.md").read_text()
+    assert f"interrupted at t = {steps * 1e-3:.3f} s" in summary, summary
 
 
 def test_invalid_scenario_is_refused_before_any_process_starts(tmp_path):

@@ -18,7 +18,7 @@ from rclpy.serialization import deserialize_message
 
 from fsr_bringup.cli.analyze_cli import main as analyze_main
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
-from fsr_sim.recording.reader import open_recording
+from fsr_sim.recording.reader import RecordingError, open_recording
 from fsr_sim.ros.conversions import odometry_from_state, wrench_stamped
 from fsr_sim.ros.qos import STREAM_QOS
 from fsr_sim.ros.runtime import configure_environment
@@ -105,6 +105,21 @@ def graph(tmp_path: Path):
     g.close()
 
 
+def wait_until_on_disk(path: Path, count: int, timeout: float = 30.0) -> None:
+    """Poll the file being written until its complete chunks hold ``count`` odom messages."""
+    deadline = time.monotonic() + timeout
+    on_disk = 0
+    while time.monotonic() < deadline:
+        try:
+            on_disk = open_recording(path).count("odom")
+        except RecordingError:
+            on_disk = 0
+        if on_disk >= count:
+            return
+        time.sleep(0.05)  # polling a file another process writes
+    raise AssertionError(f"{path}: {on_disk} of {count} odom messages on disk after {timeout} s")
+
+
 def assert_prefix(path: Path, count: int) -> None:
     """The file holds exactly messages 0..count-1 of both topics, decoded equal to what was sent."""
     recording = open_recording(path)
@@ -151,22 +166,46 @@ def test_records_every_message_readable_by_standard_tools(graph: Graph, tmp_path
     assert xs == list(range(N))
 
 
+BATCH = 1000  # messages per topic between acknowledgements: the publisher's lead stays far below its depth
+
+
 @pytest.mark.graph
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_signal_mid_stream_closes_a_valid_file_without_losing_received_messages(graph: Graph, signum: int) -> None:
     graph.start_recorder()
-    halt = threading.Event()
-    publisher = threading.Thread(target=graph.publish, args=(10 * N, 0, halt))
+    halt, first_batch_received = threading.Event(), threading.Event()
+    errors: list[str] = []
+
+    def stream() -> None:
+        """Batches of BATCH messages per topic, each acknowledged by the recorder before the next one (a
+        reliable KEEP_LAST writer more than its depth ahead of a reader would drop samples: DDS history,
+        not the recorder, would then be under test), until halted."""
+        from rclpy.duration import Duration
+
+        k = 0
+        while not halt.is_set():
+            graph.publish(BATCH, k, halt)
+            k += BATCH
+            for pub in (graph.odom, graph.wrench):
+                if not pub.wait_for_all_acked(Duration(seconds=10)) and not halt.is_set():
+                    errors.append(f"batch ending at {k} not acknowledged within 10 s")
+                    return
+            first_batch_received.set()
+
+    publisher = threading.Thread(target=stream)
     publisher.start()
-    time.sleep(0.15)  # mid-stream
-    code, out, err = graph.stop(signum)
-    halt.set()
-    publisher.join()
+    try:
+        assert first_batch_received.wait(30.0), errors or "the recorder acknowledged no batch within 30 s"
+        code, out, err = graph.stop(signum)  # mid-stream: the publisher goes on until halted
+    finally:
+        halt.set()
+        publisher.join(30.0)
+    assert not publisher.is_alive() and not errors, errors
     assert code == 0, err
     recording = open_recording(graph.out)
     assert not recording.truncated
     odom_count = recording.count("odom")
-    assert 0 < odom_count < 10 * N  # stopped mid-stream
+    assert odom_count >= BATCH  # at least the acknowledged batch
     assert f"/odom: {odom_count}" in out  # everything taken was written
     # Received messages form a gap-free prefix of what was sent, decoded equal to it.
     for topic, cls, make in (("odom", Odometry, odom_message), ("wrench_truth", WrenchStamped, wrench_message)):
@@ -179,7 +218,7 @@ def test_sigkill_leaves_a_file_readable_up_to_the_last_chunk(graph: Graph, tmp_p
     graph.start_recorder()
     graph.publish(N)
     graph.all_acked()
-    time.sleep(1.0)  # > FLUSH_PERIOD: the recorder completes its chunk while idle
+    wait_until_on_disk(graph.out, N)  # the recorder completes its chunk while idle (every FLUSH_PERIOD)
     code, _, _ = graph.stop(signal.SIGKILL)
     assert code == -signal.SIGKILL
     recording = open_recording(graph.out)

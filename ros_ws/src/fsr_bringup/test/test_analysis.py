@@ -154,3 +154,21 @@ def test_cli_refuses_bad_input_with_one_line_exit_2(kind: str, tmp_path: Path, c
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and str(path) in err[0]
     assert not (tmp_path / "out" / "metrics.json").exists()
+
+
+def test_a_flight_stopped_by_a_signal_is_summarised_as_interrupted() -> None:
+    from fsr_bringup.analysis.metrics import interrupted_at
+    from fsr_bringup.analysis.summary import markdown_summary
+
+    stopped = {"state": "stopped", "reason": "received SIGINT", "sim_time": 5.123, "steps": 5123}
+    assert interrupted_at(stopped) == pytest.approx(5.123)
+    for other in (
+        {"state": "finished", "reason": "reached the scenario duration 10 s", "sim_time": 10.0, "steps": 10000},
+        {"state": "diverged", "reason": "crashed into the ceiling", "sim_time": 2.0, "steps": 2000},
+        {"state": "stopped", "reason": "start-up failed: no rotor_cmd", "sim_time": 0.0, "steps": 0},
+        None,
+    ):
+        assert interrupted_at(other) is None
+    summary = markdown_summary({"scenario": "x", "sim_status": stopped, "interrupted_at_s": 5.123})
+    assert "| end state | **interrupted at t = 5.123 s** (received SIGINT) |" in summary
+    assert "interrupted" not in markdown_summary({"scenario": "x", "sim_status": {"state": "finished", "reason": "r"}})

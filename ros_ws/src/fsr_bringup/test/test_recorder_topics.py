@@ -12,6 +12,7 @@ from std_msgs.msg import Float64, String
 
 from fsr_bringup.recording.recorder_node import (
     STANDARD_TOPICS,
+    final_status_ns,
     stamp_ns,
     starts_with_stamp,
     status_time_ns,
@@ -56,3 +57,13 @@ def test_status_time() -> None:
     status = {"state": "finished", "reason": "", "sim_time": 2.5, "steps": 2500}
     assert status_time_ns(serialize_message(String(data=json.dumps(status)))) == 2_500_000_000
     assert status_time_ns(serialize_message(String(data="not json"))) is None
+
+
+@pytest.mark.parametrize(("state", "expected"), [
+    ("running", None), ("finished", 5_123_000_000), ("diverged", 5_123_000_000), ("stopped", 5_123_000_000),
+])
+def test_final_status_gives_the_stamp_of_the_last_state(state: str, expected: int | None) -> None:
+    status = {"state": state, "reason": "", "sim_time": 5.123, "steps": 5123}
+    assert final_status_ns(serialize_message(String(data=json.dumps(status)))) == expected
+    assert final_status_ns(serialize_message(String(data="not json"))) is None
+    assert final_status_ns(serialize_message(String(data='{"state": "stopped"}'))) is None  # no sim_time

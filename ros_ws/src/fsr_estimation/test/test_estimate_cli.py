@@ -122,3 +122,42 @@ def test_bad_input_is_one_line_and_exit_2(ref, tmp_path, capsys, change, message
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("fsr-estimate: error: ")
     assert message in err
+
+
+def cut_in_half(source, tmp_path):
+    """The shipped recording cut at half its size, like a copy interrupted or a recorder killed."""
+    data = source.read_bytes()
+    path = tmp_path / "half.mcap"
+    path.write_bytes(data[: len(data) // 2])
+    return path
+
+
+def test_truncated_mcap_is_refused_with_the_time_it_covers(ref, tmp_path, capsys):
+    half = cut_in_half(ref.EXAMPLE_MCAP, tmp_path)
+    code = main([str(half), *REPORT_ARGS])
+    captured = capsys.readouterr()
+    assert code == 2
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1
+    assert "truncated" in lines[0] and "--allow-truncated" in lines[0]
+    covered = [float(v) for v in lines[0].split("t = ")[1].split(" s")[0].split(" .. ")]
+    assert covered[0] == pytest.approx(0.0, abs=0.01)
+    assert 1.0 < covered[1] < 20.0  # part of the 30 s flight, not all of it
+
+
+def test_truncated_mcap_is_used_with_allow_truncated_and_a_warning(ref, tmp_path, capsys):
+    half = cut_in_half(ref.EXAMPLE_MCAP, tmp_path)
+    code = main([str(half), *REPORT_ARGS, "--allow-truncated", "--json", str(tmp_path / "out.json")])
+    captured = capsys.readouterr()
+    assert code == 0
+    assert captured.err.startswith("fsr-estimate: warning:") and "truncated" in captured.err
+    assert len(captured.err.strip().splitlines()) == 1
+    assert "Settling time" in captured.out
+    end = float(captured.err.split(" .. ")[1].split(" s")[0])
+    assert end < 20.0
+
+
+def test_complete_mcap_prints_no_warning(ref, capsys):
+    assert main([str(ref.EXAMPLE_MCAP), *REPORT_ARGS]) == 0
+    assert capsys.readouterr().err == ""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +63,9 @@ def test_published_estimates_equal_the_offline_observer(ros_graph, ref):
     assert ros_graph.wait_for_subscribers(wrench_pub, timeout=5.0)
     # Handshake: warm-up pairs until one estimate comes back (both directions matched), then ~/reset.
     warm_stamp = 100 * 10**9
+    deadline = time.monotonic() + 30.0
     while not ros_graph.spin_until(lambda: len(estimates) > 0, 0.2):
+        assert time.monotonic() < deadline, f"no estimate after 30 s of warm-up pairs: {ros_graph.log(estimator)}"
         warm_stamp += PERIOD_NS
         for msg in messages_for(log, 0, warm_stamp):
             (odom_pub if isinstance(msg, Odometry) else wrench_pub).publish(msg)

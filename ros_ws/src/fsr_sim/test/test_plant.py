@@ -1,8 +1,10 @@
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
 from fsr_sim.model.frames import GRAVITY
@@ -146,3 +148,64 @@ def test_saturated_rotor_command_is_clamped_and_recorded():
     assert plant.set_rotor_command(np.array((500.0, 1500.0, 500.0, 500.0)))
     assert plant.rotor_speeds[1] == 1000.0
     assert plant.saturation.worst_rotor == 2
+
+
+CEILING = Environment(ceiling=Surface(enabled=True, height=-3.0, effect=True))
+
+
+def test_ceiling_stops_the_vehicle_at_its_top():
+    # Thrust 1.5 x weight from 0.5 m below the ceiling: the top (top_height above the centre) touches it
+    # at ~2.2 m/s (below the crash speed) and the vehicle is held there.
+    plant = make_plant(position=[0.0, 0.0, -2.4], environment=CEILING)
+    assert plant.vehicle.top_height == plant.vehicle.contact_height  # default: symmetric about the CoM
+    plant.set_wrench_command(1.5 * plant.vehicle.weight, np.zeros(3))
+    for _ in range(1000):
+        plant.step()
+        assert plant.position[2] >= -3.0 + plant.vehicle.top_height - 1e-12
+    assert plant.at_ceiling
+    assert plant.position[2] == pytest.approx(-3.0 + plant.vehicle.top_height)
+    np.testing.assert_allclose(plant.velocity, 0.0)
+    assert 0.0 < plant.max_ceiling_impact_speed < plant.crash_speed
+    assert plant.divergence() is None
+    plant.set_wrench_command(0.5 * plant.vehicle.weight, np.zeros(3))  # less than the weight: it drops away
+    for _ in range(100):
+        plant.step()
+    assert not plant.at_ceiling and plant.position[2] > -3.0 + plant.vehicle.top_height
+
+
+def test_hard_ceiling_impact_is_reported_as_a_crash():
+    plant = make_plant(position=[0.0, 0.0, -2.0], velocity=[0.0, 0.0, -6.0], environment=CEILING)
+    plant.set_wrench_command(plant.vehicle.weight, np.zeros(3))
+    for _ in range(300):
+        plant.step()
+    assert plant.position[2] >= -2.9 - 1e-12
+    assert "crashed into the ceiling at 6.00 m/s" in plant.divergence()
+
+
+def test_top_height_is_a_vehicle_key(tmp_path):
+    vehicle = yaml.safe_load((Path(__file__).parents[1] / "fsr_sim/config/vehicles/quadrotor_ex4.yaml").read_text())
+    vehicle["top_height"] = 0.04
+    path = tmp_path / "flat_top.yaml"
+    path.write_text(yaml.safe_dump(vehicle))
+    plant = make_plant(str(path), position=[0.0, 0.0, -2.5], environment=CEILING)
+    plant.set_wrench_command(1.3 * plant.vehicle.weight, np.zeros(3))
+    for _ in range(1500):
+        plant.step()
+    assert plant.position[2] == pytest.approx(-2.96)
+
+
+def test_steps_at_the_surface_effect_cap_are_counted_per_surface():
+    # Rotor plane 0.1 m below the ceiling: ratio ~1.12 > max_ratio 1.1, so the ceiling ratio is at its cap;
+    # the ground (2.9 m below) is far from its cap.
+    environment = Environment(ceiling=Surface(enabled=True, height=-3.0, effect=True, max_ratio=1.1))
+    plant = make_plant(actuation="rotors", position=[0.0, 0.0, -2.9], environment=environment)
+    plant.set_rotor_command(np.full(4, 400.0))
+    for _ in range(20):
+        plant.step()
+    assert plant.ceiling_cap_steps == 20 and plant.ground_cap_steps == 0
+    np.testing.assert_allclose(plant.thrust_ratios(), 1.1, rtol=1e-3)  # x the ground ratio ~1.0001
+    far = make_plant(actuation="rotors", position=[0.0, 0.0, -1.5], environment=environment)
+    far.set_rotor_command(np.full(4, 400.0))
+    for _ in range(20):
+        far.step()
+    assert far.ceiling_cap_steps == 0 and far.ground_cap_steps == 0

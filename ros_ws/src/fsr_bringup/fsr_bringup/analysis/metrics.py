@@ -15,7 +15,9 @@ Saturation counts the rotor commands at or beyond the vehicle's limits (speed ``
 ``SHORTFALL_TOLERANCE`` and the largest ``|shortfall|`` (N or N m) with its time. The external-wrench
 estimate is compared with the truth at the estimate's stamps: mean of each over the last second, RMS of the
 error after a settling time. Thrust ratios ``T / T_OGE`` near the ground and the ceiling follow the odometry through the
-scenario's environment (:mod:`fsr_sim.model.environment`).
+scenario's environment (:mod:`fsr_sim.model.environment`); the states at which a rotor's ratio is held at
+the surface's ``max_ratio`` (closer to the surface than the effect model is valid for) are counted per
+surface (``thrust_ratio.at_cap``) and named in ``notes``.
 
 Every value is JSON-ready (NaN -> None); a metric whose topics or scenario are missing is None and the
 reason is in ``notes``.
@@ -230,6 +232,30 @@ def _range(values: np.ndarray) -> list[float]:
     return [float(np.min(values)), float(np.max(values))]
 
 
+def surface_caps(flight: Flight, t: np.ndarray, ground: np.ndarray, ceiling: np.ndarray) -> dict[str, Any]:
+    """Per surface whose effect is on (and ``max_ratio > 1``): ``{steps, first_time_s, max_ratio}`` of the
+    states at which any rotor's ratio (from :func:`thrust_ratio_series`) equals the cap ``max_ratio``."""
+    env = flight.config.environment
+    caps: dict[str, Any] = {}
+    for name, surface, ratios in (("ground", env.ground, ground), ("ceiling", env.ceiling, ceiling)):
+        if not (surface.enabled and surface.effect and surface.max_ratio > 1.0):
+            continue
+        at_cap = np.any(ratios >= surface.max_ratio * (1.0 - 1e-12), axis=1)
+        steps = int(np.count_nonzero(at_cap))
+        first = float(t[np.argmax(at_cap)]) if steps else None
+        caps[name] = {"steps": steps, "first_time_s": first, "max_ratio": surface.max_ratio}
+    return caps
+
+
+def interrupted_at(status: dict[str, Any] | None) -> float | None:
+    """Simulated time [s] at which a signal stopped the flight (final ``sim_status`` ``stopped`` with reason
+    ``received SIGINT`` / ``SIGTERM``), or None for a flight that ended on its own (or never started)."""
+    if not status or status.get("state") != "stopped" or not str(status.get("reason", "")).startswith("received "):
+        return None
+    sim_time = status.get("sim_time")
+    return float(sim_time) if isinstance(sim_time, int | float) else None
+
+
 def flight_metrics(
     recording: Recording | Flight | str | Path, settle_time: float = DEFAULT_SETTLE_S
 ) -> dict[str, Any]:
@@ -251,6 +277,7 @@ def flight_metrics(
         "sim_status": (
             {key: status.get(key) for key in ("state", "reason", "sim_time", "steps")} if status else None
         ),
+        "interrupted_at_s": interrupted_at(status),
     }
     errors = tracking_errors(flight)
     if errors is None:
@@ -286,10 +313,18 @@ def flight_metrics(
         metrics["thrust_ratio"] = None
         notes.append("thrust ratios skipped: odom or scenario missing")
     else:
-        _, ground, ceiling = ratios
+        t, ground, ceiling = ratios
+        caps = surface_caps(flight, t, ground, ceiling)
         metrics["thrust_ratio"] = {
             "ground": _range(ground), "ceiling": _range(ceiling), "combined": _range(ground * ceiling),
+            "at_cap": caps,
         }
+        for name, cap in caps.items():
+            if cap["steps"]:
+                notes.append(
+                    f"{name} effect at its cap (thrust ratio {cap['max_ratio']:g} = max_ratio) for {cap['steps']} "
+                    f"state(s) from t = {cap['first_time_s']:.3f} s: closer to the {name} than the model is valid for"
+                )
     metrics["notes"] = notes
     return json_ready(metrics)
 

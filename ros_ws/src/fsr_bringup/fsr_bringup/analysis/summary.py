@@ -23,6 +23,8 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
     rows: list[tuple[str, str]] = []
     status = metrics.get("sim_status")
     end = f"{status.get('state')} ({status.get('reason')})" if status else "n/a"
+    if metrics.get("interrupted_at_s") is not None:
+        end = f"**interrupted at t = {metrics['interrupted_at_s']:.3f} s** ({status.get('reason')})"
     rows.append(("end state", end + (" - **truncated recording**" if metrics.get("truncated") else "")))
     rows.append(("duration [s] / steps", f"{_num(metrics.get('duration_s'))} / {_num(metrics.get('steps'))}"))
     tracking = metrics.get("tracking")
@@ -69,6 +71,10 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
     if ratio:
         text = f"{_vector(ratio['ground'], 4)} / {_vector(ratio['ceiling'], 4)}"
         rows.append(("ground / ceiling thrust ratio T/T_OGE range", text))
+        for name, cap in (ratio.get("at_cap") or {}).items():
+            if cap["steps"]:
+                rows.append((f"{name} effect at its cap {_num(cap['max_ratio'], 2)} (outside the model)",
+                             f"**{cap['steps']} states**, first at {_num(cap['first_time_s'], 3)} s"))
     where = f" ({metrics['namespace']})" if metrics.get("namespace") not in (None, "/") else ""
     lines = [
         f"### Flight `{metrics.get('scenario')}`{where}",

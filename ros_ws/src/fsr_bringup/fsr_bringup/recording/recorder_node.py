@@ -18,6 +18,16 @@ publisher's source timestamp (wall clock).
 Files survive crashes: chunks are small and flushed every ``FLUSH_PERIOD`` s, so a SIGKILLed file is
 readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued, write the summary,
 exit 0. A path that cannot be written: one line naming it and the reason, exit 1, before subscribing.
+
+Draining at shutdown: once a namespace's simulator has ended (final ``sim_status``: ``finished``,
+``diverged`` or ``stopped``, whose ``sim_time`` is the stamp ``t_K`` of its last state), the recorder knows
+what to expect: every stamped stream of that namespace that has started (``odom``, ``wrench_truth``,
+``rotor_cmd``, ``wrench_cmd``, ``reference``, ``wrench_estimate``) up to ``t_K``. It keeps taking until
+each has (in-order reliable streams: the last stamp reached means nothing before it is missing), at most
+``DRAIN_STALL_S`` without a message or ``DRAIN_FINAL_MAX_S`` in all, and names a stream that falls short.
+Without a final status (the flight still runs) it stops after ``DRAIN_QUIET_S`` without a message
+(``DRAIN_MAX_S`` at most). ``fsr-fly`` stops the recorder last, after the simulator and after the
+controller and estimator have answered every state (:mod:`fsr_sim.ros.flight_end`).
 """
 
 from __future__ import annotations
@@ -52,6 +62,10 @@ FLUSH_PERIOD = 0.5  # s of wall time between flushes: at most this much is lost 
 WAIT_TIMEOUT_NS = 100_000_000  # a signal is noticed within 0.1 s
 DRAIN_QUIET_S = 0.2  # at shutdown, stop taking after this long without a message
 DRAIN_MAX_S = 1.0
+DRAIN_STALL_S = 2.0  # with a final sim_status: give up on a stream after this long without a message
+DRAIN_FINAL_MAX_S = 15.0
+DRAINED_TOPICS = ("odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "wrench_estimate")
+STAMP_TOLERANCE_NS = 1000  # sim_time is a float of seconds
 _STAMP = struct.Struct("<iI")
 
 
@@ -115,6 +129,17 @@ def status_time_ns(data: bytes) -> int | None:
         return None
 
 
+def final_status_ns(data: bytes) -> int | None:
+    """``sim_time`` [ns] of a final (``finished`` / ``diverged`` / ``stopped``) ``sim_status``, else None."""
+    from fsr_sim.ros.flight_end import final_stamp_ns
+
+    try:
+        (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
+        return final_stamp_ns(data[8 : 8 + length].rstrip(b"\0").decode("utf-8", errors="replace"))
+    except (IndexError, struct.error):
+        return None
+
+
 def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> type:
     """Build the node class lazily (rclpy is imported only after the environment is configured)."""
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
@@ -147,6 +172,9 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
             self.last_flush = time.monotonic()
             self.unflushed = False
             self.entries: list[tuple[object, str, bool, bool]] = []  # (subscription, topic, stamped, status)
+            self.last_stamp: dict[str, int] = {}  # topic -> newest stamp written [ns]
+            self.final_ns: dict[str, int] = {}  # namespace -> stamp of its simulator's last state [ns]
+            self.drained: dict[str, str] = {}  # topic -> namespace, for the streams awaited at shutdown
             for name, type_name in topics:
                 cls = message_class(type_name)
                 qos = clock_qos if name == CLOCK_TOPIC[0] else STREAM_QOS
@@ -158,6 +186,9 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
                 topic = sub.topic_name
                 writer.add_topic(topic, type_name)
                 self.entries.append((sub, topic, starts_with_stamp(cls), name.endswith("sim_status")))
+                namespace, _, base = topic.rpartition("/")
+                if base in DRAINED_TOPICS and type_name == STANDARD_TOPICS[base]:
+                    self.drained[topic] = namespace
             self.wait_set = _rclpy.WaitSet(len(self.entries), 0, 0, 0, 0, 0, self.context.handle)
             self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
 
@@ -201,9 +232,14 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
                     if stamped:
                         log_time = stamp_ns(data)
                         self.sim_time_ns = max(self.sim_time_ns, log_time)
+                        if log_time > self.last_stamp.get(topic, -1):
+                            self.last_stamp[topic] = log_time
                     elif status:
                         status_ns = status_time_ns(data)
                         log_time = self.sim_time_ns if status_ns is None else status_ns
+                        final = final_status_ns(data)
+                        if final is not None:
+                            self.final_ns[topic.rpartition("/")[0]] = final
                     else:
                         log_time = self.sim_time_ns
                     self.writer.write(topic, data, log_time, source)
@@ -229,15 +265,44 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
             self.failed = True
             self.exit_code = EXIT_FAILURE
 
+        def short_streams(self) -> list[str] | None:
+            """Started streams whose newest stamp is before their simulator's last state; None when no
+            simulator has ended (nothing known to wait for)."""
+            if not self.final_ns:
+                return None
+            short = []
+            for topic, namespace in self.drained.items():
+                final, last = self.final_ns.get(namespace), self.last_stamp.get(topic)
+                if final is not None and last is not None and last < final - STAMP_TOLERANCE_NS:
+                    short.append(topic)
+            return short
+
+        def drain(self) -> None:
+            """Take what is still queued (see the module docstring for when to stop)."""
+            start = quiet_since = time.monotonic()
+            while not self.failed:
+                if self.take(50_000_000):
+                    quiet_since = time.monotonic()
+                short = self.short_streams()
+                now = time.monotonic()
+                if short is None:
+                    if now - quiet_since >= DRAIN_QUIET_S or now - start >= DRAIN_MAX_S:
+                        return
+                elif not short:
+                    self.take(0)  # what came with the last stamped messages (mass_estimate, /clock)
+                    return
+                elif now - quiet_since >= DRAIN_STALL_S or now - start >= DRAIN_FINAL_MAX_S:
+                    for topic in short:
+                        final = self.final_ns[self.drained[topic]]
+                        print(f"fsr-record: warning: {topic} ends at t = {self.last_stamp[topic] * 1e-9:.4f} s, "
+                              f"before the simulator's last state t = {final * 1e-9:.4f} s", file=sys.stderr,
+                              flush=True)
+                    return
+
         def close(self) -> None:
             """Take what is still queued, then finish the file (summary and footer) and report counts."""
             if not self.failed:
-                start = quiet_since = time.monotonic()
-                while time.monotonic() - quiet_since < DRAIN_QUIET_S and time.monotonic() - start < DRAIN_MAX_S:
-                    if self.take(50_000_000) and not self.failed:
-                        quiet_since = time.monotonic()
-                    if self.failed:
-                        break
+                self.drain()
             try:
                 self.writer.close()
             except OSError as error:

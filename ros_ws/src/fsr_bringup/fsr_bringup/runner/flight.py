@@ -2,8 +2,11 @@
 
 Order: the recorder first (so it is subscribed before anything is published), then the estimator and the
 controller, the simulator last; the simulator's lockstep handshake waits for all of them. The flight
-ends when the simulator exits (end of the scenario, divergence, or a failure). Then the other nodes get
-SIGINT (the recorder last, so it writes everything and closes its file), with SIGTERM/SIGKILL fallbacks.
+ends when the simulator exits (end of the scenario, divergence, or a failure). Then the nodes get SIGINT
+in waves, with SIGTERM/SIGKILL fallbacks: the simulators (on Ctrl-C they are still running: they publish
+``sim_status`` stopped with the last step), then the controllers and estimators (they answer every state up
+to that step), the recorder last (it drains until it holds every message up to that step, then closes the
+file).
 
 A node that dies during the flight is reported by name; the flight goes on (the simulator applies the
 scenario's failsafe when the controller is gone) and the run's exit code is non-zero.
@@ -209,7 +212,7 @@ def fly_graph(
                 console.progress(f"t = {watcher.sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
     finally:
         console.end_progress()
-        group.stop_all()
+        group.stop_all(first=tuple(simulators))
         if watcher is not None:
             sim_time = watcher.sim_time
             watcher.close()

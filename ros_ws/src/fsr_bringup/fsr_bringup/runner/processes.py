@@ -1,9 +1,9 @@
 """Starting, watching and stopping the node processes of a run (what ``ros2 launch`` would do).
 
 Each node runs in its own session (so a terminal Ctrl-C reaches only the runner, which then stops the
-nodes in order: producers first, the recorder last) and gets ``PR_SET_PDEATHSIG`` so that it is
-terminated if the runner itself dies: no orphans. Output (stdout and stderr) is streamed line by line,
-prefixed with the node's name, and copied to ``<log_dir>/<name>.log``.
+nodes in order: the simulators first, then the nodes that answer their states, the recorder last) and
+gets ``PR_SET_PDEATHSIG`` so that it is terminated if the runner itself dies: no orphans. Output (stdout
+and stderr) is streamed line by line, prefixed with the node's name, and copied to ``<log_dir>/<name>.log``.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 PR_SET_PDEATHSIG = 1
+DRAIN_WAIT_S = 20.0  # s a node may take after SIGINT to answer/record what is queued (it bounds itself)
 
 
 def _die_with_parent() -> None:  # runs in the child between fork and exec
@@ -132,7 +133,12 @@ class ProcessGroup:
             if node.name in names:
                 node.reader.join(timeout=2.0)
 
-    def stop_all(self, last: tuple[str, ...] = ("recorder",), timeout: float = 5.0) -> None:
-        first = [n.name for n in self.nodes if n.name not in last]
-        self.stop(first, timeout)
-        self.stop(list(last), timeout * 2)
+    def stop_all(self, last: tuple[str, ...] = ("recorder",), timeout: float = 5.0, first: tuple[str, ...] = ()
+                 ) -> None:
+        """SIGINT in waves, each waiting for the previous one to exit: ``first`` (the simulators: they publish
+        their final ``sim_status``), then the others (controller, estimator: they answer every state up to the
+        simulator's last one), then ``last`` (the recorder: it drains up to that state and closes the file)."""
+        self.stop(list(first), timeout)
+        middle = [n.name for n in self.nodes if n.name not in last and n.name not in first]
+        self.stop(middle, DRAIN_WAIT_S if first else timeout)
+        self.stop(list(last), DRAIN_WAIT_S)

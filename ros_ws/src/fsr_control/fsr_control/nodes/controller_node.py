@@ -8,8 +8,10 @@ Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
 axis gave way at the rotor limits, see fsr_control.allocation) and ``reference``, all stamped ``t_k`` (lockstep
 contract).
-NaN/inf odom or goals are dropped with a rate-limited warning. At exit it logs the saturation summary and
-the callback's cost.
+NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
+final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
+for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation
+summary and the callback's cost.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from fsr_sim.ros.conversions import (
     odometry_is_finite,
     state_from_odometry,
 )
+from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, run_node
 
@@ -92,6 +95,8 @@ class ControllerNode(Node):
             self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
+        self.flight_end = FlightEnd(self)
+        self.answered_ns: int | None = None  # stamp of the last odom handled
         self.warn = RateLimitedWarning(self.get_logger())
         self.callback_seconds = 0.0
         self.callbacks = 0
@@ -113,9 +118,11 @@ class ControllerNode(Node):
             )
         except (ValueError, ArithmeticError) as error:  # never crash mid-flight; the simulator holds/fails safe
             self.warn(f"no command for odom at {stamp_ns * 1e-9:.3f} s: {error}")
+            self.answered_ns = stamp_ns
             return
         for topic, message in controller_messages(stamp_ns, output, self.rotors):
             self.publishers_by_topic[topic].publish(message)
+        self.answered_ns = stamp_ns
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1
 
@@ -129,6 +136,8 @@ class ControllerNode(Node):
         self.get_logger().info(f"new goal {position.tolist()} from t = {self.controller.last_stamp:.3f} s")
 
     def close(self) -> None:
+        publishers = [p for p in (self.rotor_pub, self.wrench_pub, self.reference_pub) if p is not None]
+        self.flight_end.drain(self, lambda: self.answered_ns, publishers)
         saturation = self.controller.saturation
         if saturation.count:
             self.get_logger().warning(

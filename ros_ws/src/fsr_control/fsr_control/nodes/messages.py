@@ -4,7 +4,9 @@
   one point): ``transforms[0]`` the desired pose (translation world NED [m], rotation ``R_d`` body -> world),
   ``velocities[0]`` linear velocity world [m/s] and angular velocity ``R_d omega_d`` world [rad/s],
   ``accelerations[0]`` linear acceleration world [m/s^2] and ``R_d omega_dot_d`` world [rad/s^2].
-* ``goal`` (geometry_msgs/PoseStamped, world NED): position and orientation of the new target.
+* ``goal`` (geometry_msgs/PoseStamped, world NED): position and orientation of the new target;
+  ``header.frame_id`` must be ``world_ned`` (or empty, taken as ``world_ned``): no transforms are looked up,
+  so a goal in any other frame is refused rather than silently read as NED.
 * Stamps: the controller's outputs carry the stamp of the ``odom`` they answer (integer ns of sim time).
 """
 
@@ -63,7 +65,17 @@ def controller_messages(stamp_ns: int, output: ControlOutput, rotors: bool) -> l
 
 
 def goal_from_message(msg: PoseStamped) -> tuple[np.ndarray, np.ndarray]:
-    """(position world NED [m], rotation body -> world) of a goal; ValueError for NaN/inf or a zero quaternion."""
+    """(position world NED [m], rotation body -> world) of a goal.
+
+    Raises
+    ------
+    ValueError
+        If ``header.frame_id`` is neither ``world_ned`` nor empty (the message names the frame), or the pose
+        holds NaN/inf, or the orientation is a zero quaternion.
+    """
+    frame = msg.header.frame_id
+    if frame not in ("", WORLD_FRAME):
+        raise ValueError(f"goal frame_id is {frame!r}, expected {WORLD_FRAME!r} (or empty); no transform is applied")
     p, o = msg.pose.position, msg.pose.orientation
     values = (p.x, p.y, p.z, o.x, o.y, o.z, o.w)
     if not all(math.isfinite(v) for v in values):

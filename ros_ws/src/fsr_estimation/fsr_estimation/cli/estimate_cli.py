@@ -1,7 +1,9 @@
 """``fsr-estimate``: run the momentum observer over a flight log for a sweep of (c0, r) and measure it.
 
 Prints Markdown tables (settling times to the millisecond, MAE to 4 decimals, max error after ``--after``,
-dm and m_real to 3 decimals); ``--json`` writes the numbers, ``--plots`` the report's figures.
+dm and m_real to 3 decimals); ``--json`` writes the numbers, ``--plots`` the report's figures. A truncated
+MCAP recording (no footer) is refused (exit 2, one line with the time it covers) unless ``--allow-truncated``
+is given, which prints that line as a warning and estimates over the part that is there.
 """
 
 from __future__ import annotations
@@ -104,6 +106,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="settling-time definition (default: standard)")
     parser.add_argument("--after", type=float, metavar="T",
                         help="max error over samples at time >= T [s] (default: the last 5 s of the log)")
+    parser.add_argument("--allow-truncated", action="store_true",
+                        help="use a truncated MCAP recording (no footer) up to where it stops, with a warning "
+                             "(default: refuse it)")
     return parser
 
 
@@ -167,6 +172,12 @@ def run(args: argparse.Namespace) -> str:
     except ValueError as error:
         raise UsageError(f"--{error}") from None
     log: FlightLog = load_flight_log(args.log)
+    if log.truncated:
+        covered = (f"{log.source}: truncated recording (no MCAP footer), covers only t = {log.time[0]:.3f} .. "
+                   f"{log.time[-1]:.3f} s ({len(log)} samples)")
+        if not args.allow_truncated:
+            raise UsageError(f"{covered}; pass --allow-truncated to estimate over that part")
+        print(f"fsr-estimate: warning: {covered}; estimating over that part (--allow-truncated)", file=sys.stderr)
     try:
         results = sweep(log, model, c0_values, r_values, np.zeros(6) if truth is None else truth,
                         settling=args.settling, after=args.after, keep_estimates=args.plots is not None)

@@ -71,6 +71,11 @@ class StampedEstimator:
         self._last_stamp: int | None = None
         self._first_sample: tuple | None = None  # held until the period is known
 
+    @property
+    def last_stamp(self) -> int | None:
+        """Stamp [ns] of the last processed pair (None before the first)."""
+        return self._last_stamp
+
     def add_state(self, stamp_ns: int, rotation: np.ndarray, velocity_world: np.ndarray,
                   angular_velocity_body: np.ndarray) -> Estimate | None:
         """The state stamped ``stamp_ns``; returns the estimate if this completes a pair."""

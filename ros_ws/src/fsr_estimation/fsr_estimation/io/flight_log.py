@@ -61,6 +61,7 @@ class FlightLog:
     force_body: np.ndarray
     torque_body: np.ndarray
     source: str = "flight log"
+    truncated: bool = False  # an MCAP recording cut short (no footer): the samples stop before the flight ended
 
     def __post_init__(self) -> None:
         n = None
@@ -199,7 +200,10 @@ def load_csv(path: str | Path) -> FlightLog:
 
 def load_mcap(path: str | Path) -> FlightLog:
     """An fsr MCAP recording: ``odom`` (pose world NED, twist body FRD) and ``wrench_cmd`` (body wrench)
-    paired by header stamp. ``v = R v_b``, ``eta`` from ``R``, ``eta_dot = Q(eta)^-1 omega_b``."""
+    paired by header stamp. ``v = R v_b``, ``eta`` from ``R``, ``eta_dot = Q(eta)^-1 omega_b``.
+
+    A file without its MCAP footer (recorder killed, copy cut short) is read up to its last complete chunk
+    and the log is flagged ``truncated``; the caller decides whether a partial flight is acceptable."""
     from fsr_sim.recording.reader import RecordingError, open_recording
 
     path = Path(path)
@@ -229,6 +233,7 @@ def load_mcap(path: str | Path) -> FlightLog:
         force_body=wrench[:, :3],
         torque_body=wrench[:, 3:6],
         source=str(path),
+        truncated=recording.truncated,
     )
 
 

@@ -6,6 +6,9 @@ resets on gaps live there), then publishes each estimate as ``wrench_estimate`` 
 force ``R_b^T f_e``, torque ``Q^-T tau_e``, stamped with the pair's stamp) and ``mass_estimate`` (Float64,
 kg).
 Messages with NaN/inf are dropped with a rate-limited warning. Service ``~/reset`` (std_srvs/Trigger).
+Asked to stop after the simulator ended (its final ``sim_status``), it first estimates every pair still
+queued up to the simulator's last state and waits for its subscribers' acknowledgements
+(:mod:`fsr_sim.ros.flight_end`).
 Parameters: :mod:`fsr_estimation.nodes.estimator_params`.
 """
 
@@ -32,6 +35,7 @@ from fsr_sim.ros.conversions import (
     wrench_from_msg,
     wrench_is_finite,
 )
+from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, run_node
 
@@ -57,6 +61,7 @@ class EstimatorNode(Node):
         self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS)
         self.create_service(Trigger, "~/reset", self._on_reset)
         period = settings.control_period
+        self.flight_end = FlightEnd(self)
         self.get_logger().info(
             f"estimator: c0 = {c.c0} rad/s, r = {c.r}, mass = {c.mass} kg, inertia diag = "
             f"{np.diag(c.inertia).tolist()} kg m^2, control period = "
@@ -65,6 +70,11 @@ class EstimatorNode(Node):
 
     def done(self) -> bool:
         return not self.enabled
+
+    def close(self) -> None:
+        """Estimate every pair up to the simulator's last state before exiting (see the module docstring)."""
+        if self.enabled:
+            self.flight_end.drain(self, lambda: self.estimator.last_stamp, [self.wrench_pub, self.mass_pub])
 
     def _on_odom(self, msg: Odometry) -> None:
         stamp = ns_from_time(msg.header.stamp)

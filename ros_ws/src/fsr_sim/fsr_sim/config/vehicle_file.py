@@ -1,9 +1,9 @@
 """Vehicle YAML files: the format, and parsing into a :class:`fsr_sim.model.vehicle.Vehicle`.
 
 A file gives ``name``, ``mass`` [kg], ``inertia`` (3 numbers or 3x3) [kg m^2], ``c_f``, ``c_m``,
-``rotor_radius`` [m], ``rotor_speed_min``/``rotor_speed_max`` [rad/s], optional ``tilt_angle_max_deg`` and
-``contact_height`` [m], and either a ``layout`` (``count`` rotors on a circle of radius ``arm_length``,
-rotor ``i`` at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW, optional
+``rotor_radius`` [m], ``rotor_speed_min``/``rotor_speed_max`` [rad/s], optional ``tilt_angle_max_deg``,
+``contact_height`` and ``top_height`` [m], and either a ``layout`` (``count`` rotors on a circle of radius
+``arm_length``, rotor ``i`` at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW, optional
 ``tilting: true`` for a tilt axis along each arm) or an explicit ``rotors`` list of
 ``{position, spin, tilt_axis}``.
 """
@@ -49,6 +49,7 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
         raise root.error("rotor_speed_max", f"must be > rotor_speed_min ({speed_min}), got {speed_max}")
     tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
     contact_height = root.number("contact_height", 0.1, minimum=0.0)
+    top_height = root.number("top_height", contact_height, minimum=0.0)  # default: symmetric about the CoM
 
     if root.has("layout") == root.has("rotors"):
         raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
@@ -73,6 +74,7 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
             tilt_axes=tilt_axes,
             tilt_angle_max=float(tilt_max),
             contact_height=contact_height,
+            top_height=top_height,
             description=description,
         )
     except InvalidValueError as error:  # a check of the model itself (e.g. tilt axes out of the x-y plane)

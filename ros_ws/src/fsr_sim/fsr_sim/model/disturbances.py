@@ -1,7 +1,13 @@
 """External wrench profiles (SPEC §3.4): constant, step, sinusoid and piecewise-linear table.
 
-Each profile gives a force [N] in its ``frame`` (``world`` NED or ``body`` FRD) and a torque [N m] in the
-body frame as a function of simulated time ``t`` [s]. Several profiles add up.
+Each profile gives a force [N] and a torque [N m], both in its ``frame`` (``world`` NED, the default, or
+``body`` FRD), as a function of simulated time ``t`` [s]. Several profiles add up. The plant applies the
+force in the world frame and the torque in the body frame, so with ``R`` the attitude (body -> world):
+
+* ``frame: world``: ``f_world = f``, ``tau_body = R^T tau`` (a torque fixed in space, e.g. about world down);
+* ``frame: body``: ``f_world = R f``, ``tau_body = tau`` (a torque that turns with the vehicle).
+
+For the exercise-3 yaw torque ``[0, 0, -0.4]`` the two agree while the vehicle stays level.
 
 From Python: :func:`constant`, :func:`step`, :func:`sinusoid`, :func:`table`. Scenario syntax (a list under
 ``disturbances``, parsed by :mod:`fsr_sim.config.plant_sections`)::
@@ -20,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from fsr_sim.model.checks import InvalidValueError, finite_array
-from fsr_sim.model.so3 import Mat3, mat_vec3
+from fsr_sim.model.so3 import Mat3, mat_t_vec3, mat_vec3
 
 ZERO3 = np.zeros(3)
 FRAMES = ("world", "body")
@@ -29,9 +35,9 @@ FRAMES = ("world", "body")
 @dataclass(frozen=True)
 class DisturbanceProfile:
     kind: str
-    frame: str  # frame of the force: "world" or "body"
+    frame: str  # frame of the force and the torque: "world" or "body"
     force: np.ndarray  # (3,) amplitude / value, or (k, 3) table
-    torque: np.ndarray  # (3,) or (k, 3), body frame
+    torque: np.ndarray  # (3,) or (k, 3), in ``frame``
     start: float = 0.0
     end: float = float("inf")
     frequency_hz: float = 0.0
@@ -41,7 +47,7 @@ class DisturbanceProfile:
     times: np.ndarray | None = None
 
     def wrench(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """(force in ``frame`` [N], torque body [N m]) at time ``t`` [s]."""
+        """(force in ``frame`` [N], torque in ``frame`` [N m]) at time ``t`` [s]."""
         if self.kind == "table":
             return (
                 np.array([np.interp(t, self.times, self.force[:, i]) for i in range(3)]),
@@ -56,7 +62,7 @@ class DisturbanceProfile:
 
 
 def constant(force: ArrayLike = ZERO3, torque: ArrayLike = ZERO3, frame: str = "world") -> DisturbanceProfile:
-    """A wrench that acts all the time: ``force`` [N] in ``frame``, ``torque`` [N m] body."""
+    """A wrench that acts all the time: ``force`` [N] and ``torque`` [N m] in ``frame`` (``world`` or ``body``)."""
     return _profile("constant", frame, force, torque)
 
 
@@ -105,7 +111,11 @@ def _profile(kind: str, frame: str, force: ArrayLike, torque: ArrayLike, **field
 def total_external_wrench(
     profiles: list[DisturbanceProfile], t: float, rotation: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Sum of all profiles at ``t``: (force world NED [N], torque body FRD [N m])."""
+    """Sum of all profiles at ``t``: (force world NED [N], torque body FRD [N m]).
+
+    ``f_world = sum_world f + R sum_body f`` and ``tau_body = R^T sum_world tau + sum_body tau`` with ``R``
+    (shape (3, 3)) the attitude body FRD -> world NED.
+    """
     total = external_wrench_floats(profiles, t, np.asarray(rotation, dtype=float).tolist())
     return np.array(total[:3]), np.array(total[3:])
 
@@ -119,9 +129,11 @@ def external_wrench_floats(
     for profile in profiles:
         force, torque = profile.wrench(t)
         force = force.tolist()
+        torque = torque.tolist()
         if profile.frame == "body":
             force = mat_vec3(rotation, force)
-        torque = torque.tolist()
+        else:
+            torque = mat_t_vec3(rotation, torque)
         fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
         tx, ty, tz = tx + torque[0], ty + torque[1], tz + torque[2]
     return fx, fy, fz, tx, ty, tz

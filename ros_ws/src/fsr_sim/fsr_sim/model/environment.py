@@ -20,9 +20,18 @@ Bound near the surface (all three are singular there): the ratio is ``1 / max(D,
 closer to the surface. Distances are also floored at 1 mm so that ``z <= 0`` (rotor at or through the
 surface) gives the bounded value instead of a division by zero.
 
-Contact: the ground stops the vehicle. The landing gear's feet are ``contact_height`` below the centre of
-mass; when they would go below the ground the position is put back on it, the downward velocity is
-removed and the vehicle is held (no sliding, no spin) while the net force pushes it into the ground.
+Reaching the cap means the vehicle is closer to the surface than the model is valid for; :class:`ThrustEffects`
+raises ``ground_capped`` / ``ceiling_capped`` when a rotor is evaluated at the cap (the plant counts the steps
+and clears them).
+
+Contact: the ground and the ceiling are solid. The landing gear's feet are the vehicle's ``contact_height``
+below the centre of mass, its top (rotor guards, frame) ``top_height`` above it (vehicle YAML, default
+``contact_height``); the contact points are taken along world down (attitude ignored, as for the ground).
+When the feet would go below the ground (``p_z > ground.height - contact_height``) or the top above the
+ceiling (``p_z < ceiling.height + top_height``) the position is put back on the surface, the velocity
+and angular velocity are removed and the vehicle is held (no sliding, no spin) while the net force
+pushes it into the surface. An impact faster than the plant's crash speed (3 m/s) ends the flight
+("crashed into the ground" / "crashed into the ceiling").
 """
 
 from __future__ import annotations
@@ -160,6 +169,8 @@ class ThrustEffects:
         self._ground = ground.enabled and ground.effect
         self._ceiling = ceiling.enabled and ceiling.effect
         self._multirotor = environment.ground_model == "multirotor"
+        self.ground_capped = False  # set by ratios_floats when a rotor's ground ratio is at max_ratio
+        self.ceiling_capped = False  # likewise for the ceiling (the plant counts and clears both)
 
     def ratios(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """``T_i / T_OGE,i`` for each rotor (1 away from surfaces); ground and ceiling multiply."""
@@ -185,7 +196,9 @@ class ThrustEffects:
     def ratios_floats(self, position_down: float, rotation_row2: Vec3) -> list[float]:
         """:meth:`ratios` on Python floats: ``position_down`` = p_z [m], ``rotation_row2`` = third row of ``R``.
 
-        ``a if not a < b else b`` is ``max(a, b)`` that propagates NaN like ``np.maximum``.
+        ``a if not a < b else b`` is ``max(a, b)`` that propagates NaN like ``np.maximum`` (so does the
+        explicit ``if denominator < floor``). Sets ``ground_capped`` / ``ceiling_capped`` when a ratio is held
+        at its ``max_ratio``.
         """
         env = self.environment
         rho = self.rotor_radius
@@ -207,11 +220,17 @@ class ThrustEffects:
                     c, q = _neighbour_scale(z, rho2)
                     neighbours = sum([c / (d2 + q) ** 1.5 for d2 in others_sq])
                     denominator = denominator - neighbours - _body_term(z, arm_sq, rho2, body_factor)
-                ratio = 1.0 / (denominator if not denominator < ground_floor else ground_floor)
+                if denominator < ground_floor:
+                    denominator = ground_floor
+                    self.ground_capped = True
+                ratio = 1.0 / denominator
             if ceiling:
                 z = rotor_down - ceiling_height
                 z = z if not z < MIN_DISTANCE else MIN_DISTANCE
                 denominator = _ceiling_denominator(z, rho, k1, k2)
-                ratio = ratio * (1.0 / (denominator if not denominator < ceiling_floor else ceiling_floor))
+                if denominator < ceiling_floor:
+                    denominator = ceiling_floor
+                    self.ceiling_capped = True
+                ratio = ratio * (1.0 / denominator)
             out.append(ratio)
         return out

@@ -18,6 +18,11 @@ Built from plain Python values::
     plant.state.position, plant.state.rotation
 
 A scenario's plant section gives the same object through :func:`fsr_sim.config.scenario.plant_from_config`.
+
+Ground and ceiling are solid (contact geometry in :mod:`fsr_sim.model.environment`); an impact faster
+than ``crash_speed`` is a divergence. ``ground_cap_steps`` / ``ceiling_cap_steps`` count the control steps
+in which a rotor's thrust ratio was held at the surface's ``max_ratio`` (the effect model's validity ends
+there).
 """
 
 from __future__ import annotations
@@ -127,6 +132,10 @@ class Plant:
         self.crash_speed = crash_speed
         self.max_impact_speed = 0.0
         self.in_contact = False
+        self.max_ceiling_impact_speed = 0.0  # [m/s] upward speed at ceiling contact
+        self.at_ceiling = False
+        self.ground_cap_steps = 0
+        self.ceiling_cap_steps = 0
         n = vehicle.rotor_count
         self.rotor_speeds = np.zeros(n)
         self.tilt_angles = np.zeros(n) if vehicle.is_tilting else None
@@ -309,11 +318,23 @@ class Plant:
 
     def step(self) -> None:
         """Advance one period: ``physics_substeps`` RK4 steps of ``physics_dt``, with ground contact."""
+        ceiling = self.environment.ceiling.enabled
         for sub in range(self.substeps):
             t = self.time + sub * self.dt
             self.state_vector = self.body.step_floats(t, self.state_vector, self.dt, self._wrench)
             self._apply_ground_contact()
+            if ceiling:
+                self._apply_ceiling_contact()
+        effects = self.effects
+        if effects.ground_capped or effects.ceiling_capped:
+            self._count_capped_steps()
         self.step_index += 1
+
+    def _count_capped_steps(self) -> None:
+        effects = self.effects
+        self.ground_cap_steps += effects.ground_capped
+        self.ceiling_cap_steps += effects.ceiling_capped
+        effects.ground_capped = effects.ceiling_capped = False
 
     def _apply_ground_contact(self) -> None:
         ground = self.environment.ground
@@ -332,6 +353,23 @@ class Plant:
         state[VELOCITY] = 0.0  # held by the ground (no bounce, no sliding)
         state[ANGULAR_VELOCITY] = 0.0
 
+    def _apply_ceiling_contact(self) -> None:
+        """The top of the vehicle (``top_height`` above the centre) stops at the ceiling, like the ground
+        (called only when the ceiling is enabled)."""
+        ceiling = self.environment.ceiling
+        self.at_ceiling = False
+        rest_z = ceiling.height + self.vehicle.top_height
+        state = self.state_vector
+        if state[2] > rest_z:
+            return
+        self.at_ceiling = True
+        impact = -state[5]  # upward (negative NED z) speed
+        if impact > self.max_ceiling_impact_speed:
+            self.max_ceiling_impact_speed = float(impact)
+        state[2] = rest_z
+        state[VELOCITY] = 0.0  # held against the ceiling while the net force pushes up
+        state[ANGULAR_VELOCITY] = 0.0
+
     def divergence(self) -> str | None:
         """Why the simulation cannot go on (NaN state, beyond physical bounds, crash), or None."""
         s = self.state_vector.tolist()
@@ -345,4 +383,7 @@ class Plant:
             return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
         if self.max_impact_speed > self.crash_speed:
             return f"crashed into the ground at {self.max_impact_speed:.2f} m/s (limit {self.crash_speed} m/s)"
+        if self.max_ceiling_impact_speed > self.crash_speed:
+            return (f"crashed into the ceiling at {self.max_ceiling_impact_speed:.2f} m/s "
+                    f"(limit {self.crash_speed} m/s)")
         return None

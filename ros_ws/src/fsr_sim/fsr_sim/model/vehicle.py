@@ -46,7 +46,9 @@ class Vehicle:
     tilt_angle_max : float
         [rad], tilt limits ``+-tilt_angle_max``.
     contact_height : float
-        [m], distance from the centre of mass down to the landing gear's feet.
+        [m], distance from the centre of mass down to the landing gear's feet (ground contact).
+    top_height : float
+        [m], distance from the centre of mass up to the top of the vehicle (ceiling contact).
 
     Raises
     ------
@@ -66,7 +68,8 @@ class Vehicle:
     spins: np.ndarray
     tilt_axes: np.ndarray | None = None
     tilt_angle_max: float = np.pi
-    contact_height: float = 0.1
+    contact_height: float = 0.1  # [m] centre of mass above the landing gear's feet (ground contact)
+    top_height: float = 0.1  # [m] top of the vehicle above the centre of mass (ceiling contact)
     description: str = ""
 
     def __post_init__(self) -> None:
@@ -80,7 +83,7 @@ class Vehicle:
             if not value > 0.0 or not np.isfinite(value):
                 raise InvalidValueError(name, f"must be > 0, got {value}")
             put(name, value)
-        for name in ("c_m", "rotor_speed_min", "contact_height"):
+        for name in ("c_m", "rotor_speed_min", "contact_height", "top_height"):
             value = float(getattr(self, name))
             if not value >= 0.0 or not np.isfinite(value):
                 raise InvalidValueError(name, f"must be >= 0, got {value}")

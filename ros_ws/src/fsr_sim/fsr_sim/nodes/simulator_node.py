@@ -99,6 +99,7 @@ class SimulatorNode(Node):
         self.startup_deadline = time.monotonic() + self.params.startup_timeout
         self.wall_start = 0.0
         self.stale_commands = 0
+        self.surfaces_at_cap: set[str] = set()  # surfaces whose effect-cap warning was logged
         mode = "lockstep" if self.config.lockstep else f"free-running at {self.config.real_time_factor}x real time"
         self.get_logger().info(
             f"scenario '{self.config.name}' ({self.scenario.source}): {self.config.plant_vehicle.name}, "
@@ -268,8 +269,11 @@ class SimulatorNode(Node):
     def _advance(self) -> None:
         """Step the plant one control period, then publish the new state or end the run."""
         self.have_command = False
-        self.plant.step()
-        reason = self.plant.divergence()
+        plant = self.plant
+        plant.step()
+        if (plant.ground_cap_steps or plant.ceiling_cap_steps) and len(self.surfaces_at_cap) < 2:
+            self._warn_surface_cap()
+        reason = plant.divergence()
         if reason is not None:
             if self.messages.is_finite():
                 self._publish_state()
@@ -279,6 +283,20 @@ class SimulatorNode(Node):
         self._publish_state()
         if self.plant.step_index >= self.config.step_count:
             self._finish("finished", f"reached the scenario duration {self.config.duration:g} s", EXIT_OK)
+
+    def _warn_surface_cap(self) -> None:
+        """Warn once per surface when its thrust ratio first reaches ``max_ratio`` (outside the model)."""
+        environment = self.config.environment
+        for surface, steps, max_ratio in (
+            ("ground", self.plant.ground_cap_steps, environment.ground.max_ratio),
+            ("ceiling", self.plant.ceiling_cap_steps, environment.ceiling.max_ratio),
+        ):
+            if steps and surface not in self.surfaces_at_cap:
+                self.surfaces_at_cap.add(surface)
+                self.get_logger().warning(
+                    f"{surface} effect at its cap (thrust ratio {max_ratio:g} = max_ratio) at {self._where()}: a "
+                    f"rotor is closer to the {surface} than the effect model is valid for; the steps are counted"
+                )
 
     # ----- commands ---------------------------------------------------------------------------------
     def _take_commands(self, expected_ns: int | None, wait: float) -> bool:
@@ -358,6 +376,8 @@ class SimulatorNode(Node):
         summary += f"; {self.stale_commands} late command(s) ignored" if self.stale_commands else ""
         saturation = self.plant.saturation.count
         summary += f"; {saturation} saturated rotor command(s)" if saturation else ""
+        for surface, steps in (("ground", self.plant.ground_cap_steps), ("ceiling", self.plant.ceiling_cap_steps)):
+            summary += f"; {steps} step(s) with the {surface} effect at its cap" if steps else ""
         self.get_logger().info(
             f"{state}: {reason} ({self.plant.step_index} steps, t = {self.plant.time:.4f} s in {wall:.2f} s wall"
             f"{speed}{summary})"
