@@ -44,6 +44,9 @@ class ControlOutput:
     tilt_angles: np.ndarray | None
     reference: Reference
     saturated: bool
+    rotation_cmd: np.ndarray | None = None  # commanded attitude R_c (body FRD -> world NED): the law's R_d, or R_ref
+    force_desired: np.ndarray | None = None  # body wrench the law asked for, before allocation [N]
+    torque_desired: np.ndarray | None = None  # [N m]
 
     @property
     def thrust(self) -> float:
@@ -136,14 +139,16 @@ class FlightController:
             geometric = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body)
             force_body = np.array((0.0, 0.0, -geometric.thrust))
             torque_body = geometric.torque_body
+            rotation_cmd = geometric.rotation_desired
         else:
             force_body, torque_body = self.law.compute(
                 reference, position, rotation, velocity_world, angular_velocity_body
             )
+            rotation_cmd = reference.rotation  # fully actuated: the reference attitude is commanded as it is
         actuated = self.actuator.allocate(stamp_s, force_body, torque_body)
         return ControlOutput(
             stamp_s, actuated.force_body, actuated.torque_body, actuated.rotor_speeds, actuated.tilt_angles,
-            reference, actuated.saturated,
+            reference, actuated.saturated, rotation_cmd, force_body, torque_body,
         )
 
     def set_goal(

@@ -139,7 +139,7 @@ class _Recorder:
         from nav_msgs.msg import Odometry
         from std_msgs.msg import Float64
 
-        from fsr_control.nodes.messages import reference_message
+        from fsr_control.nodes.messages import attitude_command_message, reference_message
         from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME, rotor_command, time_from_ns, wrench_stamped
 
         odom = Odometry()
@@ -159,6 +159,8 @@ class _Recorder:
             write("/rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles), stamp_ns)
         write("/wrench_cmd", wrench_stamped(stamp_ns, output.force_body, output.torque_body), stamp_ns)
         write("/reference", reference_message(stamp_ns, output.reference), stamp_ns)
+        write("/attitude_cmd", attitude_command_message(stamp_ns, output.rotation_cmd), stamp_ns)
+        write("/wrench_desired", wrench_stamped(stamp_ns, output.force_desired, output.torque_desired), stamp_ns)
         if estimate is not None:
             write("/wrench_estimate", wrench_stamped(stamp_ns, estimate[0], estimate[1]), stamp_ns)
             write("/mass_estimate", Float64(data=float(estimate[2])), stamp_ns)

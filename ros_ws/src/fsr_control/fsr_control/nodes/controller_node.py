@@ -5,7 +5,8 @@ Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``t
 ``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal). An invalid value exits with code 2 and names it.
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
-``rotor_cmd`` (rotor actuation), ``wrench_cmd`` and ``reference``, all stamped ``t_k`` (lockstep contract).
+``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``reference``, ``attitude_cmd`` (the commanded attitude
+``R_c``) and ``wrench_desired`` (the law's wrench before allocation), all stamped ``t_k`` (lockstep contract).
 NaN/inf odom or goals are dropped with a rate-limited warning. At exit it logs the saturation summary and
 the callback's cost.
 """
@@ -16,7 +17,7 @@ import copy
 import sys
 import time
 
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import PoseStamped, QuaternionStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
@@ -25,7 +26,7 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController, seconds_from_ns
-from fsr_control.nodes.messages import goal_from_message, reference_message
+from fsr_control.nodes.messages import attitude_command_message, goal_from_message, reference_message
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.ros.conversions import (
@@ -85,6 +86,8 @@ class ControllerNode(Node):
         self.rotor_pub = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS) if self.rotors else None
         self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS)
         self.reference_pub = self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS)
+        self.attitude_pub = self.create_publisher(QuaternionStamped, "attitude_cmd", STREAM_QOS)
+        self.desired_pub = self.create_publisher(WrenchStamped, "wrench_desired", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
         self.warn = RateLimitedWarning(self.get_logger())
@@ -113,6 +116,8 @@ class ControllerNode(Node):
             self.rotor_pub.publish(rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles))
         self.wrench_pub.publish(wrench_stamped(stamp_ns, output.force_body, output.torque_body))
         self.reference_pub.publish(reference_message(stamp_ns, output.reference))
+        self.attitude_pub.publish(attitude_command_message(stamp_ns, output.rotation_cmd))
+        self.desired_pub.publish(wrench_stamped(stamp_ns, output.force_desired, output.torque_desired))
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1
 

@@ -4,6 +4,11 @@
   one point): ``transforms[0]`` the desired pose (translation world NED [m], rotation ``R_d`` body -> world),
   ``velocities[0]`` linear velocity world [m/s] and angular velocity ``R_d omega_d`` world [rad/s],
   ``accelerations[0]`` linear acceleration world [m/s^2] and ``R_d omega_dot_d`` world [rad/s^2].
+* ``attitude_cmd`` (geometry_msgs/QuaternionStamped, frame ``world_ned``): the commanded attitude ``R_c``
+  (body FRD -> world NED, ``[x, y, z, w]`` with ``w >= 0``) that the attitude loop tracks: the geometric
+  controller's ``R_d`` built from the thrust vector, the Voliro controller's reference attitude.
+* ``wrench_desired`` (geometry_msgs/WrenchStamped, ``base_link_frd``): the body wrench the control law asked
+  for, before allocation and rotor clamping (``wrench_cmd`` is the wrench after them).
 * ``goal`` (geometry_msgs/PoseStamped, world NED): position and orientation of the new target.
 * Stamps: the controller's outputs carry the stamp of the ``odom`` they answer (integer ns of sim time).
 """
@@ -13,7 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from geometry_msgs.msg import PoseStamped, Transform, Twist
+from geometry_msgs.msg import PoseStamped, QuaternionStamped, Transform, Twist
 from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
 
 from fsr_control.planning.trajectory import Reference
@@ -43,6 +48,18 @@ def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTraje
     ).tolist()
     point = MultiDOFJointTrajectoryPoint(transforms=[transform], velocities=[velocity], accelerations=[acceleration])
     msg.points = [point]
+    return msg
+
+
+def attitude_command_message(stamp_ns: int, rotation: np.ndarray) -> QuaternionStamped:
+    """``attitude_cmd``: the commanded attitude ``R_c`` (body FRD -> world NED) as a unit quaternion, ``w >= 0``."""
+    msg = QuaternionStamped()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = WORLD_FRAME
+    x, y, z, w = quaternion_from_rotation(np.asarray(rotation, dtype=float)).tolist()
+    if w < 0.0:
+        x, y, z, w = -x, -y, -z, -w
+    msg.quaternion.x, msg.quaternion.y, msg.quaternion.z, msg.quaternion.w = x, y, z, w
     return msg
 
 
