@@ -63,7 +63,7 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
 
 def test_all_figures_and_files_are_written(synthetic_recording: Path, tmp_path: Path) -> None:
     result = analyze_recording(synthetic_recording, tmp_path)
-    assert sorted(p.name for p in result.figures) == sorted(FIGURES)
+    assert sorted(p.stem for p in result.figures) == sorted(FIGURES)
     for path in result.figures:
         assert path.stat().st_size > 10_000 and path.read_bytes()[:4] == b"\x89PNG"
     saved = json.loads((tmp_path / "metrics.json").read_text())
@@ -81,7 +81,7 @@ def test_missing_topics_and_scenario_are_skipped_with_notes(tmp_path: Path, writ
     assert m["mass"] is None and m["thrust_ratio"] is None and m["sim_status"] is None
     assert m["duration_s"] == pytest.approx(2.0) and m["scenario"] == "odom_only"
     notes = "\n".join(m["notes"])
-    for expected in ("no scenario", "no messages on /reference", "tracking errors skipped", "figure errors.png"):
+    for expected in ("no scenario", "no messages on /reference", "tracking errors skipped", "figure errors left out"):
         assert expected in notes
     assert [p.name for p in result.figures] == ["pose.png"]
     assert "Notes:" in result.summary

@@ -191,13 +191,10 @@ def thrust_ratio_series(flight: Flight) -> tuple[np.ndarray, np.ndarray, np.ndar
         distance = env.ground.height - rotor_down
         if env.ground_model == "multirotor":
             effects = ThrustEffects(env, vehicle.positions, vehicle.rotor_radius)
-            ground = np.array([
-                multirotor_ground_effect_ratio(
-                    row, vehicle.rotor_radius, effects.separation, effects.arm_lengths, env.body_factor,
-                    env.ground.max_ratio,
-                )
-                for row in distance
-            ]).reshape(distance.shape)
+            ground = multirotor_ground_effect_ratio(
+                distance, vehicle.rotor_radius, effects.separation, effects.arm_lengths, env.body_factor,
+                env.ground.max_ratio,
+            )
         else:
             ground = ground_effect_ratio(distance, vehicle.rotor_radius, env.ground.max_ratio)
     if env.ceiling.enabled and env.ceiling.effect:
