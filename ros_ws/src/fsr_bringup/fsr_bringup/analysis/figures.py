@@ -175,9 +175,18 @@ def _finish(fig: Figure, axes: np.ndarray, title: str, options: FigureOptions, l
         ax.set_xlabel("time [s]")
     if handles:
         fig.legend(list(handles.values()), list(handles), loc="outside upper center",
-                   ncols=min(legend_cols, len(handles)), handlelength=2.0, columnspacing=1.2)
+                   ncols=_legend_columns(list(handles), fig.get_figwidth(), legend_cols), handlelength=2.0,
+                   columnspacing=1.2)
     if options.titles:
         fig.suptitle(title)
+
+
+def _legend_columns(labels: list[str], width_in: float, most: int) -> int:
+    """Most legend columns (at most ``most``) whose entries fit in the figure width: an entry is about its
+    text (0.6 em per character) plus the handle and spacing (~3.2 em)."""
+    em = FONT_PT / 72.0  # in
+    entry = max(len(label) for label in labels) * 0.6 * em + 3.2 * em
+    return max(1, min(most, len(labels), int(width_in // entry)))
 
 
 def _width(natural: str, options: FigureOptions) -> float:
