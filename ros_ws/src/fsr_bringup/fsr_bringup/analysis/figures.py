@@ -374,17 +374,20 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
                   if np.any(ratio != 1.0)]
         if not panels:
             continue
-        fig, axes = _figure(len(panels), 1, _width("one", options), row_height=1.4)
+        fig, axes = _figure(len(panels), 1, _width("one", options), row_height=1.8)
         for row, (ratio, surface) in enumerate(panels):
-            for i in range(ratio.shape[1]):
-                _plot(axes[row, 0], t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
-                      label=f"rotor {i + 1}")
+            if np.allclose(ratio, ratio[:, :1], rtol=0.0, atol=1e-9):  # level flight: every rotor alike
+                _plot(axes[row, 0], t, ratio[:, 0], color=ROTOR_COLOURS[0], label="every rotor")
+            else:
+                for i in range(ratio.shape[1]):
+                    _plot(axes[row, 0], t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
+                          label=f"rotor {i + 1}")
             _label(axes[row, 0], f"{surface} T/T_OGE", "-", "per rotor")
         if flight.odom is not None:
             twin = axes[0, 0].twinx()
             height = flight.config.environment.ground.height - flight.odom.position[:, 2]
             _plot(twin, flight.odom.t, height, **ASIDE)
-            twin.set_ylabel("height above ground [m]\nworld NED", color="0.35")
+            twin.set_ylabel("height [m]\nabove ground", color="0.35")
             axes[0, 0].plot([], [], label="height above ground", **ASIDE)  # its legend entry
         _finish(fig, axes, "thrust ratio near surfaces", options, legend_cols=5)
         notes = [f"thrust_ratio: drawn for {run.label}"] if len(runs) > 1 else []
