@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import Transform, Twist, WrenchStamped
+from geometry_msgs.msg import QuaternionStamped, Transform, Twist, WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, String
@@ -37,11 +37,13 @@ TRUE_TORQUE = np.array([0.0, 0.0, -0.4])
 ESTIMATE_BIAS = np.array([0.02, -0.01, 0.0, 0.0, 0.0, 0.005])
 RADIUS = 0.12  # quadrotor_ex4 rotor radius [m]
 YAW_RATE = math.radians(10.0)  # rad/s of the reference
+COMMAND_YAW_OFFSET = math.radians(4.0)  # attitude_cmd = reference yaw + 4 deg (the vehicle: + 2 deg, then + 10 deg)
 
 EXPECTED = {
     "steps": STEPS,
     "position_final": 0.3, "position_peak": 0.5, "position_peak_time": 1.0,
-    "attitude_final": 10.0, "attitude_peak": 10.0, "velocity_error": 0.2, "angular_velocity_error": 0.1,
+    "attitude_final": 6.0, "attitude_peak": 6.0, "attitude_reference_final": 10.0,
+    "velocity_error": 0.2, "angular_velocity_error": 0.1,
     "saturation_steps": 210, "saturation_first": 0.5, "worst_rotor": 3, "at_max": 200, "at_min": 10,
     # wrench_shortfall: axis -> (steps that gave way, max |shortfall|, its time); rounding-size values do not count
     "gave_way": {"torque_z": (200, 0.3, 0.6), "force_z": (10, 0.5, 1.5), "torque_x": (0, 0.0, None)},
@@ -114,6 +116,13 @@ def write_synthetic(path: Path, *, topics: tuple[str, ...] | None = None, scenar
                 point.accelerations = [Twist()]
                 ref.points = [point]
                 writer.write_message("/reference", ref, stamp_ns)
+            if wanted("attitude_cmd"):
+                command = QuaternionStamped()
+                command.header.stamp = stamp
+                command.header.frame_id = "world_ned"
+                q = command.quaternion
+                q.x, q.y, q.z, q.w = yaw_quaternion(ref_yaw + COMMAND_YAW_OFFSET)
+                writer.write_message("/attitude_cmd", command, stamp_ns)
             if wanted("rotor_cmd"):
                 speeds = [500.0] * 4
                 if 500 <= k < 700:
@@ -136,6 +145,8 @@ def write_synthetic(path: Path, *, topics: tuple[str, ...] | None = None, scenar
                 if 1500 <= k < 1510:
                     shortfall[2] = -0.5  # thrust gave way while rotor 1 was at its minimum
                 writer.write_message("/wrench_shortfall", _wrench(stamp, shortfall[:3], shortfall[3:]), stamp_ns)
+            if wanted("wrench_desired"):
+                writer.write_message("/wrench_desired", _wrench(stamp, [0.0, 0.0, -12.5], [0.0, 0.0, 0.0]), stamp_ns)
             if wanted("wrench_truth"):
                 writer.write_message("/wrench_truth", _wrench(stamp, TRUE_FORCE, TRUE_TORQUE), stamp_ns)
             if wanted("wrench_estimate"):

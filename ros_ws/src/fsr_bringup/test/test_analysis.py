@@ -27,8 +27,12 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
     assert tracking["position_error_m"]["final"] == pytest.approx(EXPECTED["position_final"], abs=1e-9)
     assert tracking["position_error_m"]["peak"] == pytest.approx(EXPECTED["position_peak"], abs=1e-9)
     assert tracking["position_error_m"]["peak_time_s"] == pytest.approx(EXPECTED["position_peak_time"])
-    assert tracking["attitude_error_deg"]["final"] == pytest.approx(EXPECTED["attitude_final"], abs=1e-6)
-    assert tracking["attitude_error_deg"]["peak"] == pytest.approx(EXPECTED["attitude_peak"], abs=1e-6)
+    assert tracking["attitude_error_deg"]["final"] == pytest.approx(EXPECTED["attitude_final"], abs=1e-9)
+    assert tracking["attitude_error_deg"]["peak"] == pytest.approx(EXPECTED["attitude_peak"], abs=1e-9)
+    # Against the commanded attitude (attitude_cmd); the planner's attitude is kept apart.
+    assert tracking["attitude_vs"] == "attitude_cmd"
+    assert tracking["attitude_vs_reference_deg"]["final"] == pytest.approx(EXPECTED["attitude_reference_final"],
+                                                                           abs=1e-9)
     # World-frame velocity error although odometry carries body-frame twist (yawed vehicle).
     assert tracking["velocity_error_m_s"]["final"] == pytest.approx(EXPECTED["velocity_error"], abs=1e-9)
     assert tracking["velocity_error_m_s"]["peak"] == pytest.approx(EXPECTED["velocity_error"], abs=1e-9)
@@ -49,7 +53,7 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
     wrench = m["external_wrench"]
     np.testing.assert_allclose(wrench["truth_mean_last_s"], [1, 1, 0, 0, 0, -0.4], atol=1e-12)
     np.testing.assert_allclose(wrench["estimate_mean_last_s"], [1.02, 0.99, 0, 0, 0, -0.395], atol=1e-12)
-    np.testing.assert_allclose(wrench["rms_error"], [0.02, 0.01, 0, 0, 0, 0.005], atol=1e-12)
+    np.testing.assert_allclose(wrench["rms_error_vs_external"], [0.02, 0.01, 0, 0, 0, 0.005], atol=1e-12)
     assert wrench["rms_from_s"] == pytest.approx(1.0)  # half the 2 s run (default settling 5 s is longer)
     assert m["mass"]["estimate_final_kg"] == pytest.approx(EXPECTED["mass_final"])
     assert m["mass"]["true_kg"] == EXPECTED["mass_true"] and m["mass"]["nominal_kg"] == EXPECTED["mass_nominal"]
@@ -65,7 +69,7 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
 
 def test_all_figures_and_files_are_written(synthetic_recording: Path, tmp_path: Path) -> None:
     result = analyze_recording(synthetic_recording, tmp_path)
-    assert sorted(p.name for p in result.figures) == sorted(FIGURES)
+    assert sorted(p.stem for p in result.figures) == sorted(FIGURES)
     for path in result.figures:
         assert path.stat().st_size > 10_000 and path.read_bytes()[:4] == b"\x89PNG"
     saved = json.loads((tmp_path / "metrics.json").read_text())
@@ -85,7 +89,7 @@ def test_missing_topics_and_scenario_are_skipped_with_notes(tmp_path: Path, writ
     assert m["mass"] is None and m["thrust_ratio"] is None and m["sim_status"] is None and m["wrench_shortfall"] is None
     assert m["duration_s"] == pytest.approx(2.0) and m["scenario"] == "odom_only"
     notes = "\n".join(m["notes"])
-    for expected in ("no scenario", "no messages on /reference", "tracking errors skipped", "figure errors.png"):
+    for expected in ("no scenario", "no messages on /reference", "tracking errors skipped", "figure errors left out"):
         assert expected in notes
     assert [p.name for p in result.figures] == ["pose.png"]
     assert "Notes:" in result.summary

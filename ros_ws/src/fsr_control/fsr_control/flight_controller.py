@@ -61,6 +61,21 @@ class ControlOutput:
         """``u_T = -f_z`` [N] (thrust along ``-z_b``)."""
         return -float(self.force_body[2])
 
+    @property
+    def rotation_cmd(self) -> np.ndarray:
+        """The commanded attitude ``R_c`` (body FRD -> world NED): the geometric law's ``R_d``, or the reference."""
+        return self.desired.rotation_commanded
+
+    @property
+    def force_desired(self) -> np.ndarray:
+        """Body force the law asked for, before allocation [N]."""
+        return self.desired.force_body
+
+    @property
+    def torque_desired(self) -> np.ndarray:
+        """Body torque the law asked for, before allocation [N m]."""
+        return self.desired.torque_body
+
 
 class FlightController:
     """Planner + control law + allocation for one vehicle (nominal model ``vehicle``).

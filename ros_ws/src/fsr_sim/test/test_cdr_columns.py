@@ -65,3 +65,26 @@ def test_empty_trailing_sequence_without_padding_is_decoded() -> None:
         columns = decode_columns([payload], "sensor_msgs/msg/JointState")
         assert np.array_equal(columns.get("velocity")[0], [500.0 + i for i in range(8)])
         assert columns.get("effort").shape == (1, 0)
+
+
+def test_stamped_columns_sorts_by_stamp_and_decodes_many_layouts_message_by_message(tmp_path) -> None:
+    """The one decoder of fsr-analyze and fsr-estimate: header-stamp order, and beyond MAX_LAYOUTS layouts
+    (40 frame-id lengths here) the same columns from single-message decoding."""
+    from fsr_sim.recording.cdr_columns import MAX_LAYOUTS, stamped_columns
+    from fsr_sim.recording.reader import open_recording
+    from fsr_sim.recording.writer import RecordingWriter
+
+    count = MAX_LAYOUTS + 8
+    order = np.random.default_rng(3).permutation(count)  # written out of stamp order
+    path = tmp_path / "layouts.mcap"
+    with RecordingWriter(path) as writer:
+        writer.add_topic("/wrench_cmd", "geometry_msgs/msg/WrenchStamped")
+        for k in order.tolist():
+            msg = wrench_stamped(k * 1_000_000, np.array((k, -k, 0.5 * k), float), np.array((0.0, 0.0, k), float))
+            msg.header.frame_id = "f" * (k + 1)
+            writer.write_message("/wrench_cmd", msg, 0)
+    stamps, columns = stamped_columns(open_recording(path), "wrench_cmd")
+    np.testing.assert_array_equal(stamps, np.arange(count) * 1_000_000)
+    np.testing.assert_array_equal(columns.get("wrench.force.y"), -np.arange(count, dtype=float))
+    np.testing.assert_array_equal(columns.get("wrench.torque.z"), np.arange(count, dtype=float))
+    assert [len(s) for s in columns.strings["header.frame_id"]] == list(range(1, count + 1))

@@ -1,27 +1,107 @@
-"""PNG figures of one flight (matplotlib, Agg, no pyplot state): the report's plots from a recording.
+"""Figures of one or several flights for a paper (matplotlib, Agg, no pyplot state).
 
-Each ``*_figure`` function draws one file and returns its path, or None when its topics are missing (the
-caller records a note). Time axes are simulated time [s]; frames as in :mod:`fsr_bringup.analysis.load`.
+Each ``*_figure`` function draws one figure from a list of :class:`Run` (one run, or several overlaid: two
+estimator settings, two controllers) and returns it, or a reason why it has nothing to show (topics
+missing, no surface effect, no rotors); :func:`make_figures` saves every figure in every requested format
+and turns the reasons into notes. Conventions, the same in every figure:
+
+* size: one journal column (3.5 in) or two (7.16 in) wide, 8 pt text (:data:`RC`), no title inside the
+  figure unless asked for; the scenario and the runs go into the file's metadata (PNG text chunks, PDF info,
+  SVG ``<metadata>``) and into ``summary.md``;
+* every axis label names its quantity, frame (world NED, body FRD, ZYX Euler) and unit; time is the
+  simulated time [s];
+* colours from the Okabe-Ito palette (colour-blind safe), one meaning per colour in a figure: a run per
+  colour (:data:`RUN_COLOURS`), black dashed the reference / the truth the estimate must reach, grey what
+  is only shown for comparison (the external wrench alone, model values, limits); in rotor figures a rotor
+  per colour;
+* a panel whose data spans less than its :data:`FLOORS` value is drawn on a fixed axis of that height with
+  a note (no autoscaled rounding noise), tick labels without offset notation;
+* legends are placed above the panels, never over the data;
+* long series are decimated for drawing only (:func:`envelope`: per-bucket min and max, so peaks survive);
+  metrics always use every sample.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import Flight
-from fsr_bringup.analysis.metrics import thrust_ratio_series, tracking_errors
+from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_sim.model.so3 import euler_zyx_from_rotation
 
-DPI = 110
-AXES = ("x", "y", "z")
+ONE_COLUMN_IN = 3.5  # in, one journal column
+TWO_COLUMN_IN = 7.16  # in, full page width (two columns)
+PNG_DPI = 300
+FORMATS = ("png", "pdf", "svg")
+FONT_PT = 8.0
 PLOT_BUCKETS = 1500  # longer series are drawn as per-bucket min and max (same picture, far fewer points)
+AXES = ("x", "y", "z")
+
+# Okabe & Ito (2008), colour-universal design.
+OKABE_ITO = {
+    "black": "#000000", "orange": "#E69F00", "sky_blue": "#56B4E9", "bluish_green": "#009E73",
+    "yellow": "#F0E442", "blue": "#0072B2", "vermillion": "#D55E00", "reddish_purple": "#CC79A7",
+}
+RUN_COLOURS = tuple(OKABE_ITO[k] for k in ("blue", "vermillion", "bluish_green", "reddish_purple", "orange",
+                                           "sky_blue"))
+ROTOR_COLOURS = tuple(OKABE_ITO[k] for k in ("blue", "vermillion", "bluish_green", "reddish_purple", "orange",
+                                             "sky_blue", "yellow", "black"))
+TRUTH = {"color": OKABE_ITO["black"], "ls": "--", "lw": 1.0}
+ASIDE = {"color": "0.55", "ls": ":", "lw": 1.0}  # grey: shown for comparison only (not a target)
+LIMIT = {"color": "0.55", "ls": "-.", "lw": 0.8}
+
+# Smallest axis height per unit: a channel spanning less is drawn flat on this fixed axis, with a note.
+FLOORS = {"m": 1e-3, "m/s": 1e-3, "deg": 1e-3, "rad/s": 1e-3, "N": 1e-3, "N m": 1e-4, "kg": 1e-4, "-": 1e-4,
+          "rotor rad/s": 1e-2}
+
+RC = {
+    "font.size": FONT_PT, "axes.labelsize": FONT_PT, "axes.titlesize": FONT_PT, "xtick.labelsize": FONT_PT,
+    "ytick.labelsize": FONT_PT, "legend.fontsize": FONT_PT, "figure.titlesize": FONT_PT + 1,
+    "axes.formatter.useoffset": False, "axes.formatter.limits": (-4, 5), "lines.linewidth": 1.0,
+    "axes.linewidth": 0.6, "grid.linewidth": 0.4, "grid.alpha": 0.4, "legend.frameon": False,
+    "svg.fonttype": "none", "pdf.fonttype": 42, "savefig.dpi": PNG_DPI, "font.family": "DejaVu Sans",
+}
+
+
+@dataclass
+class Run:
+    """One flight to draw: its label in legends, the decoded recording and its effective truth."""
+
+    label: str
+    flight: Flight
+    effective: EffectiveWrench | None = None
+
+    @classmethod
+    def of(cls, flight: Flight, label: str | None = None) -> Run:
+        return cls(label or flight.scenario_name, flight, effective_wrench(flight))
+
+
+@dataclass
+class FigureOptions:
+    """Formats to write, width override (``auto`` = each figure's own), titles inside figures."""
+
+    formats: tuple[str, ...] = ("png",)
+    width: str = "auto"  # auto | one | two
+    titles: bool = False
+
+
+@dataclass
+class Drawn:
+    """A drawn figure, or why there is none (``figure`` None and ``reason``)."""
+
+    figure: Figure | None
+    reason: str = ""
+    notes: list[str] = field(default_factory=list)
 
 
 def envelope(t: np.ndarray, y: np.ndarray, buckets: int = PLOT_BUCKETS) -> tuple[np.ndarray, np.ndarray]:
@@ -33,35 +113,85 @@ def envelope(t: np.ndarray, y: np.ndarray, buckets: int = PLOT_BUCKETS) -> tuple
         return t, y
     head = buckets * size
     block = y[:head].reshape(buckets, size)
-    filled = np.where(np.isnan(block), np.inf, block)
-    i_min = np.argmin(filled, axis=1)
+    i_min = np.argmin(np.where(np.isnan(block), np.inf, block), axis=1)
     i_max = np.argmax(np.where(np.isnan(block), -np.inf, block), axis=1)
     index = np.sort(np.stack((i_min, i_max), axis=1), axis=1) + (np.arange(buckets) * size)[:, None]
     index = np.concatenate((index.ravel(), np.arange(head, n)))
     return t[index], y[index]
 
 
-def _plot(ax: Axes, t: np.ndarray, y: np.ndarray, *args: object, **kwargs: object) -> None:
-    ax.plot(*envelope(t, y), *args, **kwargs)
+def _plot(ax: Axes, t: np.ndarray, y: np.ndarray, **kwargs: object) -> None:
+    ax.plot(*envelope(t, y), **kwargs)
 
 
-def _figure(rows: int, cols: int, title: str, height: float = 2.2) -> tuple[Figure, np.ndarray]:
-    fig = Figure(figsize=(max(5.0 * cols, 8.0), height * rows + 0.8), layout="constrained")
+def _figure(rows: int, cols: int, width: float, row_height: float = 1.15) -> tuple[Figure, np.ndarray]:
+    fig = Figure(figsize=(width, row_height * rows + 0.55), layout="constrained")
     FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(rows, cols, sharex=True, squeeze=False))
-    fig.suptitle(title)
     return fig, axes
 
 
-def _save(fig: Figure, path: Path, axes: np.ndarray) -> Path:
+def _label(ax: Axes, text: str, unit: str, frame: str = "") -> None:
+    """Axis label ``text [unit]`` with the frame on a second line; the unit also selects the panel's floor
+    (:data:`FLOORS`)."""
+    shown = unit.removeprefix("rotor ")
+    ax.set_ylabel(f"{text} [{shown}]" + (f"\n{frame}" if frame else ""))
+    ax._fsr_unit = unit  # type: ignore[attr-defined]
+
+
+def _apply_floor(ax: Axes) -> str | None:
+    """Fixed axis for a panel whose data spans less than its floor; returns the note drawn on it."""
+    unit = getattr(ax, "_fsr_unit", None)
+    floor = FLOORS.get(unit) if unit else None
+    if floor is None:
+        return None
+    values = [np.asarray(line.get_ydata(), dtype=float) for line in ax.get_lines()
+              if line.get_transform() == ax.transData]
+    values = [v[np.isfinite(v)] for v in values if v.size]
+    values = [v for v in values if v.size]
+    if not values:
+        return None
+    low = min(float(v.min()) for v in values)
+    high = max(float(v.max()) for v in values)
+    if high - low >= floor:
+        return None
+    centre = round(0.5 * (low + high) / floor) * floor
+    bottom = 0.0 if low >= 0.0 and centre - floor < 0.0 else centre - floor  # a norm stays on [0, 2 floor]
+    ax.set_ylim(bottom, bottom + 2.0 * floor)
+    note = f"range < {floor:g} {unit}"
+    ax.text(0.99, 0.04, note, transform=ax.transAxes, ha="right", va="bottom", color="0.35")
+    return note
+
+
+def _finish(fig: Figure, axes: np.ndarray, title: str, options: FigureOptions, legend_cols: int = 4) -> None:
+    """Grid, floors, time label, one legend above the panels (no duplicates), optional title."""
+    handles: dict[str, object] = {}
     for ax in axes.flat:
-        ax.grid(True, alpha=0.3)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(loc="best", fontsize="small")
+        ax.grid(True)
+        _apply_floor(ax)
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    fig.savefig(path, dpi=DPI)
-    return path
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside upper center",
+                   ncols=_legend_columns(list(handles), fig.get_figwidth(), legend_cols), handlelength=2.0,
+                   columnspacing=1.2)
+    if options.titles:
+        fig.suptitle(title)
+
+
+def _legend_columns(labels: list[str], width_in: float, most: int) -> int:
+    """Most legend columns (at most ``most``) whose entries fit in the figure width: an entry is about its
+    text (0.6 em per character) plus the handle and spacing (~3.2 em)."""
+    em = FONT_PT / 72.0  # in
+    entry = max(len(label) for label in labels) * 0.6 * em + 3.2 * em
+    return max(1, min(most, len(labels), int(width_in // entry)))
+
+
+def _width(natural: str, options: FigureOptions) -> float:
+    choice = natural if options.width == "auto" else options.width
+    return TWO_COLUMN_IN if choice == "two" else ONE_COLUMN_IN
 
 
 def _degrees_unwrapped(rpy: np.ndarray) -> np.ndarray:
@@ -71,164 +201,251 @@ def _degrees_unwrapped(rpy: np.ndarray) -> np.ndarray:
     return out
 
 
-def pose_figure(flight: Flight, path: Path) -> Path | None:
-    """Position [m] and ZYX attitude [deg] vs the reference."""
-    odom, ref = flight.odom, flight.reference
-    if odom is None:
-        return None
-    fig, axes = _figure(3, 2, f"{flight.scenario_name}: pose vs reference")
-    rpy = _degrees_unwrapped(euler_zyx_from_rotation(odom.rotation))
-    for i, name in enumerate(AXES):
-        ax = axes[i, 0]
-        _plot(ax, odom.t, odom.position[:, i], label="actual")
-        if ref is not None:
-            _plot(ax, ref.t, ref.position[:, i], "--", label="reference")
-        ax.set_ylabel(f"{name} (NED) [m]")
+def _colour(index: int) -> str:
+    return RUN_COLOURS[index % len(RUN_COLOURS)]
+
+
+def pose_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Position (world NED) [m] and ZYX Euler attitude [deg] of each run vs the planner's reference."""
+    runs_with = [r for r in runs if r.flight.odom is not None]
+    if not runs_with:
+        return Drawn(None, "no odom")
+    fig, axes = _figure(3, 2, _width("two", options))
+    ref = next((r.flight.reference for r in runs_with if r.flight.reference is not None), None)
     ref_rpy = _degrees_unwrapped(euler_zyx_from_rotation(ref.rotation)) if ref is not None else None
-    for i, name in enumerate(("roll", "pitch", "yaw")):
-        ax = axes[i, 1]
-        _plot(ax, odom.t, rpy[:, i], label="actual")
+    for index, run in enumerate(runs_with):
+        odom = run.flight.odom
+        rpy = _degrees_unwrapped(euler_zyx_from_rotation(odom.rotation))
+        for i in range(3):
+            _plot(axes[i, 0], odom.t, odom.position[:, i], color=_colour(index), label=run.label)
+            _plot(axes[i, 1], odom.t, rpy[:, i], color=_colour(index), label=run.label)
+    for i, (name, angle) in enumerate(zip(AXES, ("roll", "pitch", "yaw"), strict=True)):
         if ref is not None:
-            _plot(ax, ref.t, ref_rpy[:, i], "--", label="reference")
-        ax.set_ylabel(f"{name} [deg]")
-    return _save(fig, path, axes)
+            _plot(axes[i, 0], ref.t, ref.position[:, i], label="reference", **TRUTH)
+            _plot(axes[i, 1], ref.t, ref_rpy[:, i], label="reference", **TRUTH)
+        _label(axes[i, 0], f"p_{name}", "m", "world NED")
+        _label(axes[i, 1], angle, "deg", "ZYX Euler")
+    _finish(fig, axes, "pose vs reference", options)
+    return Drawn(fig)
 
 
-def errors_figure(flight: Flight, path: Path) -> Path | None:
-    """Position, velocity (world), attitude and angular-velocity (body) errors."""
-    errors = tracking_errors(flight)
-    if errors is None:
-        return None
-    fig, axes = _figure(4, 1, f"{flight.scenario_name}: tracking errors", height=2.0)
-    for ax, values, label, unit in (
-        (axes[0, 0], errors.position, "e_p", "m"),
-        (axes[1, 0], errors.velocity, "e_v", "m/s"),
-        (axes[3, 0], errors.angular_velocity, "e_omega", "rad/s"),
-    ):
-        for i, name in enumerate(AXES):
-            _plot(ax, errors.t, values[:, i], label=f"{label},{name}")
-        ax.set_ylabel(f"{label} [{unit}]")
-    _plot(axes[2, 0], errors.t, errors.attitude_deg, color="C3", label="angle of R_d^T R")
-    axes[2, 0].set_ylabel("attitude error [deg]")
-    return _save(fig, path, axes)
+def errors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Tracking error norms of each run: position and velocity (world), attitude angle of ``R_c^T R``
+    (commanded attitude), angular velocity (body)."""
+    series = [(index, run, tracking_errors(run.flight)) for index, run in enumerate(runs)]
+    series = [s for s in series if s[2] is not None]
+    if not series:
+        return Drawn(None, "odom or reference missing")
+    fig, axes = _figure(4, 1, _width("one", options), row_height=0.95)
+    notes = []
+    for index, run, errors in series:
+        style = {"color": _colour(index), "label": run.label}
+        _plot(axes[0, 0], errors.t, np.linalg.norm(errors.position, axis=1), **style)
+        _plot(axes[1, 0], errors.t, np.linalg.norm(errors.velocity, axis=1), **style)
+        _plot(axes[2, 0], errors.t, errors.attitude_deg, **style)
+        _plot(axes[3, 0], errors.t, np.linalg.norm(errors.angular_velocity, axis=1), **style)
+        if not errors.attitude_commanded:
+            notes.append(f"errors: {run.label} has no attitude_cmd; its attitude error is against R_d")
+    _label(axes[0, 0], "|e_p|", "m", "world NED")
+    _label(axes[1, 0], "|e_v|", "m/s", "world NED")
+    _label(axes[2, 0], "att. error", "deg", "angle of R_c^T R")
+    _label(axes[3, 0], "|e_omega|", "rad/s", "body FRD")
+    _finish(fig, axes, "tracking errors", options, legend_cols=3)
+    return Drawn(fig, notes=notes)
 
 
-def wrench_command_figure(flight: Flight, path: Path) -> Path | None:
-    """Commanded thrust / body force [N] and torques [N m] (``wrench_cmd``)."""
-    cmd = flight.wrench_cmd
-    if cmd is None:
-        return None
-    fig, axes = _figure(2, 1, f"{flight.scenario_name}: commanded wrench (body FRD)", height=2.6)
-    _plot(axes[0, 0], cmd.t, np.linalg.norm(cmd.force, axis=1), color="k", label="u_T = |f|")
+def wrench_command_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Commanded body force [N] and torque [N m] (``wrench_cmd``, body FRD) of each run, with ``-m g``."""
+    runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.wrench_cmd is not None]
+    if not runs_with:
+        return Drawn(None, "no wrench_cmd")
+    fig, axes = _figure(3, 2, _width("two", options))
+    for index, run in runs_with:
+        cmd = run.flight.wrench_cmd
+        for i in range(3):
+            _plot(axes[i, 0], cmd.t, cmd.force[:, i], color=_colour(index), label=run.label)
+            _plot(axes[i, 1], cmd.t, cmd.torque[:, i], color=_colour(index), label=run.label)
+    config = runs_with[0][1].flight.config
+    if config is not None:
+        weight = config.vehicle.weight
+        axes[2, 0].axhline(-weight, label=f"-m g (controller model, {weight:.2f} N)", **ASIDE)
     for i, name in enumerate(AXES):
-        _plot(axes[0, 0], cmd.t, cmd.force[:, i], label=f"f_{name}", alpha=0.8)
-        _plot(axes[1, 0], cmd.t, cmd.torque[:, i], label=f"tau_{name}")
-    if flight.config is not None:
-        weight = flight.config.vehicle.weight
-        axes[0, 0].axhline(weight, color="gray", ls=":", label=f"m g = {weight:.2f} N")
-    axes[0, 0].set_ylabel("force [N]")
-    axes[1, 0].set_ylabel("torque [N m]")
-    return _save(fig, path, axes)
+        _label(axes[i, 0], f"f_{name}", "N", "body FRD")
+        _label(axes[i, 1], f"tau_{name}", "N m", "body FRD")
+    _finish(fig, axes, "commanded wrench", options)
+    return Drawn(fig)
 
 
-def rotors_figure(flight: Flight, path: Path) -> Path | None:
-    """Rotor speeds [rad/s] (and tilt angles [deg]) with the vehicle's limits."""
-    cmd = flight.rotor_cmd
-    if cmd is None:
-        return None
-    rows = 2 if cmd.tilts is not None else 1
-    fig, axes = _figure(rows, 1, f"{flight.scenario_name}: rotor commands", height=2.8)
-    for i in range(cmd.speeds.shape[1]):
-        _plot(axes[0, 0], cmd.t, cmd.speeds[:, i], label=f"rotor {i + 1}")
-    axes[0, 0].set_ylabel("rotor speed [rad/s]")
-    vehicle = flight.config.vehicle if flight.config is not None else None
-    if vehicle is not None:
-        for limit in (vehicle.rotor_speed_min, vehicle.rotor_speed_max):
-            axes[0, 0].axhline(limit, color="r", ls="--", lw=1)
-        axes[0, 0].plot([], [], "r--", lw=1, label="limits")
-    if cmd.tilts is not None:
-        for i in range(cmd.tilts.shape[1]):
-            _plot(axes[1, 0], cmd.t, np.degrees(cmd.tilts[:, i]), label=f"tilt {i + 1}")
-        axes[1, 0].set_ylabel("tilt angle [deg]")
-        if vehicle is not None and vehicle.tilt_angle_max < math.pi:
-            for sign in (-1, 1):
-                axes[1, 0].axhline(sign * math.degrees(vehicle.tilt_angle_max), color="r", ls="--", lw=1)
-    return _save(fig, path, axes)
+def rotors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Rotor speeds [rad/s] (and tilt angles [deg]) per run (one row each), a colour per rotor, limits grey."""
+    runs_with = [r for r in runs if r.flight.rotor_cmd is not None]
+    if not runs_with:
+        return Drawn(None, "no rotor_cmd (wrench actuation: no rotors)")
+    tilting = any(r.flight.rotor_cmd.tilts is not None for r in runs_with)
+    fig, axes = _figure(len(runs_with), 2 if tilting else 1, _width("two" if tilting else "one", options),
+                        row_height=1.5)
+    for row, run in enumerate(runs_with):
+        cmd = run.flight.rotor_cmd
+        vehicle = run.flight.config.vehicle if run.flight.config is not None else None
+        prefix = f"{run.label}: " if len(runs_with) > 1 else ""
+        for i in range(cmd.speeds.shape[1]):
+            colour = ROTOR_COLOURS[i % len(ROTOR_COLOURS)]
+            _plot(axes[row, 0], cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
+            if tilting and cmd.tilts is not None:
+                _plot(axes[row, 1], cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
+        _label(axes[row, 0], f"{prefix}speed", "rotor rad/s", "rotor axis")
+        if vehicle is not None:
+            for limit in (vehicle.rotor_speed_min, vehicle.rotor_speed_max):
+                axes[row, 0].axhline(limit, label="limits", **LIMIT)
+        if tilting:
+            _label(axes[row, 1], f"{prefix}tilt", "deg", "about the arm")
+            if vehicle is not None and vehicle.tilt_angle_max < math.pi:
+                for sign in (-1, 1):
+                    axes[row, 1].axhline(sign * math.degrees(vehicle.tilt_angle_max), label="limits", **LIMIT)
+    _finish(fig, axes, "rotor commands", options, legend_cols=5)
+    return Drawn(fig)
 
 
-def external_wrench_figure(flight: Flight, path: Path) -> Path | None:
-    """Estimated vs true external wrench, six panels (body FRD)."""
-    est, truth = flight.wrench_estimate, flight.wrench_truth
-    if est is None and truth is None:
-        return None
-    fig, axes = _figure(2, 3, f"{flight.scenario_name}: external wrench, estimate vs truth")
-    for row, (kind, unit) in enumerate((("force", "N"), ("torque", "N m"))):
-        for col, name in enumerate(AXES):
-            ax = axes[row, col]
-            label = f"{'f' if row == 0 else 'tau'}_{name}"
-            if truth is not None:
-                _plot(ax, truth.t, getattr(truth, kind)[:, col], "k--", label="true")
-            if est is not None:
-                _plot(ax, est.t, getattr(est, kind)[:, col], label="estimate")
-            ax.set_ylabel(f"{label} [{unit}]")
-    return _save(fig, path, axes)
+def external_wrench_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Online wrench estimate of each run vs the effective truth (black dashed) in body FRD; the external
+    wrench alone (``wrench_truth``) in grey for comparison."""
+    runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.wrench_estimate is not None]
+    if not runs_with:
+        return Drawn(None, "no wrench_estimate (estimator off)")
+    fig, axes = _figure(3, 2, _width("two", options))
+    for index, run in runs_with:
+        est = run.flight.wrench_estimate
+        for i in range(3):
+            _plot(axes[i, 0], est.t, est.force[:, i], color=_colour(index), label=f"estimate, {run.label}")
+            _plot(axes[i, 1], est.t, est.torque[:, i], color=_colour(index), label=f"estimate, {run.label}")
+    notes = []
+    for _, run in runs_with:
+        eff = run.effective
+        if eff is None:
+            notes.append(f"external_wrench: no effective truth for {run.label} (scenario or wrench_cmd missing)")
+            continue
+        for i in range(3):
+            _plot(axes[i, 0], eff.t, eff.force_body[:, i], label="effective truth", **TRUTH)
+            _plot(axes[i, 1], eff.t, eff.torque_body[:, i], label="effective truth", **TRUTH)
+    truth = runs_with[0][1].flight.wrench_truth
+    if truth is not None:
+        for i in range(3):
+            _plot(axes[i, 0], truth.t, truth.force[:, i], label="external wrench only", **ASIDE)
+            _plot(axes[i, 1], truth.t, truth.torque[:, i], label="external wrench only", **ASIDE)
+    for i, name in enumerate(AXES):
+        _label(axes[i, 0], f"f_{name}", "N", "body FRD")
+        _label(axes[i, 1], f"tau_{name}", "N m", "body FRD")
+    _finish(fig, axes, "wrench estimate vs effective truth", options, legend_cols=3)
+    return Drawn(fig, notes=notes)
 
 
-def mass_figure(flight: Flight, path: Path) -> Path | None:
-    """Mass estimate [kg] vs the true plant mass and the nominal model mass."""
-    mass = flight.mass_estimate
-    if mass is None:
-        return None
-    fig, axes = _figure(1, 1, f"{flight.scenario_name}: mass estimate", height=3.0)
+def mass_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Mass estimate ``m_e + f_e,z / g`` [kg] of each run vs the true plant mass and the estimator's model."""
+    runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.mass_estimate is not None]
+    if not runs_with:
+        return Drawn(None, "no mass_estimate (estimator off)")
+    fig, axes = _figure(1, 1, _width("one", options), row_height=1.8)
     ax = axes[0, 0]
-    _plot(ax, mass.t, mass.value, label="estimate m_model + dm")
+    for index, run in runs_with:
+        mass = run.flight.mass_estimate
+        _plot(ax, mass.t, mass.value, color=_colour(index), label=f"estimate, {run.label}")
+    flight = runs_with[0][1].flight
     if flight.config is not None:
-        ax.axhline(flight.config.plant_vehicle.mass, color="k", ls="--", label="true plant mass")
-        ax.axhline(flight.config.vehicle.mass, color="gray", ls=":", label="nominal mass")
-    ax.set_ylabel("mass [kg]")
-    return _save(fig, path, axes)
+        ax.axhline(flight.config.plant_vehicle.mass, label="true plant mass", **TRUTH)
+    if flight.estimator is not None:
+        ax.axhline(flight.estimator.mass, label="estimator model mass", **ASIDE)
+    _label(ax, "mass", "kg", "m_e + f_e,z / g")
+    _finish(fig, axes, "mass estimate", options, legend_cols=2)
+    return Drawn(fig)
 
 
-def thrust_ratio_figure(flight: Flight, path: Path) -> Path | None:
-    """Ground and ceiling thrust ratio ``T / T_OGE`` per rotor along the flight."""
-    series = thrust_ratio_series(flight)
-    if series is None:
-        return None
-    t, ground, ceiling = series
-    fig, axes = _figure(2, 1, f"{flight.scenario_name}: thrust ratio near surfaces", height=2.6)
-    for ax, ratio, surface in ((axes[0, 0], ground, "ground"), (axes[1, 0], ceiling, "ceiling")):
-        for i in range(ratio.shape[1]):
-            _plot(ax, t, ratio[:, i], label=f"rotor {i + 1}")
-        ax.set_ylabel(f"{surface} T / T_OGE [-]")
-    if flight.odom is not None and flight.config is not None:
-        # Height above the ground on a twin axis: tells why the ratio moves.
-        twin = axes[0, 0].twinx()
-        height = flight.config.environment.ground.height - flight.odom.position[:, 2]
-        _plot(twin, t, height, color="gray", lw=0.8, ls=":")
-        twin.set_ylabel("height above ground [m]", color="gray")
-    return _save(fig, path, axes)
+def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Thrust ratio ``T / T_OGE`` per rotor near the ground and the ceiling (first run with rotors and an
+    active surface effect), with the height above the ground in grey."""
+    for run in runs:
+        flight = run.flight
+        if flight.config is None or flight.config.actuation != "rotors" or flight.rotor_cmd is None:
+            continue
+        series = thrust_ratio_series(flight)
+        if series is None:
+            continue
+        t, ground, ceiling = series
+        panels = [(ratio, name) for ratio, name in ((ground, "ground"), (ceiling, "ceiling"))
+                  if np.any(ratio != 1.0)]
+        if not panels:
+            continue
+        fig, axes = _figure(len(panels), 1, _width("one", options), row_height=1.8)
+        for row, (ratio, surface) in enumerate(panels):
+            if np.allclose(ratio, ratio[:, :1], rtol=0.0, atol=1e-9):  # level flight: every rotor alike
+                _plot(axes[row, 0], t, ratio[:, 0], color=ROTOR_COLOURS[0], label="every rotor")
+            else:
+                for i in range(ratio.shape[1]):
+                    _plot(axes[row, 0], t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
+                          label=f"rotor {i + 1}")
+            _label(axes[row, 0], f"{surface} T/T_OGE", "-", "per rotor")
+        if flight.odom is not None:
+            twin = axes[0, 0].twinx()
+            height = flight.config.environment.ground.height - flight.odom.position[:, 2]
+            _plot(twin, flight.odom.t, height, **ASIDE)
+            twin.set_ylabel("height [m]\nabove ground", color="0.35")
+            axes[0, 0].plot([], [], label="height above ground", **ASIDE)  # its legend entry
+        _finish(fig, axes, "thrust ratio near surfaces", options, legend_cols=5)
+        notes = [f"thrust_ratio: drawn for {run.label}"] if len(runs) > 1 else []
+        return Drawn(fig, notes=notes)
+    return Drawn(None, "no surface effect acts on rotors in this flight (effect off, no surface in reach, or "
+                       "wrench actuation)")
 
 
-FIGURES: dict[str, Callable[[Flight, Path], Path | None]] = {
-    "pose.png": pose_figure,
-    "errors.png": errors_figure,
-    "wrench_cmd.png": wrench_command_figure,
-    "rotors.png": rotors_figure,
-    "external_wrench.png": external_wrench_figure,
-    "mass.png": mass_figure,
-    "thrust_ratio.png": thrust_ratio_figure,
+FIGURES: dict[str, Callable[[list[Run], FigureOptions], Drawn]] = {
+    "pose": pose_figure,
+    "errors": errors_figure,
+    "wrench_cmd": wrench_command_figure,
+    "rotors": rotors_figure,
+    "external_wrench": external_wrench_figure,
+    "mass": mass_figure,
+    "thrust_ratio": thrust_ratio_figure,
 }
 
 
-def make_figures(flight: Flight, out_dir: Path) -> tuple[list[Path], list[str]]:
-    """Write every figure that the recording allows into ``out_dir``; returns (written, notes)."""
+def figure_metadata(name: str, runs: list[Run], fmt: str) -> dict[str, str]:
+    """File metadata naming the figure, the scenario(s) and the recordings (keys as each backend wants)."""
+    title = f"fsr {name}: " + ", ".join(f"{r.label} ({r.flight.scenario_name})" for r in runs)
+    description = "recordings: " + ", ".join(str(r.flight.recording.path) for r in runs)
+    if fmt == "pdf":
+        return {"Title": title, "Subject": description, "Creator": "fsr-analyze"}
+    if fmt == "svg":
+        return {"Title": title, "Description": description, "Creator": "fsr-analyze"}
+    return {"Title": title, "Description": description, "Software": "fsr-analyze"}
+
+
+def save_figure(fig: Figure, stem: Path, formats: Iterable[str], metadata: Callable[[str], dict]) -> list[Path]:
+    """Write ``fig`` as ``stem.<fmt>`` for each format (PNG at :data:`PNG_DPI`); returns the paths."""
+    paths = []
+    for fmt in formats:
+        path = stem.with_suffix(f".{fmt}")
+        fig.savefig(path, format=fmt, dpi=PNG_DPI, metadata=metadata(fmt))
+        paths.append(path)
+    return paths
+
+
+def make_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions | None = None
+                 ) -> tuple[list[Path], list[str]]:
+    """Draw every figure the runs allow into ``out_dir``; returns (written files, notes for skipped ones)."""
+    if isinstance(runs, Flight):
+        runs = [Run.of(runs)]
+    options = options or FigureOptions()
+    unknown = [f for f in options.formats if f not in FORMATS]
+    if unknown:
+        raise ValueError(f"figure format(s) {', '.join(unknown)} not supported (use {', '.join(FORMATS)})")
     out_dir.mkdir(parents=True, exist_ok=True)
     written, notes = [], []
-    for name, draw in FIGURES.items():
-        path = draw(flight, out_dir / name)
-        if path is None:
-            notes.append(f"figure {name} skipped: its topics (or the scenario) are missing")
-        else:
-            written.append(path)
+    with matplotlib.rc_context(RC):
+        for name, draw in FIGURES.items():
+            drawn = draw(runs, options)
+            notes.extend(drawn.notes)
+            if drawn.figure is None:
+                notes.append(f"figure {name} left out: {drawn.reason}")
+                continue
+            written += save_figure(drawn.figure, out_dir / name, options.formats,
+                                   lambda fmt, name=name: figure_metadata(name, runs, fmt))
     return written, notes
-

@@ -18,16 +18,17 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_estimation.config.estimator_config import EstimatorConfig, estimator_config
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
 from fsr_sim.model.so3 import rotations_from_quaternions
-from fsr_sim.recording.cdr_columns import Columns, LayoutError, decode_columns
+from fsr_sim.recording.cdr_columns import Columns, LayoutError, stamped_columns
 from fsr_sim.recording.reader import Recording, open_recording
 
 NS_PER_S = 1_000_000_000
 STANDARD_TOPICS = (
-    "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "wrench_shortfall", "reference", "goal", "wrench_estimate",
-    "mass_estimate", "sim_status",
+    "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "wrench_shortfall", "reference", "attitude_cmd",
+    "wrench_desired", "goal", "wrench_estimate", "mass_estimate", "sim_status",
 )
 
 
@@ -52,6 +53,16 @@ class Reference:
     velocity: np.ndarray  # (n, 3) world [m/s]
     acceleration: np.ndarray  # (n, 3) world [m/s^2]
     angular_velocity_world: np.ndarray  # (n, 3) ``R_d omega_d`` [rad/s]
+
+
+@dataclass
+class Attitude:
+    """``attitude_cmd``: the commanded attitude ``R_c`` (body FRD -> world NED)."""
+
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    quaternion: np.ndarray  # (n, 4) [x, y, z, w]
+    rotation: np.ndarray  # (n, 3, 3)
 
 
 @dataclass
@@ -85,11 +96,14 @@ class Flight:
     namespace: str
     scenario_name: str
     config: SimulationConfig | None
+    estimator: EstimatorConfig | None = None  # the observer's model (mass, inertia) and filter, from the scenario
     odom: Odometry | None = None
     reference: Reference | None = None
     wrench_truth: Wrench | None = None
     wrench_cmd: Wrench | None = None
     wrench_shortfall: Wrench | None = None  # demanded - commanded body wrench (which axis gave way)
+    attitude_cmd: Attitude | None = None
+    wrench_desired: Wrench | None = None
     wrench_estimate: Wrench | None = None
     rotor_cmd: RotorCommand | None = None
     mass_estimate: Scalar | None = None
@@ -132,8 +146,8 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
         if note:
             notes.append(note)
     namespace = "/" + namespace.strip("/") if namespace.strip("/") else "/"
-    config, scenario_name = _scenario(recording, notes)
-    flight = Flight(recording, namespace, scenario_name, config, notes=notes)
+    config, scenario_name, estimator = _scenario(recording, notes)
+    flight = Flight(recording, namespace, scenario_name, config, estimator, notes=notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(_topic(namespace, name) for name in ("/clock", *STANDARD_TOPICS))}):
@@ -142,6 +156,7 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
         "odom": _odometry, "reference": _reference, "wrench_truth": _wrench, "wrench_cmd": _wrench,
         "wrench_shortfall": _wrench,
         "wrench_estimate": _wrench, "rotor_cmd": _rotor_command, "mass_estimate": _scalar,
+        "attitude_cmd": _attitude, "wrench_desired": _wrench,
     }
     for name, loader in loaders.items():
         topic = _topic(namespace, name)
@@ -166,39 +181,36 @@ def _topic(namespace: str, name: str) -> str:
     return f"{namespace.rstrip('/')}/{name}"
 
 
-def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig | None, str]:
+def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig | None, str, EstimatorConfig | None]:
+    """(plant-side config, scenario name, estimator config) of the scenario stored in the metadata."""
     text = recording.scenario_yaml
     fallback = recording.path.stem
     if text is None:
         notes.append("no scenario in the recording's metadata: vehicle limits, true mass and surfaces unknown")
-        return None, fallback
+        return None, fallback, None
     source = f"{recording.path} (fsr_scenario metadata)"
     try:
         data = parse_yaml_mapping(text, source)
     except ConfigError as error:
         notes.append(f"scenario in the metadata cannot be read: {error}")
-        return None, fallback
+        return None, fallback, None
     scenario = Scenario(data=data, source=source, base_dir=recording.path.parent)
     try:
-        return simulation_config(scenario), scenario.name
+        config = simulation_config(scenario)
     except ConfigError as error:
         notes.append(f"scenario in the metadata cannot be used: {error}")
-        return None, scenario.name
+        return None, scenario.name, None
+    try:
+        estimator = estimator_config(scenario)
+    except ConfigError as error:
+        notes.append(f"estimator section of the scenario cannot be used: {error}")
+        estimator = None
+    return config, scenario.name, estimator
 
 
 def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:
     """Decoded columns of ``topic`` sorted by header stamp (log time where there is no header)."""
-    raw = recording.raw(topic)
-    columns = decode_columns([data for _, data in raw], recording.topics[recording.resolve(topic)])
-    if "header.stamp.sec" in columns.numbers:
-        stamp = columns.numbers["header.stamp.sec"].astype(np.int64) * NS_PER_S
-        stamp += columns.numbers["header.stamp.nanosec"].astype(np.int64)
-    else:
-        stamp = np.fromiter((t for t, _ in raw), dtype=np.int64, count=len(raw))
-    order = np.argsort(stamp, kind="stable")
-    columns.numbers = {key: value[order] for key, value in columns.numbers.items()}
-    columns.strings = {key: value[order] for key, value in columns.strings.items()}
-    return stamp[order], columns
+    return stamped_columns(recording, topic)
 
 
 def _vector(columns: Columns, prefix: str, keys: str = "xyz") -> np.ndarray:
@@ -229,6 +241,12 @@ def _reference(recording: Recording, topic: str) -> Reference:
         rotations_from_quaternions(quaternion), optional(f"{point}.velocities.0.linear"),
         optional(f"{point}.accelerations.0.linear"), optional(f"{point}.velocities.0.angular"),
     )
+
+
+def _attitude(recording: Recording, topic: str) -> Attitude:
+    stamp, c = _columns(recording, topic)
+    quaternion = _vector(c, "quaternion", "xyzw")
+    return Attitude(stamp, stamp / NS_PER_S, quaternion, rotations_from_quaternions(quaternion))
 
 
 def _wrench(recording: Recording, topic: str) -> Wrench:

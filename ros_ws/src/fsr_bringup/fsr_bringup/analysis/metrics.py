@@ -4,20 +4,28 @@ Errors are taken at the odometry stamps t_k against the reference stamped t_k (z
 stamp has no exact partner):
 
 * position ``e_p = p - p_d`` [m] (world NED), velocity ``e_v = R v_b - p_dot_d`` [m/s] (world);
-* attitude: the angle of ``R_d^T R``, ``2 acos(|<q, q_d>|)`` [deg];
+* attitude: the angle of ``R_c^T R`` [deg] with ``R_c`` the attitude the controller commanded
+  (``attitude_cmd``: the geometric controller's thrust-vector attitude, the Voliro controller's reference);
+  the angle of ``R_d^T R`` against the planner's attitude ``R_d`` is kept as ``attitude_vs_reference``
+  (it counts the tilt the geometric controller commands on purpose as error). Recordings without
+  ``attitude_cmd`` fall back to ``R_d``, with a note;
 * angular velocity ``e_w = omega_b - R^T R_d omega_d`` [rad/s] (body FRD; the reference carries
   ``R_d omega_d`` in world axes).
 
 Each is summarised as final (last sample), peak (max of the norm, with its time) and RMS of the norm.
 Saturation counts the rotor commands at or beyond the vehicle's limits (speed ``<= rotor_speed_min`` or
-``>= rotor_speed_max``, tilt ``|alpha| >= tilt_angle_max``); which wrench axis gave way comes from
+``>= rotor_speed_max``, tilt ``|alpha| >= tilt_angle_max``). The online wrench estimate (body FRD) is
+compared with the *effective truth* (:mod:`fsr_bringup.analysis.effective`: external wrench + surface-effect
+thrust change + contact + model mismatch, what the observer must converge to) with the functions of
+``fsr-estimate`` (:mod:`fsr_estimation.core.metrics`): settling time per channel (standard or the report's
+definition), MAE over the whole flight, max error after ``after`` (default: the last 5 s) and RMS error after
+a settling time; the pure external wrench (``wrench_truth``) is reported next to it. Thrust ratios
+``T / T_OGE`` near the ground and the ceiling follow the odometry through the scenario's environment
+(:mod:`fsr_sim.model.environment`); the states at which a rotor's ratio is held at the surface's
+``max_ratio`` (closer to the surface than the effect model is valid for) are counted per surface
+(``thrust_ratio.at_cap``) and named in ``notes``. Which wrench axis gave way at the rotor limits comes from
 ``wrench_shortfall`` (demanded minus commanded body wrench): per axis the steps with ``|shortfall|`` above
-``SHORTFALL_TOLERANCE`` and the largest ``|shortfall|`` (N or N m) with its time. The external-wrench
-estimate is compared with the truth at the estimate's stamps: mean of each over the last second, RMS of the
-error after a settling time. Thrust ratios ``T / T_OGE`` near the ground and the ceiling follow the odometry through the
-scenario's environment (:mod:`fsr_sim.model.environment`); the states at which a rotor's ratio is held at
-the surface's ``max_ratio`` (closer to the surface than the effect model is valid for) are counted per
-surface (``thrust_ratio.at_cap``) and named in ``notes``.
+``SHORTFALL_TOLERANCE`` and the largest ``|shortfall|`` (N or N m) with its time.
 
 Every value is JSON-ready (NaN -> None); a metric whose topics or scenario are missing is None and the
 reason is in ``notes``.
@@ -32,18 +40,17 @@ from typing import Any
 
 import numpy as np
 
+from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import Flight, hold, load_flight
+from fsr_estimation.core import metrics as estimator_metrics
+from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
-from fsr_sim.model.environment import (
-    ThrustEffects,
-    ceiling_effect_ratio,
-    ground_effect_ratio,
-    multirotor_ground_effect_ratio,
-)
+from fsr_sim.model.so3 import relative_rotation_angles
 from fsr_sim.recording.reader import Recording
 
 DEFAULT_SETTLE_S = 5.0  # s, start of the window for the wrench-estimate RMS error (at most half the run)
 MEAN_WINDOW_S = 1.0  # s, final-value window for the wrench estimate and truth
+WRENCH_CHANNELS = estimator_metrics.CHANNELS
 LIMIT_TOLERANCE = 1e-9  # relative: a command this close to a limit counts as at the limit
 
 
@@ -54,7 +61,9 @@ class TrackingErrors:
     t: np.ndarray  # (n,) s
     position: np.ndarray  # (n, 3) m, world
     velocity: np.ndarray  # (n, 3) m/s, world
-    attitude_deg: np.ndarray  # (n,) deg
+    attitude_deg: np.ndarray  # (n,) deg, angle of R_c^T R (commanded attitude; R_d^T R without attitude_cmd)
+    attitude_reference_deg: np.ndarray  # (n,) deg, angle of R_d^T R (planner's attitude)
+    attitude_commanded: bool  # attitude_deg is against the recorded attitude_cmd
     angular_velocity: np.ndarray  # (n, 3) rad/s, body
 
 
@@ -66,20 +75,27 @@ def tracking_errors(flight: Flight) -> TrackingErrors | None:
         return None
     target = odom.stamp_ns
     p_d = hold(ref.stamp_ns, ref.position, target)
-    q_d = hold(ref.stamp_ns, ref.quaternion, target)
-    q_d /= np.linalg.norm(q_d, axis=1, keepdims=True)
-    q = odom.quaternion / np.linalg.norm(odom.quaternion, axis=1, keepdims=True)
-    dot = np.abs(np.sum(q * q_d, axis=1))
-    attitude = np.degrees(2.0 * np.arccos(np.clip(dot, 0.0, 1.0)))
-    attitude[np.isnan(dot)] = np.nan
+    reference_attitude = _angle_deg(hold(ref.stamp_ns, ref.rotation.reshape(-1, 9), target), odom.rotation)
+    cmd = flight.attitude_cmd
+    commanded = (_angle_deg(hold(cmd.stamp_ns, cmd.rotation.reshape(-1, 9), target), odom.rotation)
+                 if cmd is not None else reference_attitude)
     return TrackingErrors(
         t=odom.t,
         position=odom.position - p_d,
         velocity=odom.velocity_world - hold(ref.stamp_ns, ref.velocity, target),
-        attitude_deg=attitude,
+        attitude_deg=commanded,
+        attitude_reference_deg=reference_attitude,
+        attitude_commanded=cmd is not None,
         angular_velocity=odom.angular_velocity
         - np.einsum("nji,nj->ni", odom.rotation, hold(ref.stamp_ns, ref.angular_velocity_world, target)),
     )
+
+
+def _angle_deg(desired_rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """Angle of ``R_d^T R`` [deg] per sample; ``desired_rows`` (n, 9) held rotations (NaN before the first)."""
+    angle = np.degrees(relative_rotation_angles(desired_rows.reshape(-1, 3, 3), rotation))
+    angle[np.isnan(desired_rows).any(axis=1)] = np.nan
+    return angle
 
 
 def error_summary(t: np.ndarray, error: np.ndarray) -> dict[str, float | None]:
@@ -158,28 +174,63 @@ def wrench_shortfall(flight: Flight) -> dict[str, Any] | None:
     return result
 
 
-def wrench_comparison(flight: Flight, settle_time: float = DEFAULT_SETTLE_S) -> dict[str, Any] | None:
-    """Estimated vs true external wrench ``[f_x, f_y, f_z, tau_x, tau_y, tau_z]`` (body FRD, N and N m)."""
-    est, truth = flight.wrench_estimate, flight.wrench_truth
-    if est is None or truth is None:
+def _channels(values: np.ndarray) -> dict[str, float | None]:
+    return {name: (float(v) if math.isfinite(v) else None) for name, v in zip(WRENCH_CHANNELS, values, strict=True)}
+
+
+def wrench_comparison(flight: Flight, settle_time: float = DEFAULT_SETTLE_S, settling: str = "standard",
+                      after: float | None = None) -> dict[str, Any] | None:
+    """Online wrench estimate vs the effective truth (and vs the external wrench alone), body FRD [N, N m].
+
+    Per channel (``fx fy fz tx ty tz``): settling time (``settling``: ``standard`` or ``report``), MAE over
+    the flight, max error at time >= ``after`` [s] (default: the last 5 s), RMS error after ``settle_time``
+    (at most half the flight), all with :mod:`fsr_estimation.core.metrics` on the estimate's samples where
+    the effective truth is defined. None without ``wrench_estimate``; without the scenario's estimator model
+    only the external-wrench comparison is given.
+    """
+    est = flight.wrench_estimate
+    if est is None or (flight.wrench_truth is None and flight.odom is None):
         return None
     estimate = np.hstack((est.force, est.torque))
-    true = np.hstack((truth.force, truth.torque))
-    true_at_est = hold(truth.stamp_ns, true, est.stamp_ns)
     span = est.t[-1] - est.t[0]
     skip = min(settle_time, 0.5 * span)
-    late = (est.t >= est.t[0] + skip) & np.all(np.isfinite(true_at_est), axis=1)
-    error = estimate[late] - true_at_est[late]
-    last_est = est.t >= est.t[-1] - MEAN_WINDOW_S
-    last_true = truth.t >= truth.t[-1] - MEAN_WINDOW_S
-    return {
-        "components": ["f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z"],
-        "estimate_mean_last_s": estimate[last_est].mean(axis=0).tolist(),
-        "truth_mean_last_s": true[last_true].mean(axis=0).tolist(),
-        "rms_error": np.sqrt(np.mean(error**2, axis=0)).tolist() if len(error) else None,
-        "max_abs_error": np.abs(error).max(axis=0).tolist() if len(error) else None,
-        "rms_from_s": float(est.t[0] + skip),
+    late = est.t >= est.t[0] + skip
+    last = est.t >= est.t[-1] - MEAN_WINDOW_S
+    result: dict[str, Any] = {
+        "frame": "body FRD", "components": list(WRENCH_CHANNELS), "rms_from_s": float(est.t[0] + skip),
+        "estimate_mean_last_s": estimate[last].mean(axis=0).tolist(),
+        "truth_mean_last_s": None, "rms_error_vs_external": None,
+        "effective_truth_mean_last_s": None, "rms_error": None, "max_abs_error": None,
+        "settling": settling, "settling_time_s": None, "mae": None, "max_error_after": None, "after_s": None,
     }
+    if flight.wrench_truth is not None:
+        truth = flight.wrench_truth
+        true = hold(truth.stamp_ns, np.hstack((truth.force, truth.torque)), est.stamp_ns)
+        ok = late & np.all(np.isfinite(true), axis=1)
+        result["truth_mean_last_s"] = true[last].mean(axis=0).tolist()
+        if ok.any():
+            result["rms_error_vs_external"] = np.sqrt(np.mean((estimate[ok] - true[ok]) ** 2, axis=0)).tolist()
+    effective = effective_wrench(flight)
+    if effective is None:
+        return result
+    true = hold(effective.stamp_ns, effective.wrench_body, est.stamp_ns)
+    defined = np.all(np.isfinite(true), axis=1)
+    if defined.sum() < 2:
+        return result
+    t, w, truth_eff = est.t[defined], estimate[defined], true[defined]
+    error = w - truth_eff
+    ok = late[defined]
+    after_s = max(0.0, float(t[-1] - t[0]) - DEFAULT_LAST_SECONDS) if after is None else float(after)
+    result.update({
+        "effective_truth_mean_last_s": truth_eff[last[defined]].mean(axis=0).tolist(),
+        "rms_error": np.sqrt(np.mean(error[ok] ** 2, axis=0)).tolist() if ok.any() else None,
+        "max_abs_error": np.abs(error[ok]).max(axis=0).tolist() if ok.any() else None,
+        "settling_time_s": _channels(estimator_metrics.settling_time(t, w, truth_eff, settling)),
+        "mae": _channels(estimator_metrics.mean_absolute_error(w, truth_eff)),
+        "max_error_after": _channels(estimator_metrics.max_error_after(t, w, truth_eff, after_s, settling)),
+        "after_s": after_s,
+    })
+    return result
 
 
 def mass_comparison(flight: Flight) -> dict[str, Any] | None:
@@ -194,38 +245,6 @@ def mass_comparison(flight: Flight) -> dict[str, Any] | None:
         "nominal_kg": flight.config.vehicle.mass if flight.config else None,
         "error_kg": final - true if true is not None else None,
     }
-
-
-def thrust_ratio_series(flight: Flight) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """``(t, ground, ceiling)``: per-rotor ``T / T_OGE`` of each surface along the flight, shape (n, rotors)
-    (1 where a surface is off); None without odom or scenario."""
-    odom, config = flight.odom, flight.config
-    if odom is None or config is None:
-        return None
-    env, vehicle = config.environment, config.plant_vehicle
-    # World z of each rotor centre: p_z + (R p_i)_z, vectorised over the flight.
-    rotor_down = odom.position[:, 2:3] + odom.rotation[:, 2, :] @ vehicle.positions.T
-    ground = np.ones_like(rotor_down)
-    ceiling = np.ones_like(rotor_down)
-    if env.ground.enabled and env.ground.effect:
-        distance = env.ground.height - rotor_down
-        if env.ground_model == "multirotor":
-            effects = ThrustEffects(env, vehicle.positions, vehicle.rotor_radius)
-            ground = np.array([
-                multirotor_ground_effect_ratio(
-                    row, vehicle.rotor_radius, effects.separation, effects.arm_lengths, env.body_factor,
-                    env.ground.max_ratio,
-                )
-                for row in distance
-            ]).reshape(distance.shape)
-        else:
-            ground = ground_effect_ratio(distance, vehicle.rotor_radius, env.ground.max_ratio)
-    if env.ceiling.enabled and env.ceiling.effect:
-        ceiling = ceiling_effect_ratio(
-            rotor_down - env.ceiling.height, vehicle.rotor_radius, env.ceiling_k1, env.ceiling_k2,
-            env.ceiling.max_ratio,
-        )
-    return odom.t, ground, ceiling
 
 
 def _range(values: np.ndarray) -> list[float]:
@@ -257,9 +276,13 @@ def interrupted_at(status: dict[str, Any] | None) -> float | None:
 
 
 def flight_metrics(
-    recording: Recording | Flight | str | Path, settle_time: float = DEFAULT_SETTLE_S
+    recording: Recording | Flight | str | Path, settle_time: float = DEFAULT_SETTLE_S, settling: str = "standard",
+    after: float | None = None,
 ) -> dict[str, Any]:
-    """All metrics of one flight as a JSON-ready dict (see the module docstring for definitions)."""
+    """All metrics of one flight as a JSON-ready dict (see the module docstring for definitions).
+
+    ``settling`` (``standard`` | ``report``) and ``after`` [s] select the estimator metrics' settling-time
+    definition and the start of the max-error window (default: the last 5 s)."""
     flight = recording if isinstance(recording, Flight) else load_flight(recording)
     notes = list(flight.notes)
     odom = flight.odom
@@ -288,6 +311,8 @@ def flight_metrics(
             "position_error_m": error_summary(errors.t, errors.position),
             "velocity_error_m_s": error_summary(errors.t, errors.velocity),
             "attitude_error_deg": error_summary(errors.t, errors.attitude_deg),
+            "attitude_vs": "attitude_cmd" if errors.attitude_commanded else "reference",
+            "attitude_vs_reference_deg": error_summary(errors.t, errors.attitude_reference_deg),
             "angular_velocity_error_rad_s": error_summary(errors.t, errors.angular_velocity),
         }
     if flight.wrench_cmd is not None:
@@ -304,9 +329,14 @@ def flight_metrics(
     metrics["wrench_shortfall"] = wrench_shortfall(flight)
     if metrics["wrench_shortfall"] is None:
         notes.append("wrench shortfall skipped: wrench_shortfall missing")
-    metrics["external_wrench"] = wrench_comparison(flight, settle_time)
+    if errors is not None and not errors.attitude_commanded:
+        notes.append("no attitude_cmd: attitude error measured against the planner's attitude R_d")
+    metrics["external_wrench"] = wrench_comparison(flight, settle_time, settling, after)
     if metrics["external_wrench"] is None:
         notes.append("wrench estimate comparison skipped: wrench_estimate or wrench_truth missing")
+    elif metrics["external_wrench"]["settling_time_s"] is None:
+        notes.append("effective truth unavailable (odom, wrench_cmd or the scenario's estimator model missing): "
+                     "the estimate is compared with the external wrench only")
     metrics["mass"] = mass_comparison(flight)
     ratios = thrust_ratio_series(flight)
     if ratios is None:

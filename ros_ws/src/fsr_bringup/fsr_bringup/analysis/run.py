@@ -1,5 +1,6 @@
-"""One call that turns a recording into ``metrics.json``, ``summary.md`` and the figures (used by
-``fsr-analyze`` and ``fsr-fly``)."""
+"""One call that turns recordings into ``metrics.json``, ``summary.md`` and the figures (used by
+``fsr-analyze`` and ``fsr-fly``): one run, or several overlaid in the same figures with their metrics side
+by side."""
 
 from __future__ import annotations
 
@@ -8,10 +9,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fsr_bringup.analysis.figures import make_figures
+from fsr_bringup.analysis.figures import FigureOptions, Run, make_figures
 from fsr_bringup.analysis.load import load_flight
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, flight_metrics
-from fsr_bringup.analysis.summary import markdown_summary
+from fsr_bringup.analysis.summary import comparison_summary, markdown_summary
 from fsr_sim.recording.reader import Recording, RecordingError, open_recording
 
 
@@ -24,31 +25,79 @@ class Analysis:
     summary_path: Path
 
 
+def _opened(recording: Recording | str | Path) -> Recording:
+    """The recording, refused (:class:`RecordingError`) when it holds no message at all."""
+    if not isinstance(recording, Recording):
+        recording = open_recording(recording)
+    if not any(recording.count(topic) for topic in recording.topics):
+        state = "truncated and holds no complete chunk" if recording.truncated else "holds no messages"
+        raise RecordingError(f"{recording.path}: recording {state}")
+    return recording
+
+
+def analyze_recordings(
+    recordings: list[Recording | str | Path],
+    out_dir: str | Path,
+    labels: list[str] | None = None,
+    namespace: str | None = None,
+    settle_time: float = DEFAULT_SETTLE_S,
+    figures: bool = True,
+    options: FigureOptions | None = None,
+    settling: str = "standard",
+    after: float | None = None,
+) -> Analysis:
+    """Analyse one or several recordings into ``out_dir``.
+
+    One recording: ``metrics.json`` is its metrics (:func:`fsr_bringup.analysis.metrics.flight_metrics`).
+    Several: every figure overlays them (a colour per run, ``labels`` in the legends, default the file
+    stems), ``metrics.json`` is ``{"labels": [...], "runs": {label: metrics}}`` and ``summary.md`` one table
+    with a column per run. :class:`RecordingError` for a recording without messages; ValueError for labels
+    that do not match the recordings one to one.
+    """
+    opened = [_opened(r) for r in recordings]
+    if labels is None:
+        labels = [r.path.stem for r in opened]
+    if len(labels) != len(opened) or len(set(labels)) != len(labels):
+        raise ValueError(f"--labels: need {len(opened)} distinct labels, one per recording; got {labels}")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    flights = [load_flight(r, namespace) for r in opened]
+    runs = [Run.of(flight, label) for flight, label in zip(flights, labels, strict=True)]
+    written: list[Path] = []
+    notes: list[str] = []
+    if figures:
+        written, notes = make_figures(runs, out_dir, options)
+    per_run = []
+    for flight in flights:
+        if len(flights) == 1:
+            flight.notes.extend(notes)
+        per_run.append(flight_metrics(flight, settle_time, settling, after))
+    names = sorted({path.name for path in written})
+    if len(flights) == 1:
+        metrics = per_run[0]
+        metrics["figures"] = names
+        summary = markdown_summary(metrics)
+    else:
+        metrics = {"labels": labels, "runs": dict(zip(labels, per_run, strict=True)), "figures": names,
+                   "notes": notes}
+        summary = comparison_summary(labels, per_run, notes)
+    metrics_path = out_dir / "metrics.json"
+    summary_path = out_dir / "summary.md"
+    metrics_path.write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+    summary_path.write_text(summary, encoding="utf-8")
+    return Analysis(metrics, summary, written, metrics_path, summary_path)
+
+
 def analyze_recording(
     recording: Recording | str | Path,
     out_dir: str | Path,
     namespace: str | None = None,
     settle_time: float = DEFAULT_SETTLE_S,
     figures: bool = True,
+    options: FigureOptions | None = None,
+    settling: str = "standard",
+    after: float | None = None,
 ) -> Analysis:
-    """Analyse ``recording`` into ``out_dir``; :class:`RecordingError` if it holds no message at all."""
-    if not isinstance(recording, Recording):
-        recording = open_recording(recording)
-    if not any(recording.count(topic) for topic in recording.topics):
-        state = "truncated and holds no complete chunk" if recording.truncated else "holds no messages"
-        raise RecordingError(f"{recording.path}: recording {state}")
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    flight = load_flight(recording, namespace)
-    written: list[Path] = []
-    if figures:
-        written, notes = make_figures(flight, out_dir)
-        flight.notes.extend(notes)
-    metrics = flight_metrics(flight, settle_time)
-    metrics["figures"] = [path.name for path in written]
-    summary = markdown_summary(metrics)
-    metrics_path = out_dir / "metrics.json"
-    summary_path = out_dir / "summary.md"
-    metrics_path.write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
-    summary_path.write_text(summary, encoding="utf-8")
-    return Analysis(metrics, summary, written, metrics_path, summary_path)
+    """Analyse one recording into ``out_dir`` (:func:`analyze_recordings` with one run)."""
+    return analyze_recordings([recording], out_dir, None, namespace, settle_time, figures, options, settling,
+                              after)

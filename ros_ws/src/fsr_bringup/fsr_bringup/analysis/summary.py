@@ -1,8 +1,11 @@
-"""A short Markdown summary of :func:`fsr_bringup.analysis.metrics.flight_metrics` for a report."""
+"""Markdown summaries of :func:`fsr_bringup.analysis.metrics.flight_metrics`: one run (quantity, value) or
+several side by side (quantity, one column per run)."""
 
 from __future__ import annotations
 
 from typing import Any
+
+CHANNEL_LABELS = {"fx": "f_x", "fy": "f_y", "fz": "f_z", "tx": "tau_x", "ty": "tau_y", "tz": "tau_z"}
 
 
 def _num(value: Any, digits: int = 3) -> str:
@@ -18,8 +21,16 @@ def _vector(values: list | None, digits: int = 3) -> str:
     return "n/a" if values is None else "[" + ", ".join(_num(v, digits) for v in values) + "]"
 
 
-def markdown_summary(metrics: dict[str, Any]) -> str:
-    """A title line, a two-column Markdown table (quantity, value) and the notes as a list."""
+def _channels(values: dict | None, digits: int = 3) -> str:
+    """``f_x 0.264, f_y ...`` for the channels with a value (a zero truth has no settling time)."""
+    if not values:
+        return "n/a"
+    shown = [f"{CHANNEL_LABELS.get(k, k)} {_num(v, digits)}" for k, v in values.items() if v is not None]
+    return ", ".join(shown) or "n/a"
+
+
+def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
+    """(quantity, value) rows of one run's metrics, in a fixed order."""
     rows: list[tuple[str, str]] = []
     status = metrics.get("sim_status")
     end = f"{status.get('state')} ({status.get('reason')})" if status else "n/a"
@@ -29,12 +40,16 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
     rows.append(("duration [s] / steps", f"{_num(metrics.get('duration_s'))} / {_num(metrics.get('steps'))}"))
     tracking = metrics.get("tracking")
     if tracking:
+        against = "R_c, commanded" if tracking.get("attitude_vs") == "attitude_cmd" else "R_d, planner"
         for key, label in (
             ("position_error_m", "position error [m]"),
-            ("attitude_error_deg", "attitude error [deg]"),
+            ("attitude_error_deg", f"attitude error vs {against} [deg]"),
+            ("attitude_vs_reference_deg", "attitude vs planner R_d [deg]"),
             ("velocity_error_m_s", "velocity error [m/s]"),
         ):
-            item = tracking[key]
+            item = tracking.get(key)
+            if item is None or (key == "attitude_vs_reference_deg" and tracking.get("attitude_vs") != "attitude_cmd"):
+                continue
             rows.append((
                 f"{label} final / peak (at t) / RMS",
                 f"{_num(item['final'])} / {_num(item['peak'])} (at {_num(item['peak_time_s'], 2)} s) / "
@@ -61,9 +76,20 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
         rows.append(("gave way at the rotor limits [N, N m]", ", ".join(gave_way) or "no axis"))
     wrench = metrics.get("external_wrench")
     if wrench:
-        rows.append(("external wrench estimate, mean last 1 s", _vector(wrench["estimate_mean_last_s"])))
-        rows.append(("external wrench truth, mean last 1 s", _vector(wrench["truth_mean_last_s"])))
-        rows.append((f"estimate RMS error after {_num(wrench['rms_from_s'], 2)} s", _vector(wrench["rms_error"])))
+        frame = wrench.get("frame", "body FRD")
+        rows.append((f"wrench estimate, mean last 1 s ({frame})", _vector(wrench["estimate_mean_last_s"])))
+        if wrench.get("effective_truth_mean_last_s") is not None:
+            rows.append(("effective truth, mean last 1 s", _vector(wrench["effective_truth_mean_last_s"])))
+        rows.append(("external wrench only, mean last 1 s", _vector(wrench["truth_mean_last_s"])))
+        if wrench.get("settling_time_s") is not None:
+            rows.append((f"settling time [s] ({wrench['settling']}, 3 % band)", _channels(wrench["settling_time_s"])))
+            rows.append(("MAE over the flight [N, N m]", _channels(wrench["mae"], 4)))
+            rows.append(("max error after T [N, N m]",
+                         f"T = {_num(wrench['after_s'], 2)} s: {_channels(wrench['max_error_after'], 3)}"))
+            rows.append(("RMS error vs effective truth after t_s",
+                         f"t_s = {_num(wrench['rms_from_s'], 2)} s: {_vector(wrench['rms_error'])}"))
+        rows.append(("RMS error vs external wrench only after t_s",
+                     f"t_s = {_num(wrench['rms_from_s'], 2)} s: {_vector(wrench['rms_error_vs_external'])}"))
     mass = metrics.get("mass")
     if mass:
         rows.append(("mass estimate final / true [kg]", f"{_num(mass['estimate_final_kg'])} / {_num(mass['true_kg'])}"))
@@ -75,15 +101,47 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
             if cap["steps"]:
                 rows.append((f"{name} effect at its cap {_num(cap['max_ratio'], 2)} (outside the model)",
                              f"**{cap['steps']} states**, first at {_num(cap['first_time_s'], 3)} s"))
+    figures = metrics.get("figures")
+    if figures:
+        rows.append(("figures", ", ".join(figures)))
+    return rows
+
+
+def _notes(notes: list[str]) -> list[str]:
+    return ["", "Notes:", *(f"- {note}" for note in notes)] if notes else []
+
+
+def markdown_summary(metrics: dict[str, Any]) -> str:
+    """A title line (scenario, recording), a two-column Markdown table (quantity, value) and the notes."""
     where = f" ({metrics['namespace']})" if metrics.get("namespace") not in (None, "/") else ""
     lines = [
         f"### Flight `{metrics.get('scenario')}`{where}",
         "",
+        f"Recording: `{metrics.get('recording')}`",
+        "",
         "| quantity | value |",
         "|---|---|",
-        *(f"| {name} | {value} |" for name, value in rows),
+        *(f"| {name} | {value} |" for name, value in summary_rows(metrics)),
     ]
-    notes = metrics.get("notes") or []
-    if notes:
-        lines += ["", "Notes:", *(f"- {note}" for note in notes)]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + _notes(metrics.get("notes") or [])) + "\n"
+
+
+def comparison_summary(labels: list[str], runs: list[dict[str, Any]], notes: list[str] | None = None) -> str:
+    """One table, a column per run (``labels``); a quantity missing in a run reads ``n/a``."""
+    tables = [dict(summary_rows(metrics)) for metrics in runs]
+    order: list[str] = []
+    for metrics in runs:
+        order += [name for name, _ in summary_rows(metrics) if name not in order and name != "figures"]
+    lines = [
+        "### Flights " + ", ".join(f"`{label}`" for label in labels),
+        "",
+        *(f"- `{label}`: scenario `{m.get('scenario')}`, recording `{m.get('recording')}`"
+          for label, m in zip(labels, runs, strict=True)),
+        "",
+        "| quantity | " + " | ".join(labels) + " |",
+        "|---|" + "---|" * len(labels),
+        *(f"| {name} | " + " | ".join(table.get(name, "n/a") for table in tables) + " |" for name in order),
+    ]
+    all_notes = list(notes or []) + [f"{label}: {note}" for label, m in zip(labels, runs, strict=True)
+                                     for note in m.get("notes") or []]
+    return "\n".join(lines + _notes(all_notes)) + "\n"

@@ -1,8 +1,11 @@
-"""``fsr-analyze RUN.mcap --out DIR``: metrics, figures and a Markdown summary of a recorded flight.
+"""``fsr-analyze RUN.mcap [RUN2.mcap ...] --out DIR``: metrics, figures and a Markdown summary of flights.
 
-Writes ``DIR/metrics.json``, ``DIR/summary.md`` and ``DIR/*.png`` and prints the summary. A truncated
-recording (writer killed) is analysed up to its last complete chunk and said so. Exit codes: 0 done,
-2 the file is missing, not MCAP or empty (one line on stderr), 1 the output cannot be written.
+One recording: ``DIR/metrics.json``, ``DIR/summary.md`` and the figures (``--format png,pdf,svg``; PNG at
+300 dpi, journal column widths, no titles unless ``--titles``). Several recordings are overlaid in the same
+figures (a colour per run, ``--labels a,b``) with their metrics side by side in one table. A truncated
+recording (writer killed) is analysed up to its last complete chunk and said so. Exit codes: 0 done, 2 a
+file is missing, not MCAP or empty, or an argument is invalid (one line on stderr), 1 the output cannot be
+written.
 """
 
 from __future__ import annotations
@@ -14,15 +17,46 @@ from pathlib import Path
 EXIT_OK = 0
 EXIT_WRITE_ERROR = 1
 EXIT_BAD_INPUT = 2
+SETTLING_CHOICES = ("standard", "report")  # fsr_estimation.core.metrics.SETTLING_DEFINITIONS (imported lazily)
+
+
+def add_figure_arguments(parser: argparse.ArgumentParser) -> None:
+    """Figure and estimator-metric options shared by fsr-analyze and fsr-fly."""
+    parser.add_argument("--format", default="png", metavar="LIST",
+                        help="figure formats, comma separated: png, pdf, svg (default png)")
+    parser.add_argument("--width", choices=("auto", "one", "two"), default="auto",
+                        help="figure width: one column (3.5 in), two columns (7.16 in) or each figure's own")
+    parser.add_argument("--titles", action="store_true", help="put a title inside each figure (default: none)")
+    parser.add_argument("--settling", choices=SETTLING_CHOICES, default="standard",
+                        help="settling-time definition of the estimator metrics (default standard; report = the "
+                             "report's, as fsr-estimate --settling report)")
+    parser.add_argument("--after", type=float, metavar="T",
+                        help="estimator max error over t >= T [s] (default: the last 5 s)")
+
+
+def figure_options(args: argparse.Namespace) -> object:
+    """The :class:`fsr_bringup.analysis.figures.FigureOptions` of the parsed arguments (ValueError if bad)."""
+    from fsr_bringup.analysis.figures import FORMATS, FigureOptions
+
+    formats = tuple(dict.fromkeys(f.strip().lower() for f in args.format.split(",") if f.strip()))
+    bad = [f for f in formats if f not in FORMATS]
+    if not formats or bad:
+        raise ValueError(f"--format: expected a comma-separated list of {', '.join(FORMATS)}; got '{args.format}'")
+    return FigureOptions(formats=formats, width=args.width, titles=args.titles)
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog="fsr-analyze", description=__doc__.split("\n")[0])
-    parser.add_argument("recording", type=Path, help="MCAP file written by fsr-record / fsr-fly")
-    parser.add_argument("--out", type=Path, help="output folder (default: next to the recording, <name>_analysis)")
+    parser.add_argument("recordings", type=Path, nargs="+", metavar="RECORDING",
+                        help="MCAP file(s) written by fsr-record / fsr-fly; several are overlaid")
+    parser.add_argument("--out", type=Path, help="output folder (default: next to the first recording, "
+                                                 "<name>_analysis)")
+    parser.add_argument("--labels", help="comma-separated run labels for legends and table columns "
+                                         "(default: the file names)")
     parser.add_argument("--namespace", help="vehicle namespace to analyse, e.g. /uav1 (default: detected)")
     parser.add_argument("--settle", type=float, default=None, help="start of the wrench RMS window [s] (default 5)")
     parser.add_argument("--no-figures", action="store_true", help="metrics and summary only")
+    add_figure_arguments(parser)
     return parser.parse_args(argv)
 
 
@@ -30,25 +64,32 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     # Imported here so that --help and argument errors stay fast (matplotlib, ROS message modules).
     from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S
-    from fsr_bringup.analysis.run import analyze_recording
+    from fsr_bringup.analysis.run import analyze_recordings
     from fsr_sim.recording.reader import RecordingError, open_recording
 
-    out = args.out or args.recording.with_name(args.recording.stem + "_analysis")
+    first = args.recordings[0]
+    out = args.out or first.with_name(first.stem + "_analysis")
+    labels = [label.strip() for label in args.labels.split(",")] if args.labels else None
     try:
-        recording = open_recording(args.recording)
-        if recording.truncated:
-            print(f"fsr-analyze: {args.recording}: recording is TRUNCATED (no summary/footer: the writer did not "
-                  "close it); analysing up to its last complete chunk", file=sys.stderr, flush=True)
+        options = figure_options(args)
+        recordings = []
+        for path in args.recordings:
+            recording = open_recording(path)
+            if recording.truncated:
+                print(f"fsr-analyze: {path}: recording is TRUNCATED (no summary/footer: the writer did not "
+                      "close it); analysing up to its last complete chunk", file=sys.stderr, flush=True)
+            recordings.append(recording)
         settle = DEFAULT_SETTLE_S if args.settle is None else args.settle
-        result = analyze_recording(recording, out, args.namespace, settle, figures=not args.no_figures)
-    except RecordingError as error:
+        result = analyze_recordings(recordings, out, labels, args.namespace, settle, not args.no_figures, options,
+                                    args.settling, args.after)
+    except (RecordingError, ValueError) as error:
         print(f"fsr-analyze: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as error:
         print(f"fsr-analyze: error: cannot write to {out}: {error.strerror or error}", file=sys.stderr)
         return EXIT_WRITE_ERROR
     print(result.summary)
-    print(f"fsr-analyze: wrote {result.metrics_path}, {result.summary_path} and {len(result.figures)} figures "
+    print(f"fsr-analyze: wrote {result.metrics_path}, {result.summary_path} and {len(result.figures)} figure files "
           f"in {out}")
     return EXIT_OK
 

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import yaml
 
+from fsr_bringup.cli.analyze_cli import add_figure_arguments, figure_options
 from fsr_bringup.runner.domains import acquire_domain, fixed_domain
 from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_path, load_fleet
 from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
@@ -51,6 +52,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--network", action="store_true", help="allow DDS discovery beyond localhost")
     parser.add_argument("--no-analysis", action="store_true", help="skip figures and metrics")
     parser.add_argument("--quiet", action="store_true", help="do not stream node logs")
+    add_figure_arguments(parser)
     return parser.parse_args(argv)
 
 
@@ -103,6 +105,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.in_process and len(members) > 1:
         print("fsr-fly: --in-process flies one vehicle; fly a fleet with the node graph", file=sys.stderr)
         return EXIT_CONFIG_ERROR
+    try:
+        options = None if args.no_analysis else figure_options(args)
+    except ValueError as error:
+        print(f"fsr-fly: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
     run_dir = recording.with_suffix("")
     try:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -144,7 +151,8 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_analysis:
         from fsr_bringup.runner.report import analyse_and_summarise
 
-        analyse_and_summarise(recording, run_dir, [m.namespace for m in members])
+        analyse_and_summarise(recording, run_dir, [m.namespace for m in members], options, args.settling,
+                              args.after)
     print(f"fsr-fly: recording {recording}", flush=True)
     return result.exit_code
 

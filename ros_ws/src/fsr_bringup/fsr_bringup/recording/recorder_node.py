@@ -6,9 +6,9 @@
 Subscribes up front (so nothing published after the simulator's handshake is missed), without
 deserialising (``raw=True``), to ``/clock`` and, under each namespace (default: the node's own, so
 ``-r __ns:=/uav1`` works), to ``odom``, ``wrench_truth``, ``rotor_cmd``, ``wrench_cmd``, ``wrench_shortfall``,
-``reference``, ``goal``, ``wrench_estimate``, ``mass_estimate`` and ``sim_status``. Messages are taken in batches from a
-wait set (no executor callback per message: a 1 kHz lockstep graph publishes ~8 k messages/s) and written
-in arrival order.
+``reference``, ``attitude_cmd``, ``wrench_desired``, ``goal``, ``wrench_estimate``, ``mass_estimate`` and
+``sim_status``. Messages are taken in batches from a wait set (no executor callback per message: a 1 kHz
+lockstep graph publishes ~10 k messages/s) and written in arrival order.
 
 Times: ``log_time`` is the simulated time of the message: its header stamp (``/clock``: the clock value;
 ``sim_status``: its ``sim_time``); messages without a stamp (``mass_estimate``) get the latest simulated
@@ -50,6 +50,8 @@ STANDARD_TOPICS: dict[str, str] = {
     "wrench_cmd": "geometry_msgs/msg/WrenchStamped",
     "wrench_shortfall": "geometry_msgs/msg/WrenchStamped",
     "reference": "trajectory_msgs/msg/MultiDOFJointTrajectory",
+    "attitude_cmd": "geometry_msgs/msg/QuaternionStamped",
+    "wrench_desired": "geometry_msgs/msg/WrenchStamped",
     "goal": "geometry_msgs/msg/PoseStamped",
     "wrench_estimate": "geometry_msgs/msg/WrenchStamped",
     "mass_estimate": "std_msgs/msg/Float64",

@@ -5,12 +5,18 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from fsr_bringup.analysis.figures import FigureOptions
 from fsr_bringup.analysis.run import analyze_recording
 from fsr_sim.recording.reader import RecordingError, open_recording
 
 
-def analyse_and_summarise(recording_path: Path, run_dir: Path, namespaces: list[str]) -> bool:
-    """Analyse each vehicle of the recording into ``run_dir`` (``run_dir/<ns>`` for a fleet); False on error."""
+def analyse_and_summarise(recording_path: Path, run_dir: Path, namespaces: list[str],
+                          options: FigureOptions | None = None, settling: str = "standard",
+                          after: float | None = None) -> bool:
+    """Analyse each vehicle of the recording into ``run_dir`` (``run_dir/<ns>`` for a fleet); False on error.
+
+    ``options``: figure formats and sizes; ``settling`` / ``after``: the estimator metrics' settling-time
+    definition and max-error window (:func:`fsr_bringup.analysis.metrics.flight_metrics`)."""
     try:
         recording = open_recording(recording_path)
     except RecordingError as error:
@@ -23,7 +29,8 @@ def analyse_and_summarise(recording_path: Path, run_dir: Path, namespaces: list[
     for namespace in namespaces:
         out_dir = run_dir / namespace.strip("/") if namespace else run_dir
         try:
-            analysis = analyze_recording(recording, out_dir, namespace or None)
+            analysis = analyze_recording(recording, out_dir, namespace or None, options=options,
+                                         settling=settling, after=after)
         except (RecordingError, OSError) as error:
             print(f"fsr-fly: analysis of {namespace or 'the flight'} failed: {error}", file=sys.stderr)
             ok = False

@@ -6,8 +6,9 @@ Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``t
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
-axis gave way at the rotor limits, see fsr_control.allocation) and ``reference``, all stamped ``t_k`` (lockstep
-contract).
+axis gave way at the rotor limits, see fsr_control.allocation), ``reference``, ``attitude_cmd`` (the commanded
+attitude ``R_c``) and ``wrench_desired`` (the law's wrench before allocation), all stamped ``t_k`` (lockstep
+contract; :func:`fsr_control.nodes.messages.controller_messages`).
 NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
 final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
 for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation
@@ -20,7 +21,7 @@ import copy
 import sys
 import time
 
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import PoseStamped, QuaternionStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
@@ -90,6 +91,8 @@ class ControllerNode(Node):
             "wrench_cmd": self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS),
             "reference": self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS),
             "wrench_shortfall": self.create_publisher(WrenchStamped, "wrench_shortfall", STREAM_QOS),
+            "attitude_cmd": self.create_publisher(QuaternionStamped, "attitude_cmd", STREAM_QOS),
+            "wrench_desired": self.create_publisher(WrenchStamped, "wrench_desired", STREAM_QOS),
         }
         if self.rotors:
             self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)

@@ -4,6 +4,11 @@
   one point): ``transforms[0]`` the desired pose (translation world NED [m], rotation ``R_d`` body -> world),
   ``velocities[0]`` linear velocity world [m/s] and angular velocity ``R_d omega_d`` world [rad/s],
   ``accelerations[0]`` linear acceleration world [m/s^2] and ``R_d omega_dot_d`` world [rad/s^2].
+* ``attitude_cmd`` (geometry_msgs/QuaternionStamped, frame ``world_ned``): the commanded attitude ``R_c``
+  (body FRD -> world NED, ``[x, y, z, w]`` with ``w >= 0``) that the attitude loop tracks: the geometric
+  controller's ``R_d`` built from the thrust vector, the Voliro controller's reference attitude.
+* ``wrench_desired`` (geometry_msgs/WrenchStamped, ``base_link_frd``): the body wrench the control law asked
+  for, before allocation and rotor clamping (``wrench_cmd`` is the wrench after them).
 * ``goal`` (geometry_msgs/PoseStamped, world NED): position and orientation of the new target;
   ``header.frame_id`` must be ``world_ned`` (or empty, taken as ``world_ned``): no transforms are looked up,
   so a goal in any other frame is refused rather than silently read as NED.
@@ -16,7 +21,7 @@ import math
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import PoseStamped, Transform, Twist
+from geometry_msgs.msg import PoseStamped, QuaternionStamped, Transform, Twist
 from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
 
 from fsr_control.flight_controller import ControlOutput
@@ -53,7 +58,8 @@ def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTraje
 def controller_messages(stamp_ns: int, output: ControlOutput, rotors: bool) -> list[tuple[str, Any]]:
     """(topic, message) of everything the controller publishes for the state stamped ``stamp_ns``: ``rotor_cmd``
     (rotor actuation only), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus produced wrench),
-    ``reference``. The node publishes these; a recording of an in-process flight writes them."""
+    ``reference``, ``attitude_cmd``, ``wrench_desired``. The node publishes these; a recording of an in-process
+    flight writes them."""
     messages: list[tuple[str, Any]] = []
     if rotors:
         messages.append(("rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles)))
@@ -61,7 +67,21 @@ def controller_messages(stamp_ns: int, output: ControlOutput, rotors: bool) -> l
     if output.shortfall is not None:
         messages.append(("wrench_shortfall", wrench_stamped(stamp_ns, output.shortfall[:3], output.shortfall[3:])))
     messages.append(("reference", reference_message(stamp_ns, output.reference)))
+    messages.append(("attitude_cmd", attitude_command_message(stamp_ns, output.rotation_cmd)))
+    messages.append(("wrench_desired", wrench_stamped(stamp_ns, output.force_desired, output.torque_desired)))
     return messages
+
+
+def attitude_command_message(stamp_ns: int, rotation: np.ndarray) -> QuaternionStamped:
+    """``attitude_cmd``: the commanded attitude ``R_c`` (body FRD -> world NED) as a unit quaternion, ``w >= 0``."""
+    msg = QuaternionStamped()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = WORLD_FRAME
+    x, y, z, w = quaternion_from_rotation(np.asarray(rotation, dtype=float)).tolist()
+    if w < 0.0:
+        x, y, z, w = -x, -y, -z, -w
+    msg.quaternion.x, msg.quaternion.y, msg.quaternion.z, msg.quaternion.w = x, y, z, w
+    return msg
 
 
 def goal_from_message(msg: PoseStamped) -> tuple[np.ndarray, np.ndarray]:

@@ -1,9 +1,9 @@
 """``fsr-estimate``: run the momentum observer over a flight log for a sweep of (c0, r) and measure it.
 
-Prints Markdown tables (settling times to the millisecond, MAE to 4 decimals, max error after ``--after``,
-dm and m_real to 3 decimals); ``--json`` writes the numbers, ``--plots`` the report's figures. A truncated
-MCAP recording (no footer) is refused (exit 2, one line with the time it covers) unless ``--allow-truncated``
-is given, which prints that line as a warning and estimates over the part that is there.
+Prints Markdown tables (settling times to the millisecond, MAE over the whole log to 4 decimals, max error
+after ``--after``, dm and m_real to 3 decimals); ``--json`` writes the numbers, ``--plots`` the report's
+figures. A truncated MCAP recording (no footer) is refused (exit 2, one line with the time it covers) unless
+``--allow-truncated`` is given, which prints that line as a warning and estimates over the part that is there.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def format_tables(results: list[SweepResult], truth: np.ndarray | None, settling
         when = "the last 5 s" if after is None else f"t >= {after:g} s"
         rows = [[f"{r.c0:g}", str(r.r)] + [_fmt(r.mae[i], ".4f") for i in shown]
                 + [_fmt(r.max_error[i], ".6e") for i in shown] for r in results]
-        parts.append(f"Mean absolute error and max error over {when}\n\n"
+        parts.append(f"Mean absolute error over the whole log and max error over {when}\n\n"
                      + _table(["c0", "r"] + [f"MAE {n}" for n in names] + [f"max err {n}" for n in names], rows))
     rows = [[f"{r.c0:g}", str(r.r), _fmt(r.dm, ".3f"), _fmt(r.m_real, ".3f")] for r in results]
     parts.append("Mass estimate (dm = f_e,z(end) / g)\n\n" + _table(["c0", "r", "dm [kg]", "m_real [kg]"], rows))

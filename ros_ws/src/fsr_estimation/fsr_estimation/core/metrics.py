@@ -13,6 +13,10 @@ Two settling-time definitions (tolerance 3 % of ``|truth|``):
   look-back adds 2 s and an estimate below the truth counts as settled).
 
 Undefined values (a zero true value has no 3 % band; a log that ends outside the band) are NaN.
+
+The truth is a constant (C,) (the report's injected wrench) or a series (N, C) sampled with the estimate
+(the effective truth of ``fsr-analyze``, which changes along a flight); the band is then taken per sample
+and a channel has a settling time when its final true value is not zero.
 """
 
 from __future__ import annotations
@@ -61,17 +65,18 @@ def settling_time_standard(time: ArrayLike, estimate: ArrayLike, truth: ArrayLik
                            tolerance: float = TOLERANCE) -> np.ndarray:
     """Time [s] after which ``|w_hat - truth| <= tolerance |truth|`` holds to the end, per channel, shape (C,).
 
-    time (N,) [s]; estimate (N, C); truth (C,). NaN for a zero truth or an error outside the band at the end.
+    time (N,) [s]; estimate (N, C); truth (C,) or (N, C). NaN for a zero (final) truth or an error outside the
+    band at the end.
     """
     t = sample_times(time, "standard")
     e = np.abs(np.asarray(estimate, dtype=float) - np.asarray(truth, dtype=float))
-    band = tolerance * np.abs(np.asarray(truth, dtype=float))
+    band = tolerance * np.abs(np.broadcast_to(np.asarray(truth, dtype=float), e.shape))
     outside = e > band
     n = len(t)
     # Index of the last sample outside the band (-1 when none), found from the end of the log.
     last_outside = np.where(outside.any(axis=0), n - 1 - np.argmax(outside[::-1], axis=0), -1)
     result = np.where(last_outside < n - 1, t[np.minimum(last_outside + 1, n - 1)], np.nan)
-    return np.where(band > 0.0, result, np.nan)
+    return np.where(band[-1] > 0.0, result, np.nan)
 
 
 def settling_time_report(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike, tolerance: float = TOLERANCE,
@@ -90,12 +95,12 @@ def settling_time_report(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike,
     # A window [k - back, k + ahead] is a centred window of `size` shifted by origin (scipy's sign).
     moving_max = maximum_filter1d(signed_error, size, axis=0, mode="constant", cval=-np.inf,
                                   origin=size // 2 - ahead)
-    band = tolerance * np.abs(np.asarray(truth, dtype=float))
+    band = tolerance * np.abs(np.broadcast_to(np.asarray(truth, dtype=float), signed_error.shape))
     inside = moving_max <= band
     first = np.argmax(inside, axis=0)
     times = sample_times(t, "report")
     result = np.where(inside.any(axis=0), times[first], np.nan)
-    return np.where(band > 0.0, result, np.nan)
+    return np.where(band[-1] > 0.0, result, np.nan)
 
 
 def settling_time(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike, definition: str = "standard",
@@ -109,7 +114,7 @@ def settling_time(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike, defini
 
 
 def mean_absolute_error(estimate: ArrayLike, truth: ArrayLike) -> np.ndarray:
-    """``mean_k |w_hat[k] - truth|`` over the whole log, per channel, shape (C,)."""
+    """``mean_k |w_hat[k] - truth|`` over the whole log, per channel, shape (C,); truth (C,) or (N, C)."""
     return np.mean(np.abs(np.asarray(estimate, dtype=float) - np.asarray(truth, dtype=float)), axis=0)
 
 
@@ -117,7 +122,7 @@ def max_error_after(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike, afte
                     definition: str = "standard") -> np.ndarray:
     """``max |w_hat - truth|`` over the samples at time >= ``after`` [s] (the time of ``definition``), (C,).
 
-    NaN when no sample is that late.
+    truth (C,) or (N, C). NaN when no sample is that late.
     """
     times = sample_times(time, definition)
     late = times >= after - 1e-9 * max(1.0, abs(after))  # the sample at exactly `after` counts

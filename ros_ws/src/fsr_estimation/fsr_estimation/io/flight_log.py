@@ -245,39 +245,20 @@ WRENCH_FIELDS = tuple(f"wrench.{part}.{axis}" for part in ("force", "torque") fo
 
 def _topic_arrays(recording: object, topic: str) -> tuple[np.ndarray, np.ndarray]:
     """(stamps [ns] (N,), values) of ``odom`` -> (N, 13) ``[p, q_xyzw, v_body, omega_body]`` or
-    ``wrench_cmd`` -> (N, 6) ``[force, torque]``: vectorised (fsr_sim.recording.cdr_columns), or decoded
-    message by message when the payloads have a layout it does not handle."""
-    from fsr_sim.recording.cdr_columns import LayoutError, decode_columns
+    ``wrench_cmd`` -> (N, 6) ``[force, torque]``, through the one whole-topic decoder
+    (:func:`fsr_sim.recording.cdr_columns.stamped_columns`, also used by ``fsr-analyze``). A repeated stamp
+    keeps its first message."""
+    from fsr_sim.recording.cdr_columns import LayoutError, stamped_columns
+    from fsr_sim.recording.reader import RecordingError
 
-    odometry = topic == ODOM_TOPIC
-    wanted = ODOMETRY_FIELDS if odometry else WRENCH_FIELDS
-    raw = recording.raw(topic)  # type: ignore[attr-defined]
+    wanted = ODOMETRY_FIELDS if topic == ODOM_TOPIC else WRENCH_FIELDS
     try:
-        columns = decode_columns([data for _, data in raw], recording.topics[recording.resolve(topic)])  # type: ignore[attr-defined]
-        stamps = (columns.get("header.stamp.sec").astype(np.int64) * 1_000_000_000
-                  + columns.get("header.stamp.nanosec").astype(np.int64))
-        return stamps, np.column_stack([columns.get(name) for name in wanted]).astype(float, copy=False)
-    except (LayoutError, KeyError):
-        pass
-    messages = recording.messages(topic)  # type: ignore[attr-defined]
-    stamps = np.array([_stamp_ns(m) for _, m in messages], dtype=np.int64)
-    if odometry:
-        rows = [(m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z,
-                 m.pose.pose.orientation.x, m.pose.pose.orientation.y, m.pose.pose.orientation.z,
-                 m.pose.pose.orientation.w, m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.linear.z,
-                 m.twist.twist.angular.x, m.twist.twist.angular.y, m.twist.twist.angular.z) for _, m in messages]
-    else:
-        rows = [(m.wrench.force.x, m.wrench.force.y, m.wrench.force.z, m.wrench.torque.x, m.wrench.torque.y,
-                 m.wrench.torque.z) for _, m in messages]
-    values = np.array(rows, dtype=float).reshape(len(rows), 13 if odometry else 6)
-    # Keep the first message of a repeated stamp, as the vectorised path's intersect1d does.
+        stamps, columns = stamped_columns(recording, topic)
+        values = np.column_stack([columns.get(name) for name in wanted]).astype(float, copy=False)
+    except (LayoutError, KeyError) as error:
+        raise RecordingError(f"{recording.path}: cannot decode '{topic}': {error}") from None  # type: ignore[attr-defined]
     stamps, first = np.unique(stamps, return_index=True)
     return stamps, values[first]
-
-
-def _stamp_ns(msg: object) -> int:
-    stamp = msg.header.stamp  # type: ignore[attr-defined]
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
 def write_mcap(log: FlightLog, path: str | Path, metadata: dict[str, dict[str, str]] | None = None) -> Path:

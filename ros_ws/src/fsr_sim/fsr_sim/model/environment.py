@@ -129,16 +129,18 @@ def multirotor_ground_effect_ratio(
 ) -> np.ndarray:
     """Per-rotor ground-effect ratio with the neighbouring rotors and the body (Sanchez-Cuevas 2017).
 
-    distance: shape (n,), each rotor's distance to the ground [m]. rotor_separation: shape (n, n),
-    ``d_ij`` [m] (diagonal ignored). arm_lengths: shape (n,), ``b_i`` [m].
+    distance: shape (n,), each rotor's distance to the ground [m], or (..., n) for many poses at once (a
+    whole log). rotor_separation: shape (n, n), ``d_ij`` [m] (diagonal ignored). arm_lengths: shape (n,),
+    ``b_i`` [m].
     """
     z = np.maximum(distance, MIN_DISTANCE)
     rho2 = rotor_radius**2
-    c, q = _neighbour_scale(z[:, None], rho2)
-    neighbours = c / (np.asarray(rotor_separation) ** 2 + q) ** 1.5
-    np.fill_diagonal(neighbours, 0.0)
+    c, q = _neighbour_scale(z[..., :, None], rho2)
+    separation = np.asarray(rotor_separation)
+    others = 1.0 - np.eye(len(separation))  # rotor i's own term is left out
+    neighbours = others * (c / (separation**2 + q) ** 1.5)
     body = _body_term(z, np.asarray(arm_lengths) ** 2, rho2, body_factor)
-    denominator = _ground_denominator(z, rotor_radius) - neighbours.sum(axis=1) - body
+    denominator = _ground_denominator(z, rotor_radius) - neighbours.sum(axis=-1) - body
     return bounded_ratio(denominator, max_ratio)
 
 

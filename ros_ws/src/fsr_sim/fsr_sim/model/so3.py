@@ -374,3 +374,16 @@ def attitude_error(rotation: ArrayLike, rotation_desired: ArrayLike) -> FloatArr
     r = np.asarray(rotation, dtype=float).tolist()
     rd = np.asarray(rotation_desired, dtype=float).tolist()
     return np.array(attitude_error3(r, rd))
+
+
+def relative_rotation_angles(rotation_desired: ArrayLike, rotation: ArrayLike) -> FloatArray:
+    """Angle [rad] of ``R_d^T R`` for whole logs, (n, 3, 3) each -> (n,), in [0, pi].
+
+    ``atan2(|vee(E - E^T)| / 2, (tr E - 1) / 2)`` with ``E = R_d^T R``: accurate to rounding near 0 (where
+    ``acos`` of the trace or of a quaternion product turns 1e-16 rounding into ~1e-6 deg) and near pi.
+    """
+    e = np.einsum("kji,kjl->kil", np.asarray(rotation_desired, dtype=float), np.asarray(rotation, dtype=float))
+    sin_part = 0.5 * np.sqrt((e[:, 2, 1] - e[:, 1, 2]) ** 2 + (e[:, 0, 2] - e[:, 2, 0]) ** 2
+                             + (e[:, 1, 0] - e[:, 0, 1]) ** 2)
+    cos_part = 0.5 * (e[:, 0, 0] + e[:, 1, 1] + e[:, 2, 2] - 1.0)
+    return np.arctan2(sin_part, cos_part)

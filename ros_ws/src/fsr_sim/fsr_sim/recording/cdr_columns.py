@@ -215,3 +215,55 @@ def _assemble(n: int, groups: list[tuple[np.ndarray, Layout, np.ndarray]]) -> Co
             column = strings.setdefault(path, np.full(n, None, dtype=object))
             column[rows] = value
     return Columns(n, numbers, strings)
+
+
+NS_PER_S = 1_000_000_000
+
+
+def _merged(parts: list[Columns]) -> Columns:
+    """One :class:`Columns` of messages decoded one by one (rows in the order of ``parts``)."""
+    n = len(parts)
+    numbers: dict[str, np.ndarray] = {}
+    strings: dict[str, np.ndarray] = {}
+    for path in dict.fromkeys(p for part in parts for p in part.numbers):
+        width = max((part.numbers[path].shape[1] if part.numbers[path].ndim == 2 else 0) for part in parts
+                    if path in part.numbers)
+        out = np.full((n, width) if width else (n,), np.nan)
+        for row, part in enumerate(parts):
+            if path in part.numbers:
+                value = part.numbers[path][0]
+                if width:
+                    out[row, : np.size(value)] = value
+                else:
+                    out[row] = value
+        numbers[path] = out
+    for path in dict.fromkeys(p for part in parts for p in part.strings):
+        strings[path] = np.array([part.strings[path][0] if path in part.strings else None for part in parts],
+                                 dtype=object)
+    return Columns(n, numbers, strings)
+
+
+def stamped_columns(recording: Any, topic: str) -> tuple[np.ndarray, Columns]:
+    """The one whole-topic decoder of a :class:`fsr_sim.recording.reader.Recording`: (stamps [ns] (n,) int64,
+    columns), rows sorted by stamp (stable).
+
+    The stamp is the header stamp where the type has a header, the log time otherwise. A topic whose
+    messages have more layouts than :data:`MAX_LAYOUTS` is decoded message by message (same columns,
+    slower); :class:`LayoutError` only for payloads that do not match their type at all.
+    """
+    raw = recording.raw(topic)
+    type_name = recording.topics[recording.resolve(topic)]
+    payloads = [data for _, data in raw]
+    try:
+        columns = decode_columns(payloads, type_name)
+    except LayoutError:
+        columns = _merged([decode_columns([data], type_name) for data in payloads])
+    if "header.stamp.sec" in columns.numbers:
+        stamp = columns.numbers["header.stamp.sec"].astype(np.int64) * NS_PER_S
+        stamp += columns.numbers["header.stamp.nanosec"].astype(np.int64)
+    else:
+        stamp = np.fromiter((t for t, _ in raw), dtype=np.int64, count=len(raw))
+    order = np.argsort(stamp, kind="stable")
+    columns.numbers = {key: value[order] for key, value in columns.numbers.items()}
+    columns.strings = {key: value[order] for key, value in columns.strings.items()}
+    return stamp[order], columns

@@ -1,0 +1,205 @@
+"""Effective truth: the wrench the momentum observer must converge to, from a recording and its scenario.
+
+The observer (SPEC §3.8, :mod:`fsr_estimation.core.momentum`) does not estimate the injected external
+wrench alone: it estimates everything its model misses. With its model mass ``m_e`` and inertia ``I_e``
+and the commanded body wrench ``(f_c, tau_c)`` (``wrench_cmd``), its force residual over the control step
+``[t_k, t_k+1]`` is (world NED, ``e3`` down, ``a_k = (v_k+1 - v_k) / T_s``)::
+
+    f_hat -> m_e a_k - m_e g e3 - R_k f_c,k
+
+while the true plant (mass ``m``, inertia ``I``) obeys, averaged over the same step::
+
+    m a_k = m g e3 + <R f_a> + f_ext + f_contact
+
+with ``f_a`` the body force the rotors really produce (``f_c`` scaled per rotor by the ground/ceiling
+thrust ratio, :class:`fsr_sim.model.environment.ThrustEffects`; ``f_c`` itself in wrench actuation) and
+``<.>`` the mean over the step (trapezoid of its ends). Eliminating ``a_k`` gives the effective force::
+
+    f_eff = f_ext + (<R f_a> - R_k f_c) + f_contact + (m_e - m) (a_k - g e3)      [N, world NED]
+
+terms: the injected wrench; the surface-effect thrust change (and the turn of ``R`` within the step); the
+ground's contact force; the model mismatch (in steady flight ``(m - m_e) g e3``: a model heavier than the
+plant sees an upward, negative-z force). The torque (body FRD, ``omega_dot_k`` by the same difference)::
+
+    tau_eff = tau_ext + (<tau_a> - tau_c) + tau_contact + (I_e - I) omega_dot + omega x (I_e - I) omega
+
+Contact: the plant holds the vehicle on the ground (its state is put back on the ground with zero velocity
+and angular velocity at the end of a step); the contact force is the constraint force of those steps,
+``m a_k - m g e3 - <R f_a> - f_ext`` (and ``I omega_dot + omega x I omega - <tau_a> - tau_ext``), zero in
+every other step. Everything else comes from the recording and the scenario, not from the estimate.
+``f_eff`` of step k is stamped ``t_k`` (the last sample, which has no step, is NaN) and given in body FRD
+(``R_k^T f_eff``, like ``wrench_estimate``) and world NED.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fsr_bringup.analysis.load import Flight, hold
+from fsr_sim.model.allocation import clamp_rotor_speeds, rotor_axes, tilt_basis
+from fsr_sim.model.environment import (
+    ThrustEffects,
+    ceiling_effect_ratio,
+    ground_effect_ratio,
+    multirotor_ground_effect_ratio,
+)
+from fsr_sim.model.vehicle import GRAVITY, Vehicle
+
+E3 = np.array((0.0, 0.0, 1.0))
+CONTACT_TOLERANCE = 1e-9  # m: a state this close to the resting height counts as held by the ground
+
+
+@dataclass
+class EffectiveWrench:
+    """The effective truth and its parts at the odometry stamps, shape (n, 3) each (NaN at the last sample).
+
+    Forces [N] in world NED unless named ``*_body``; torques [N m] in body FRD.
+    """
+
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    force_world: np.ndarray
+    force_body: np.ndarray
+    torque_body: np.ndarray
+    external_force_world: np.ndarray
+    thrust_change_world: np.ndarray  # <R f_a> - R f_c
+    contact_force_world: np.ndarray
+    mismatch_force_world: np.ndarray  # (m_e - m)(a - g e3)
+    in_contact: np.ndarray  # (n,) bool: the ground held the vehicle at the end of the step
+
+    @property
+    def wrench_body(self) -> np.ndarray:
+        """``[f_eff body; tau_eff body]``, shape (n, 6), comparable with ``wrench_estimate``."""
+        return np.hstack((self.force_body, self.torque_body))
+
+
+def actuator_wrench(vehicle: Vehicle, speeds: np.ndarray, tilts: np.ndarray | None,
+                    ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Body wrench the rotors produce, vectorised over samples, as the plant computes it.
+
+    speeds (n, r) commanded rotor speeds [rad/s] (clamped here to the vehicle's limits, as the plant does);
+    tilts (n, r) [rad] or None; ratios (n, r) thrust ratio ``T / T_OGE`` per rotor. Returns force (n, 3) [N]
+    and torque (n, 3) [N m] in body FRD: ``f = sum c_f r_i u_i z_i``,
+    ``tau = sum u_i (c_f r_i p_i x z_i - k_i c_m z_i)`` with ``u_i = |w_i| w_i`` (drag not scaled).
+    """
+    speeds = np.nan_to_num(np.asarray(speeds, dtype=float))
+    clamped, _ = clamp_rotor_speeds(vehicle, np.abs(speeds) * speeds)
+    u = np.abs(clamped) * clamped  # (n, r)
+    if tilts is None or vehicle.tilt_axes is None:
+        axes = np.broadcast_to(rotor_axes(vehicle), (len(u), vehicle.rotor_count, 3))
+    else:
+        limit = vehicle.tilt_angle_max
+        alpha = np.clip(np.nan_to_num(np.asarray(tilts, dtype=float)), -limit, limit)[..., None]
+        z_v, z_l = tilt_basis(vehicle)
+        axes = np.cos(alpha) * z_v + np.sin(alpha) * z_l  # (n, r, 3)
+    thrust = vehicle.c_f * (ratios * u)[..., None] * axes  # per rotor force (n, r, 3)
+    force = thrust.sum(axis=1)
+    lever = np.cross(vehicle.positions, thrust).sum(axis=1)
+    drag = -(u * vehicle.spins * vehicle.c_m)[..., None] * axes
+    return force, lever + drag.sum(axis=1)
+
+
+def effective_wrench(flight: Flight) -> EffectiveWrench | None:
+    """The effective truth of the module docstring; None without odom, wrench_cmd, scenario or estimator model."""
+    odom, cmd, config, model = flight.odom, flight.wrench_cmd, flight.config, flight.estimator
+    if odom is None or cmd is None or config is None or model is None or len(odom.t) < 2:
+        return None
+    target = odom.stamp_ns
+    n = len(target)
+    rotation = odom.rotation
+    plant = config.plant_vehicle
+    m_true, m_est = plant.mass, model.mass
+    i_true, i_est = np.asarray(plant.inertia, float), np.asarray(model.inertia, float)
+    f_cmd = hold(cmd.stamp_ns, cmd.force, target)
+    tau_cmd = hold(cmd.stamp_ns, cmd.torque, target)
+    if flight.wrench_truth is not None:
+        f_ext_body = np.nan_to_num(hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.force, target))
+        tau_ext = np.nan_to_num(hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.torque, target))
+    else:
+        f_ext_body, tau_ext = np.zeros((n, 3)), np.zeros((n, 3))
+    f_ext = np.einsum("kij,kj->ki", rotation, f_ext_body)
+    # Actuator wrench at the start and at the end of each step, the command of the start held over it.
+    if config.actuation == "rotors" and flight.rotor_cmd is not None:
+        speeds = hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.speeds, target)
+        tilts = (hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.tilts, target)
+                 if flight.rotor_cmd.tilts is not None else None)
+        series = thrust_ratio_series(flight)
+        ratios = series[1] * series[2] if series is not None else np.ones_like(speeds)
+        # The same command acts at the end of the step, where the ratios (pose) have moved on.
+        f_start, tau_start = actuator_wrench(plant, speeds, tilts, ratios)
+        next_ratios = np.vstack((ratios[1:], ratios[-1:]))
+        f_end, tau_end = actuator_wrench(plant, speeds, tilts, next_ratios)
+    else:
+        f_start = f_end = f_cmd
+        tau_start = tau_end = tau_cmd
+    next_rotation = np.concatenate((rotation[1:], rotation[-1:]))
+    mean_actuator_world = 0.5 * (np.einsum("kij,kj->ki", rotation, f_start)
+                                 + np.einsum("kij,kj->ki", next_rotation, f_end))
+    mean_actuator_torque = 0.5 * (tau_start + tau_end)
+    dt = np.diff(odom.t)[:, None]
+    accel = np.full((n, 3), np.nan)
+    accel[:-1] = np.diff(odom.velocity_world, axis=0) / dt
+    omega = odom.angular_velocity
+    omega_dot = np.full((n, 3), np.nan)
+    omega_dot[:-1] = np.diff(omega, axis=0) / dt
+    gravity = GRAVITY * E3
+    thrust_change = mean_actuator_world - np.einsum("kij,kj->ki", rotation, f_cmd)
+    # Contact: the ground held the vehicle at the end of the step (state put back at rest).
+    in_contact = np.zeros(n, dtype=bool)
+    ground = config.environment.ground
+    if ground.enabled:
+        rest = ground.height - plant.contact_height
+        held = (odom.position[:, 2] >= rest - CONTACT_TOLERANCE) & ~np.any(odom.velocity_world, axis=1) \
+            & ~np.any(omega, axis=1)
+        in_contact[:-1] = held[1:]
+    contact_force = np.zeros((n, 3))
+    contact_torque = np.zeros((n, 3))
+    if in_contact.any():
+        c = in_contact
+        contact_force[c] = m_true * (accel[c] - gravity) - mean_actuator_world[c] - f_ext[c]
+        spin = np.cross(omega[c], omega[c] @ i_true.T)
+        contact_torque[c] = omega_dot[c] @ i_true.T + spin - mean_actuator_torque[c] - tau_ext[c]
+    mismatch = (m_est - m_true) * (accel - gravity)
+    force_world = f_ext + thrust_change + contact_force + mismatch
+    delta_i = i_est - i_true
+    torque = (tau_ext + mean_actuator_torque - tau_cmd + contact_torque + omega_dot @ delta_i.T
+              + np.cross(omega, omega @ delta_i.T))
+    force_world[-1] = np.nan
+    torque[-1] = np.nan
+    return EffectiveWrench(
+        stamp_ns=target, t=odom.t, force_world=force_world,
+        force_body=np.einsum("kji,kj->ki", rotation, force_world), torque_body=torque,
+        external_force_world=f_ext, thrust_change_world=thrust_change, contact_force_world=contact_force,
+        mismatch_force_world=mismatch, in_contact=in_contact,
+    )
+
+
+def thrust_ratio_series(flight: Flight) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(t, ground, ceiling)``: per-rotor ``T / T_OGE`` of each surface along the flight, shape (n, rotors)
+    (1 where a surface is off); None without odom or scenario."""
+    odom, config = flight.odom, flight.config
+    if odom is None or config is None:
+        return None
+    env, vehicle = config.environment, config.plant_vehicle
+    # World z of each rotor centre: p_z + (R p_i)_z, vectorised over the flight.
+    rotor_down = odom.position[:, 2:3] + odom.rotation[:, 2, :] @ vehicle.positions.T
+    ground = np.ones_like(rotor_down)
+    ceiling = np.ones_like(rotor_down)
+    if env.ground.enabled and env.ground.effect:
+        distance = env.ground.height - rotor_down
+        if env.ground_model == "multirotor":
+            effects = ThrustEffects(env, vehicle.positions, vehicle.rotor_radius)
+            ground = multirotor_ground_effect_ratio(
+                distance, vehicle.rotor_radius, effects.separation, effects.arm_lengths, env.body_factor,
+                env.ground.max_ratio,
+            )
+        else:
+            ground = ground_effect_ratio(distance, vehicle.rotor_radius, env.ground.max_ratio)
+    if env.ceiling.enabled and env.ceiling.effect:
+        ceiling = ceiling_effect_ratio(
+            rotor_down - env.ceiling.height, vehicle.rotor_radius, env.ceiling_k1, env.ceiling_k2,
+            env.ceiling.max_ratio,
+        )
+    return odom.t, ground, ceiling
