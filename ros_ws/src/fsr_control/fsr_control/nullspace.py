@@ -4,7 +4,7 @@ The static allocation ``G u = wrench`` (6 x 2n, ``u = [u_v1, u_l1, ..., u_vn, u_
 quadrotor has a 2-dimensional null space ``N`` (orthonormal columns). Every ``u = u_p + N z`` produces the
 same wrench. The report chose ``z = -N^T u_p`` with ``u_p = A^+ y``; but ``A^+ y`` is the minimum-norm
 solution and already orthogonal to the null space, so ``N^T u_p = 0`` and that step changes nothing
-(``test_nullspace.py`` checks it).
+(``ros_ws/src/fsr_control/test/test_nullspace.py`` checks it).
 
 What we do instead (``secondary_objective: {type: min_peak_speed}``): choose ``z`` to minimise
 
@@ -23,8 +23,8 @@ Thrusts are scaled by their mean before the steps so that the powers stay near 1
 system of the tilting quadrotor is solved in closed form (numpy's per-call overhead dominates at this
 size). The wrench is unchanged
 (to rounding): tracking is the same, only the rotor speeds and tilt angles change. Over the exercise-5
-flight it lowers the peak rotor speed while the vehicle holds roll = pitch = 45 deg (numbers in
-``SECONDARY_OBJECTIVE.md`` and ``test_nullspace.py``).
+flight it lowers the peak rotor speed while the vehicle holds roll = pitch = 45 deg (numbers in the README,
+"Voliro secondary objective", checked by ``tests/flights/test_flight_ex5.py``).
 """
 
 from __future__ import annotations

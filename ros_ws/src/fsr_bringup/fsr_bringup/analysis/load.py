@@ -24,12 +24,10 @@ from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.recording.cdr_columns import Columns, LayoutError, stamped_columns
 from fsr_sim.recording.reader import Recording, open_recording
+from fsr_sim.recording.topics import FLIGHT_TOPICS
 
 NS_PER_S = 1_000_000_000
-STANDARD_TOPICS = (
-    "odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "wrench_shortfall", "reference", "attitude_cmd",
-    "wrench_desired", "goal", "wrench_estimate", "mass_estimate", "sim_status",
-)
+STANDARD_TOPICS = tuple(FLIGHT_TOPICS)
 
 
 @dataclass

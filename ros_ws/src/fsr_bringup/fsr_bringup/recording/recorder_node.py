@@ -37,27 +37,13 @@ import json
 import struct
 import sys
 import time
-from contextlib import ExitStack
 from pathlib import Path
 
+from fsr_sim.recording.topics import CLOCK_TOPIC, FLIGHT_TOPICS
 from fsr_sim.recording.writer import RecordingWriter
 from fsr_sim.ros.runtime import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_OK, configure_environment, run_node
 
-STANDARD_TOPICS: dict[str, str] = {
-    "odom": "nav_msgs/msg/Odometry",
-    "wrench_truth": "geometry_msgs/msg/WrenchStamped",
-    "rotor_cmd": "sensor_msgs/msg/JointState",
-    "wrench_cmd": "geometry_msgs/msg/WrenchStamped",
-    "wrench_shortfall": "geometry_msgs/msg/WrenchStamped",
-    "reference": "trajectory_msgs/msg/MultiDOFJointTrajectory",
-    "attitude_cmd": "geometry_msgs/msg/QuaternionStamped",
-    "wrench_desired": "geometry_msgs/msg/WrenchStamped",
-    "goal": "geometry_msgs/msg/PoseStamped",
-    "wrench_estimate": "geometry_msgs/msg/WrenchStamped",
-    "mass_estimate": "std_msgs/msg/Float64",
-    "sim_status": "std_msgs/msg/String",
-}
-CLOCK_TOPIC = ("/clock", "rosgraph_msgs/msg/Clock")
+STANDARD_TOPICS = FLIGHT_TOPICS
 STATUS_TYPE = "std_msgs/msg/String"
 CHUNK_SIZE = 64 * 1024  # bytes: ~70 ms of a 1 kHz graph per chunk
 FLUSH_PERIOD = 0.5  # s of wall time between flushes: at most this much is lost to a SIGKILL
@@ -144,12 +130,12 @@ def final_status_ns(data: bytes) -> int | None:
 
 def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> type:
     """Build the node class lazily (rclpy is imported only after the environment is configured)."""
-    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
     from rclpy.node import Node
     from rclpy.qos import QoSProfile
 
     from fsr_sim.ros.message_schema import message_class
     from fsr_sim.ros.qos import CLOCK_QOS, GOAL_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
+    from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
     # The recorder needs every sample, so its reader queues are deep whatever the publisher's depth;
     # reliability and durability stay those of fsr_sim.ros.qos so that the QoS matches.
@@ -191,7 +177,7 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
                 namespace, _, base = topic.rpartition("/")
                 if base in DRAINED_TOPICS and type_name == STANDARD_TOPICS[base]:
                     self.drained[topic] = namespace
-            self.wait_set = _rclpy.WaitSet(len(self.entries), 0, 0, 0, 0, 0, self.context.handle)
+            self.wait_set = SubscriptionWaitSet(self, [entry[0] for entry in self.entries])
             self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
 
         def done(self) -> bool:
@@ -203,25 +189,9 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
 
         def take(self, timeout_ns: int) -> int:
             batch: list[tuple[int, int, str, bytes, bool, bool]] = []
-            with ExitStack() as stack:
-                stack.enter_context(self.context.handle)
-                for sub, *_ in self.entries:
-                    stack.enter_context(sub.handle)
-                self.wait_set.clear_entities()
-                for sub, *_ in self.entries:
-                    self.wait_set.add_subscription(sub.handle)
-                self.wait_set.wait(timeout_ns)
-                ready = set(self.wait_set.get_ready_entities("subscription"))
-                for sub, topic, stamped, status in self.entries:
-                    if sub.handle.pointer not in ready:
-                        continue
-                    while True:
-                        taken = sub.handle.take_message(sub.msg_type, True)
-                        if taken is None:
-                            break
-                        data, info = taken
-                        batch.append((info["received_timestamp"], info["source_timestamp"], topic, data, stamped,
-                                      status))
+            for index, data, info in self.wait_set.take_ready(timeout_ns):
+                _, topic, stamped, status = self.entries[index]
+                batch.append((info["received_timestamp"], info["source_timestamp"], topic, data, stamped, status))
             if batch:
                 batch.sort(key=lambda item: item[0])
                 self.write(batch)

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from fsr_sim.model.so3 import (
     euler_rate_matrix,
+    euler_rates,
     euler_zyx_from_rotation,
     rotation_from_euler_zyx,
     rotations_from_quaternions,
@@ -228,7 +229,7 @@ def load_mcap(path: str | Path) -> FlightLog:
     return FlightLog(
         time=stamps * 1e-9,
         eta=eta,
-        eta_dot=np.linalg.solve(euler_rate_matrix(eta), odom[:, 10:13, None])[..., 0],
+        eta_dot=euler_rates(eta, odom[:, 10:13]),
         velocity_world=np.einsum("kij,kj->ki", rotation, odom[:, 7:10]),
         force_body=wrench[:, :3],
         torque_body=wrench[:, 3:6],

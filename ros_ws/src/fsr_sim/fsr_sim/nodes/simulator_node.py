@@ -23,8 +23,8 @@ Free-running (``lockstep.enabled: false``): after the same handshake, steps are 
 ``real_time_factor`` x wall time and the latest valid command (any stamp) is applied; the failsafe applies
 after ``timeout`` s without one.
 
-Waiting uses a raw rcl wait set on the command subscription (the fastest measured style; the executor
-given by ``run_node`` is never spun, so the subscription's callback never runs).
+Waiting uses :class:`fsr_sim.ros.wait_set.SubscriptionWaitSet` on the command subscription (the fastest
+measured style; the executor given by ``run_node`` is never spun, so the subscription's callback never runs).
 """
 
 from __future__ import annotations
@@ -35,7 +35,6 @@ import time
 
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.duration import Duration
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
@@ -54,6 +53,7 @@ from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, par
 from fsr_sim.nodes.state_messages import StateMessages
 from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node
+from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
 WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
 BATCH_WALL = 0.05  # s of stepping per spin_once call
@@ -83,7 +83,7 @@ class SimulatorNode(Node):
         self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS) if self.params.publish_clock else None
         self.status_pub = self.create_publisher(String, "sim_status", LATCHED_QOS)
         self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS)
-        self.wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, self.context.handle)
+        self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
         self.phase = HANDSHAKE
         self.exit_code = EXIT_OK
@@ -302,27 +302,16 @@ class SimulatorNode(Node):
     def _take_commands(self, expected_ns: int | None, wait: float) -> bool:
         """Wait up to ``wait`` s, take every queued command, apply the valid one answering ``expected_ns``
         (lockstep) or every valid one (free-running, ``expected_ns`` None); True if one was applied."""
-        sub = self.command_sub
         applied = False
-        with sub.handle:
-            self.wait_set.clear_entities()
-            self.wait_set.add_subscription(sub.handle)
-            self.wait_set.wait(int(wait * 1e9))
-            if not self.wait_set.get_ready_entities("subscription"):
-                return False
-            while True:
-                taken = sub.handle.take_message(sub.msg_type, False)
-                if taken is None:
-                    break
-                msg = taken[0]
-                if expected_ns is not None:
-                    stamp = msg.header.stamp
-                    verdict = classify_stamp(stamp.sec * 1_000_000_000 + stamp.nanosec, expected_ns)
-                    if verdict != CURRENT:
-                        self._on_off_stamp(verdict, stamp, expected_ns)
-                        continue
-                if self._apply(msg):
-                    applied = True
+        for _, msg, _info in self.wait_set.take_ready(int(wait * 1e9)):
+            if expected_ns is not None:
+                stamp = msg.header.stamp
+                verdict = classify_stamp(stamp.sec * 1_000_000_000 + stamp.nanosec, expected_ns)
+                if verdict != CURRENT:
+                    self._on_off_stamp(verdict, stamp, expected_ns)
+                    continue
+            if self._apply(msg):
+                applied = True
         if applied and self.watchdog is not None and self.watchdog.feed(time.monotonic()):
             self.get_logger().info(f"{self.command_topic}: commands arrive again at {self._where()}")
         return applied

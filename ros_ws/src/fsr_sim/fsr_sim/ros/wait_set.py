@@ -1,0 +1,54 @@
+"""Taking messages without an executor: a raw rcl wait set over a fixed list of subscriptions.
+
+rclpy's executors dispatch one callback per message; at 1 kHz (thousands of messages per second) that
+dispatch dominates. The simulator (its command topic) and the recorder (every topic) instead wait on the
+subscriptions' handles and take everything queued in one go (ROS2_FROM_PIP.md: the fastest measured style).
+This uses rclpy's private ``rclpy_implementation.WaitSet``; this module is the only place that does.
+"""
+
+from __future__ import annotations
+
+from contextlib import ExitStack
+from typing import Any
+
+
+class SubscriptionWaitSet:
+    """Wait on ``subscriptions`` (of ``node``) and take their queued messages.
+
+    Each subscription's callback never runs: messages are taken here, deserialised unless the subscription
+    was created with ``raw=True`` (then CDR ``bytes``).
+    """
+
+    def __init__(self, node: Any, subscriptions: list[Any]) -> None:
+        from rclpy.impl.implementation_singleton import rclpy_implementation
+
+        self.context = node.context
+        self.subscriptions = list(subscriptions)
+        self._wait_set = rclpy_implementation.WaitSet(len(self.subscriptions), 0, 0, 0, 0, 0, self.context.handle)
+
+    def take_ready(self, timeout_ns: int) -> list[tuple[int, Any, dict]]:
+        """Wait up to ``timeout_ns`` for data, then take every queued message of every ready subscription.
+
+        Returns ``(index, message, info)`` in subscription order, then arrival order; ``info`` holds
+        ``source_timestamp`` and ``received_timestamp`` [ns, wall clock]. Empty after a timeout.
+        """
+        taken: list[tuple[int, Any, dict]] = []
+        wait_set = self._wait_set
+        with ExitStack() as stack:
+            stack.enter_context(self.context.handle)
+            for sub in self.subscriptions:
+                stack.enter_context(sub.handle)
+            wait_set.clear_entities()
+            for sub in self.subscriptions:
+                wait_set.add_subscription(sub.handle)
+            wait_set.wait(timeout_ns)
+            ready = set(wait_set.get_ready_entities("subscription"))
+            for index, sub in enumerate(self.subscriptions):
+                if sub.handle.pointer not in ready:
+                    continue
+                while True:
+                    message = sub.handle.take_message(sub.msg_type, sub.raw)
+                    if message is None:
+                        break
+                    taken.append((index, message[0], message[1]))
+        return taken
