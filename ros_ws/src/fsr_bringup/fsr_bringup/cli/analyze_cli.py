@@ -11,13 +11,15 @@ import argparse
 import sys
 from pathlib import Path
 
+from fsr_sim.cli.arguments import ArgumentParser
+
 EXIT_OK = 0
 EXIT_WRITE_ERROR = 1
 EXIT_BAD_INPUT = 2
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="fsr-analyze", description=__doc__.split("\n")[0])
+    parser = ArgumentParser(prog="fsr-analyze", description=__doc__.split("\n")[0])
     parser.add_argument("recording", type=Path, help="MCAP file written by fsr-record / fsr-fly")
     parser.add_argument("--out", type=Path, help="output folder (default: next to the recording, <name>_analysis)")
     parser.add_argument("--namespace", help="vehicle namespace to analyse, e.g. /uav1 (default: detected)")

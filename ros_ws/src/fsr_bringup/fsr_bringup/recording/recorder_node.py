@@ -1,6 +1,6 @@
 """``fsr-record --out RUN.mcap``: record the fsr graph's topics to a standard ROS 2 MCAP file.
 
-    fsr-record --out run.mcap --scenario my_flight.yaml
+    fsr-record --out run.mcap --scenario ex4_geometric      # or --scenario my_flight.yaml
     fsr-record --out fleet.mcap --namespace /uav1 --namespace /uav2 --topic /status:std_msgs/msg/String
 
 Subscribes up front (so nothing published after the simulator's handshake is missed), without
@@ -15,9 +15,14 @@ Times: ``log_time`` is the simulated time of the message: its header stamp (``/c
 time the recorder has seen, i.e. its sim-clock receive time (0 before the first). ``publish_time`` is the
 publisher's source timestamp (wall clock).
 
+End: once every recorded ``sim_status`` (one per namespace) reported the end of the flight and the
+producers have gone (or nothing arrived for a while), the recorder takes what is still queued, finishes
+the file and exits 0 by itself (:mod:`fsr_sim.ros.flight_end`); ``--keep-running`` records until a signal.
+
 Files survive crashes: chunks are small and flushed every ``FLUSH_PERIOD`` s, so a SIGKILLed file is
-readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued, write the summary,
-exit 0. A path that cannot be written: one line naming it and the reason, exit 1, before subscribing.
+readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued (for at most
+``SIGNAL_DRAIN_S`` s), write the summary, exit 0. A path that cannot be written: one line naming it and
+the reason, exit 1, before subscribing.
 """
 
 from __future__ import annotations
@@ -30,8 +35,16 @@ import time
 from contextlib import ExitStack
 from pathlib import Path
 
+from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.recording.writer import RecordingWriter
-from fsr_sim.ros.runtime import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_OK, configure_environment, run_node
+from fsr_sim.ros.runtime import (
+    EXIT_CONFIG_ERROR,
+    EXIT_FAILURE,
+    EXIT_OK,
+    configure_environment,
+    run_node,
+    signal_deadline,
+)
 
 STANDARD_TOPICS: dict[str, str] = {
     "odom": "nav_msgs/msg/Odometry",
@@ -51,15 +64,22 @@ FLUSH_PERIOD = 0.5  # s of wall time between flushes: at most this much is lost 
 WAIT_TIMEOUT_NS = 100_000_000  # a signal is noticed within 0.1 s
 DRAIN_QUIET_S = 0.2  # at shutdown, stop taking after this long without a message
 DRAIN_MAX_S = 1.0
+SIGNAL_DRAIN_S = 0.8  # s after SIGINT/SIGTERM: stop taking then, whatever is still arriving
 _STAMP = struct.Struct("<iI")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog="fsr-record", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--out", required=True, type=Path, help="MCAP file to write (overwritten)")
-    parser.add_argument("--scenario", type=Path, help="scenario YAML stored in the file's metadata")
+    parser.add_argument(
+        "--scenario", help="scenario stored in the file's metadata: a built-in name (e.g. ex4_geometric) or a YAML path"
+    )
+    parser.add_argument(
+        "--keep-running", action="store_true",
+        help="record until SIGINT/SIGTERM instead of ending with the flight (every sim_status final)",
+    )
     parser.add_argument(
         "--namespace", action="append", default=[], metavar="NS",
         help="record the standard topics under NS (repeatable; default: the node's namespace)",
@@ -114,12 +134,22 @@ def status_time_ns(data: bytes) -> int | None:
         return None
 
 
-def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> type:
+def status_text(data: bytes) -> str | None:
+    """The text of a std_msgs/String CDR message (uint32 length incl. the NUL, then the bytes)."""
+    try:
+        (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
+        return data[8 : 8 + length].rstrip(b"\0").decode("utf-8")
+    except (struct.error, IndexError, UnicodeDecodeError):
+        return None
+
+
+def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_running: bool = False) -> type:
     """Build the node class lazily (rclpy is imported only after the environment is configured)."""
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
     from rclpy.node import Node
     from rclpy.qos import QoSProfile
 
+    from fsr_sim.ros.flight_end import FlightEndRule
     from fsr_sim.ros.message_schema import message_class
     from fsr_sim.ros.qos import CLOCK_QOS, GOAL_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
 
@@ -158,10 +188,22 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
                 writer.add_topic(topic, type_name)
                 self.entries.append((sub, topic, starts_with_stamp(cls), name.endswith("sim_status")))
             self.wait_set = _rclpy.WaitSet(len(self.entries), 0, 0, 0, 0, 0, self.context.handle)
+            status_topics = [topic for _sub, topic, _stamped, status in self.entries if status]
+            self.flight_end = None if keep_running or not status_topics else FlightEndRule(status_topics)
+            self.stop_flag: object = None  # set by run_node
             self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
 
         def done(self) -> bool:
-            return self.failed
+            if self.failed:
+                return True
+            if self.flight_end is None or not self.flight_end.ended(self.producers_gone):
+                return False
+            self.get_logger().info(f"flight ended ({self.flight_end.describe()}): closing the recording")
+            return True
+
+        def producers_gone(self) -> bool:
+            """No node publishes on any recorded topic any more (everything it sent has been acknowledged)."""
+            return all(sub.get_publisher_count() == 0 for sub, *_ in self.entries)
 
         def spin_once(self, _executor: object, _stop: object) -> None:
             """Wait up to 0.1 s for messages, then take and write everything queued."""
@@ -191,6 +233,12 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
             if batch:
                 batch.sort(key=lambda item: item[0])
                 self.write(batch)
+                if self.flight_end is not None:
+                    self.flight_end.activity()
+                    for _received, _source, topic, data, _stamped, status in batch:
+                        text = status_text(data) if status else None
+                        if text is not None:
+                            self.flight_end.status(topic, text)
             self.maybe_flush()
             return len(batch)
 
@@ -232,7 +280,8 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
             """Take what is still queued, then finish the file (summary and footer) and report counts."""
             if not self.failed:
                 start = quiet_since = time.monotonic()
-                while time.monotonic() - quiet_since < DRAIN_QUIET_S and time.monotonic() - start < DRAIN_MAX_S:
+                end = min(start + DRAIN_MAX_S, signal_deadline(self.stop_flag, SIGNAL_DRAIN_S, DRAIN_MAX_S))
+                while time.monotonic() - quiet_since < DRAIN_QUIET_S and time.monotonic() < end:
                     if self.take(50_000_000) and not self.failed:
                         quiet_since = time.monotonic()
                     if self.failed:
@@ -251,14 +300,29 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
     return Recorder
 
 
-def open_writer(out: Path, scenario_path: Path | None) -> RecordingWriter:
+def scenario_text(scenario: str) -> str:
+    """YAML text kept in the metadata for ``--scenario``: an existing file as it is (a scenario or the
+    runner's fleet file), else a built-in scenario name or path, loaded and dumped (merged, checked)."""
+    from fsr_sim.config.scenario import load_scenario
+    from fsr_sim.config.validation import ConfigError
+
+    path = Path(scenario)
+    if path.is_file():
+        try:
+            return path.read_text(encoding="utf-8")
+        except OSError as error:
+            raise ValueError(f"--scenario: cannot read {path}: {error.strerror or error}") from None
+    try:
+        return load_scenario(scenario).dump()
+    except ConfigError as error:
+        raise ValueError(f"--scenario: {error}") from None
+
+
+def open_writer(out: Path, scenario: str | None) -> RecordingWriter:
     """Create the file and push its header to disk now, so that a bad path fails before subscribing."""
     metadata = None
-    if scenario_path is not None:
-        try:
-            metadata = {"fsr_scenario": {"yaml": scenario_path.read_text(encoding="utf-8")}}
-        except OSError as error:
-            raise ValueError(f"--scenario: cannot read {scenario_path}: {error.strerror or error}") from None
+    if scenario is not None:
+        metadata = {"fsr_scenario": {"yaml": scenario_text(scenario)}}
     writer = RecordingWriter(out, metadata=metadata, chunk_size=CHUNK_SIZE)
     try:
         writer.flush()
@@ -303,7 +367,7 @@ def main(argv: list[str] | None = None) -> int:
     nodes: list[object] = []
 
     def make_node(_args: list[str]) -> object:
-        node = make_recorder(writer, topics)()
+        node = make_recorder(writer, topics, args.keep_running)()
         nodes.append(node)
         return node
 

@@ -2,7 +2,9 @@
 
 Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``trajectory`` sections),
 ``controller_type`` (``geometric`` | ``voliro``, overrides the scenario), gain overrides ``k_p``, ``k_v``,
-``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal). An invalid value exits with code 2 and names it.
+``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal), ``exit_on_finish`` (default true: end by itself once
+``sim_status`` reports the end of the flight, :mod:`fsr_sim.ros.flight_end`). An invalid value exits with
+code 2 and names it.
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd`` and ``reference``, all stamped ``t_k`` (lockstep contract).
@@ -35,8 +37,9 @@ from fsr_sim.ros.conversions import (
     state_from_odometry,
     wrench_stamped,
 )
+from fsr_sim.ros.flight_end import FlightEndWatch
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
-from fsr_sim.ros.runtime import RateLimitedWarning, run_node
+from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GAIN_PARAMETERS = ("k_p", "k_v", "k_d", "k_r", "k_w")
 
@@ -58,6 +61,7 @@ class ControllerNode(Node):
         super().__init__("controller")
         name = self.declare_parameter("scenario", "").value
         controller_type = self.declare_parameter("controller_type", "").value
+        exit_on_finish = exit_on_finish_parameter(self, "controller")
         if not name:
             raise ConfigError("scenario", "parameter is required (-p scenario:=<name or path>)", "controller")
         gains = {}
@@ -87,6 +91,7 @@ class ControllerNode(Node):
         self.reference_pub = self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
+        self.flight_end = FlightEndWatch(self) if exit_on_finish else None
         self.warn = RateLimitedWarning(self.get_logger())
         self.callback_seconds = 0.0
         self.callbacks = 0
@@ -95,8 +100,13 @@ class ControllerNode(Node):
             f"{len(config.waypoints)} waypoint(s)"
         )
 
+    def done(self) -> bool:
+        return self.flight_end is not None and self.flight_end.ended()
+
     def on_odom(self, msg: Odometry) -> None:
         start = time.perf_counter()
+        if self.flight_end is not None:
+            self.flight_end.activity()
         if not odometry_is_finite(msg):
             self.warn("dropped an odom with NaN/inf values")
             return

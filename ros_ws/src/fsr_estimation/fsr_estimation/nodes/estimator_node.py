@@ -6,7 +6,8 @@ header stamp, runs :class:`fsr_estimation.core.observer.MomentumObserver` once p
 pair's stamp) and ``mass_estimate`` (Float64, kg). Time is the stamps' simulated time; the sample time is
 the stamp difference, which must equal the control period (a gap or a jump back resets the observer).
 Messages with NaN/inf are dropped with a rate-limited warning. Service ``~/reset`` (std_srvs/Trigger).
-Parameters: :mod:`fsr_estimation.nodes.estimator_params`.
+Parameters: :mod:`fsr_estimation.nodes.estimator_params`, and ``exit_on_finish`` (default true: end by
+itself once ``sim_status`` reports the end of the flight, :mod:`fsr_sim.ros.flight_end`).
 """
 
 from __future__ import annotations
@@ -32,8 +33,9 @@ from fsr_sim.ros.conversions import (
     wrench_is_finite,
     wrench_stamped,
 )
+from fsr_sim.ros.flight_end import FlightEndWatch
 from fsr_sim.ros.qos import STREAM_QOS
-from fsr_sim.ros.runtime import RateLimitedWarning, run_node
+from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 MAX_PENDING = 1000  # unpaired stamps kept per topic (about 1 s at 1 kHz)
 PERIOD_TOLERANCE = 0.01  # relative deviation of a stamp difference from the control period that is accepted
@@ -47,6 +49,7 @@ class EstimatorNode(Node):
         dynamic = ParameterDescriptor(dynamic_typing=True)
         values = {name: self.declare_parameter(name, None, dynamic).value for name in PARAMETER_NAMES}
         settings = node_settings(values)
+        exit_on_finish = exit_on_finish_parameter(self, "estimator")
         self.config = settings.config
         self.control_period = settings.control_period
         self.enabled = self.config.enabled
@@ -65,6 +68,7 @@ class EstimatorNode(Node):
         self.create_subscription(Odometry, "odom", self._on_odom, STREAM_QOS)
         self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS)
         self.create_service(Trigger, "~/reset", self._on_reset)
+        self.flight_end = FlightEndWatch(self) if exit_on_finish else None
         c = self.config
         self.get_logger().info(
             f"estimator: c0 = {c.c0} rad/s, r = {c.r}, mass = {c.mass} kg, inertia diag = "
@@ -73,7 +77,7 @@ class EstimatorNode(Node):
             + ("" if self.enabled else " (disabled by the scenario)"))
 
     def done(self) -> bool:
-        return not self.enabled
+        return not self.enabled or (self.flight_end is not None and self.flight_end.ended())
 
     def _make_observer(self, period: float) -> MomentumObserver:
         c = self.config
@@ -97,6 +101,8 @@ class EstimatorNode(Node):
         self._store(self._wrench, stamp, wrench_from_msg(msg))
 
     def _store(self, pending: dict, stamp: int, value: tuple) -> None:
+        if self.flight_end is not None:
+            self.flight_end.activity()
         if self._last_stamp is not None and stamp <= self._last_stamp:
             self.warn_timing(f"sample at {stamp} ns is not newer than the last one processed: dropped")
             return

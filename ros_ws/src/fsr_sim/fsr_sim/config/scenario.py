@@ -24,6 +24,7 @@ from fsr_sim.config.validation import (
     Section,
     load_yaml_file,
     resolve_config_path,
+    yaml_error_text,
 )
 from fsr_sim.model.disturbances import DisturbanceProfile, disturbance_from_section
 from fsr_sim.model.environment import Environment, environment_from_section
@@ -82,7 +83,8 @@ def apply_override(data: dict[str, Any], dotted_key: str, yaml_value: str, sourc
     try:
         value = yaml.safe_load(yaml_value)
     except yaml.YAMLError as error:
-        raise ConfigError(dotted_key, f"override value is not valid YAML ({error})", source) from None
+        reason = f"--set value {yaml_value!r} is not valid YAML{yaml_error_text(error, single_line=True)}"
+        raise ConfigError(dotted_key, reason, source) from None
     parts = dotted_key.split(".")
     node: Any = data
     for depth, part in enumerate(parts[:-1]):
