@@ -371,7 +371,7 @@ def main(argv: list[str] | None = None) -> int:
         nodes.append(node)
         return node
 
-    try:
+    try:  # the node's exit_code is EXIT_FAILURE once writing failed
         code = run_node(make_node, argv)
     finally:
         if not nodes:  # the node was never built: still leave a valid (empty) file
@@ -379,9 +379,7 @@ def main(argv: list[str] | None = None) -> int:
                 writer.close()
             except OSError:
                 pass
-    if nodes and getattr(nodes[0], "failed", False):
-        code = EXIT_FAILURE
-    return code
+    return code  # only reached when the node was never built: run_node ends the process otherwise
 
 
 if __name__ == "__main__":

@@ -72,7 +72,8 @@ class StopFlag:
         signal.signal(signal.SIGTERM, handler)
 
 
-def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None) -> int:
+def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None,
+             exit_process: bool = True) -> int:
     """Create the node with ``make_node(args)`` and spin it until done or signalled; returns an exit code.
 
     The node may define ``done() -> bool`` (stop spinning, e.g. end of the flight), ``exit_code`` and
@@ -80,6 +81,11 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     lockstep) instead of the executor's callbacks. ``ConfigError`` / ``ValueError`` raised while the node
     is built are printed as one line and give exit code 2. A node with a ``stop_flag`` attribute gets the
     :class:`StopFlag`; its ``close()`` can then keep within the signal budget (:func:`signal_deadline`).
+
+    With ``exit_process`` (the console scripts), once a node was built and torn down the process ends right
+    here with ``os._exit(code)`` after flushing stdout/stderr: interpreter finalisation (garbage collection
+    of rclpy objects, Fast DDS global destructors) adds up to seconds on a loaded machine and is where a
+    by-hand node was seen to hang. Files are already closed by ``close()``.
     """
     configure_environment()
     import rclpy
@@ -133,6 +139,10 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
         finally:
             rclpy.try_shutdown()
             watchdog.cancel()
+    if exit_process and node is not None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     return code
 
 
