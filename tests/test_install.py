@@ -62,6 +62,23 @@ def check_scripts_start(script: Callable[[str], Path], env: dict[str, str]) -> N
         assert "unknown scenario 'no_such_scenario'" in result.stderr, result.stderr
 
 
+def source_files(package: str) -> tuple[set[str], set[str]]:
+    """(Python modules, data files) of a package's source tree, relative to its ``ros_ws/src/<package>``."""
+    base = ROOT / "ros_ws" / "src" / package
+    files = {str(f.relative_to(base)) for f in (base / package).rglob("*")
+             if f.is_file() and "__pycache__" not in f.parts}
+    return {f for f in files if f.endswith(".py")}, {f for f in files if not f.endswith((".py", ".pyc"))}
+
+
+def test_every_python_folder_of_every_package_is_a_package():
+    """``find_packages`` skips a folder without ``__init__.py``: its modules would be missing when installed."""
+    for package in PACKAGES:
+        modules, _ = source_files(package)
+        folders = {str(Path(m).parent) for m in modules}
+        missing = sorted(f for f in folders if f"{f}/__init__.py" not in modules)
+        assert not missing, f"{package}: no __init__.py in {missing}"
+
+
 @pytest.fixture
 def domain():
     with acquire_domain(TEST_RANGE) as lease:
@@ -92,10 +109,10 @@ def test_non_editable_install_runs_every_command(tmp_path, domain):
                  "print(m.__file__)"], env)
     assert where.returncode == 0, where.stderr
     assert Path(where.stdout.strip()).is_relative_to(site), f"fsr_bringup came from {where.stdout}"
-    for data in ("fsr_sim/config/fastdds_profile.xml", "fsr_sim/config/scenarios/ex4_geometric.yaml",
-                 "fsr_sim/config/vehicles/octocopter.yaml", "fsr_bringup/fleets/three_vehicles.yaml",
-                 "fsr_bringup/cli/__init__.py"):
-        assert (site / data).is_file(), f"{data} is not installed"
+    for package in PACKAGES:  # every module and data file (scenarios, vehicles, fleets, DDS profile) shipped
+        modules, data = source_files(package)
+        missing = sorted(f for f in modules | data if not (site / f).is_file())
+        assert not missing, f"{package}: not installed: {missing}"
     for package in PACKAGES:  # the ament index knows the package (data_files), as a ROS install expects
         assert (scratch / "share" / "ament_index" / "resource_index" / "packages" / package).is_file()
         assert (scratch / "share" / package / "package.xml").is_file()

@@ -184,3 +184,11 @@ def test_every_node_exits_within_2s_of_a_signal_in_any_phase(ros_graph, tmp_path
     assert min(counts.values()) >= 10, counts
     assert all(r[3] <= SIGNAL_BUDGET_S for r in results), f"exit slower than {SIGNAL_BUDGET_S} s:\n{report}"
     assert all(r[4].returncode == 0 for r in results), f"non-zero exit after a signal:\n{report}"
+
+
+@pytest.mark.parametrize("node", ["controller", "estimator"])
+def test_exit_on_finish_must_be_a_bool(ros_graph, node):
+    process = ros_graph.start(node, [executable(node), "--ros-args", "-p", "scenario:=ex4_geometric",
+                                     "-p", "exit_on_finish:=maybe"])
+    assert ros_graph.wait_exit(process, timeout=30.0) == 2
+    assert f"{node}: parameter 'exit_on_finish': must be true or false, got 'maybe'" in ros_graph.log(process)
