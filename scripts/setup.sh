@@ -10,10 +10,12 @@ if [ ! -x "$venv/bin/python" ]; then
   "$python" -m venv "$venv"
 fi
 stamp="$venv/.fsr-installed"
-want="$(cat "$root/requirements.txt" "$root"/ros_ws/src/*/setup.py | sha256sum | cut -d' ' -f1)"
+want="$(cat "$root/requirements.txt" "$root"/ros_ws/src/*/setup.py "$root/scripts/setup.sh" | sha256sum | cut -d' ' -f1)"
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$root/requirements.txt"
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps \
+  # --use-pep517: PEP 660 editable installs (console scripts in .venv/bin) even though `wheel` is installed;
+  # without it pip would fall back to `setup.py develop`, which puts the scripts in .venv/lib/<pkg> (setup.cfg)
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --use-pep517 \
     -e "$root/ros_ws/src/fsr_sim" -e "$root/ros_ws/src/fsr_control" \
     -e "$root/ros_ws/src/fsr_estimation" -e "$root/ros_ws/src/fsr_bringup"
   echo "$want" > "$stamp"

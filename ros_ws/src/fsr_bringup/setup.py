@@ -12,9 +12,10 @@ setup(
         ("share/" + package_name, ["package.xml"]),
     ],
     install_requires=[
-        "setuptools", "numpy", "matplotlib", "mcap", "mcap-ros2-support",
+        "setuptools", "numpy", "matplotlib", "PyYAML", "mcap", "mcap-ros2-support", "ros-rosidl-parser",
         "fsr_sim", "fsr_control", "fsr_estimation",
     ],
+    extras_require={"test": ["pytest"]},  # fsr_bringup.testing (the graph-test pytest plugin)
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",

@@ -22,3 +22,23 @@ def test_markdown_prints_gq_for_the_octocopter(capsys):
 def test_unknown_vehicle_exits_2_with_a_message(capsys):
     assert main(["hexacopter"]) == 2
     assert "unknown vehicle 'hexacopter'" in capsys.readouterr().err
+
+
+def test_json_and_markdown_include_the_contact_height(capsys):
+    assert main(["octocopter", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    from fsr_sim.model.vehicle import load_vehicle
+
+    assert data["contact_height"] == load_vehicle("octocopter").contact_height
+    assert main(["quadrotor_ex4"]) == 0
+    assert "| contact height" in capsys.readouterr().out
+
+
+def test_bad_argument_is_one_line_exit_2(capsys):
+    import pytest
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["octocopter", "--jsn"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--jsn" in err and err.startswith("fsr-vehicle: error:")

@@ -14,6 +14,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from fsr_sim.cli.arguments import ArgumentParser
+
 EXIT_OK = 0
 EXIT_WRITE_ERROR = 1
 EXIT_BAD_INPUT = 2
@@ -46,7 +48,7 @@ def figure_options(args: argparse.Namespace) -> object:
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="fsr-analyze", description=__doc__.split("\n")[0])
+    parser = ArgumentParser(prog="fsr-analyze", description=__doc__.split("\n")[0])
     parser.add_argument("recordings", type=Path, nargs="+", metavar="RECORDING",
                         help="MCAP file(s) written by fsr-record / fsr-fly; several are overlaid")
     parser.add_argument("--out", type=Path, help="output folder (default: next to the first recording, "

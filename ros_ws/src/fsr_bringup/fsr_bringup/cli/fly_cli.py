@@ -26,6 +26,7 @@ from fsr_bringup.runner.domains import acquire_domain, fixed_domain
 from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_path, load_fleet
 from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
 from fsr_bringup.runner.scenario_check import check_scenario
+from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.config.validation import ConfigError, builtin_names
 
@@ -33,7 +34,7 @@ EXIT_CONFIG_ERROR = 2
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog="fsr-fly", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument(

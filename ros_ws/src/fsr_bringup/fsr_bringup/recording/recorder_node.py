@@ -1,6 +1,6 @@
 """``fsr-record --out RUN.mcap``: record the fsr graph's topics to a standard ROS 2 MCAP file.
 
-    fsr-record --out run.mcap --scenario my_flight.yaml
+    fsr-record --out run.mcap --scenario ex4_geometric      # or --scenario my_flight.yaml
     fsr-record --out fleet.mcap --namespace /uav1 --namespace /uav2 --topic /status:std_msgs/msg/String
 
 Subscribes up front (so nothing published after the simulator's handshake is missed), without
@@ -15,6 +15,10 @@ Times: ``log_time`` is the simulated time of the message: its header stamp (``/c
 time the recorder has seen, i.e. its sim-clock receive time (0 before the first). ``publish_time`` is the
 publisher's source timestamp (wall clock).
 
+End: once every recorded ``sim_status`` (one per namespace) reported the end of the flight and the
+producers have gone (or nothing arrived for a while), the recorder takes what is still queued, finishes
+the file and exits 0 by itself (:mod:`fsr_sim.ros.flight_end`); ``--keep-running`` records until a signal.
+
 Files survive crashes: chunks are small and flushed every ``FLUSH_PERIOD`` s, so a SIGKILLed file is
 readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued, write the summary,
 exit 0. A path that cannot be written: one line naming it and the reason, exit 1, before subscribing.
@@ -27,7 +31,10 @@ each has (in-order reliable streams: the last stamp reached means nothing before
 ``DRAIN_STALL_S`` without a message or ``DRAIN_FINAL_MAX_S`` in all, and names a stream that falls short.
 Without a final status (the flight still runs) it stops after ``DRAIN_QUIET_S`` without a message
 (``DRAIN_MAX_S`` at most). ``fsr-fly`` stops the recorder last, after the simulator and after the
-controller and estimator have answered every state (:mod:`fsr_sim.ros.flight_end`).
+controller and estimator have answered every state (:mod:`fsr_sim.ros.flight_end`). After SIGINT/SIGTERM the
+drain ends at the latest ``SIGNAL_DRAIN_S`` after the signal (a node exits within 2 s of a signal). Without
+``--keep-running`` the recorder also ends by itself once every recorded ``sim_status`` is final and the
+graph has gone quiet (:class:`fsr_sim.ros.flight_end.FlightEndRule`).
 """
 
 from __future__ import annotations
@@ -39,9 +46,17 @@ import sys
 import time
 from pathlib import Path
 
+from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.recording.topics import CLOCK_TOPIC, FLIGHT_TOPICS
 from fsr_sim.recording.writer import RecordingWriter
-from fsr_sim.ros.runtime import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_OK, configure_environment, run_node
+from fsr_sim.ros.runtime import (
+    EXIT_CONFIG_ERROR,
+    EXIT_FAILURE,
+    EXIT_OK,
+    configure_environment,
+    run_node,
+    signal_deadline,
+)
 
 STANDARD_TOPICS = FLIGHT_TOPICS
 STATUS_TYPE = "std_msgs/msg/String"
@@ -54,15 +69,22 @@ DRAIN_STALL_S = 2.0  # with a final sim_status: give up on a stream after this l
 DRAIN_FINAL_MAX_S = 15.0
 DRAINED_TOPICS = ("odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "wrench_estimate")
 STAMP_TOLERANCE_NS = 1000  # sim_time is a float of seconds
+SIGNAL_DRAIN_S = 0.8  # s after SIGINT/SIGTERM: stop taking then, whatever is still arriving
 _STAMP = struct.Struct("<iI")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog="fsr-record", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--out", required=True, type=Path, help="MCAP file to write (overwritten)")
-    parser.add_argument("--scenario", type=Path, help="scenario YAML stored in the file's metadata")
+    parser.add_argument(
+        "--scenario", help="scenario stored in the file's metadata: a built-in name (e.g. ex4_geometric) or a YAML path"
+    )
+    parser.add_argument(
+        "--keep-running", action="store_true",
+        help="record until SIGINT/SIGTERM instead of ending with the flight (every sim_status final)",
+    )
     parser.add_argument(
         "--namespace", action="append", default=[], metavar="NS",
         help="record the standard topics under NS (repeatable; default: the node's namespace)",
@@ -117,22 +139,29 @@ def status_time_ns(data: bytes) -> int | None:
         return None
 
 
+def status_text(data: bytes) -> str | None:
+    """The text of a std_msgs/String CDR message (uint32 length incl. the NUL, then the bytes)."""
+    try:
+        (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
+        return data[8 : 8 + length].rstrip(b"\0").decode("utf-8")
+    except (struct.error, IndexError, UnicodeDecodeError):
+        return None
+
+
 def final_status_ns(data: bytes) -> int | None:
     """``sim_time`` [ns] of a final (``finished`` / ``diverged`` / ``stopped``) ``sim_status``, else None."""
     from fsr_sim.ros.flight_end import final_stamp_ns
 
-    try:
-        (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
-        return final_stamp_ns(data[8 : 8 + length].rstrip(b"\0").decode("utf-8", errors="replace"))
-    except (IndexError, struct.error):
-        return None
+    text = status_text(data)
+    return None if text is None else final_stamp_ns(text)
 
 
-def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> type:
+def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_running: bool = False) -> type:
     """Build the node class lazily (rclpy is imported only after the environment is configured)."""
     from rclpy.node import Node
     from rclpy.qos import QoSProfile
 
+    from fsr_sim.ros.flight_end import FlightEndRule
     from fsr_sim.ros.message_schema import message_class
     from fsr_sim.ros.qos import CLOCK_QOS, GOAL_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
     from fsr_sim.ros.wait_set import SubscriptionWaitSet
@@ -178,10 +207,22 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
                 if base in DRAINED_TOPICS and type_name == STANDARD_TOPICS[base]:
                     self.drained[topic] = namespace
             self.wait_set = SubscriptionWaitSet(self, [entry[0] for entry in self.entries])
+            status_topics = [topic for _sub, topic, _stamped, status in self.entries if status]
+            self.flight_end = None if keep_running or not status_topics else FlightEndRule(status_topics)
+            self.stop_flag: object = None  # set by run_node
             self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
 
         def done(self) -> bool:
-            return self.failed
+            if self.failed:
+                return True
+            if self.flight_end is None or not self.flight_end.ended(self.producers_gone):
+                return False
+            self.get_logger().info(f"flight ended ({self.flight_end.describe()}): closing the recording")
+            return True
+
+        def producers_gone(self) -> bool:
+            """No node publishes on any recorded topic any more (everything it sent has been acknowledged)."""
+            return all(sub.get_publisher_count() == 0 for sub, *_ in self.entries)
 
         def spin_once(self, _executor: object, _stop: object) -> None:
             """Wait up to 0.1 s for messages, then take and write everything queued."""
@@ -195,6 +236,12 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
             if batch:
                 batch.sort(key=lambda item: item[0])
                 self.write(batch)
+                if self.flight_end is not None:
+                    self.flight_end.activity()
+                    for _received, _source, topic, data, _stamped, status in batch:
+                        text = status_text(data) if status else None
+                        if text is not None:
+                            self.flight_end.status(topic, text)
             self.maybe_flush()
             return len(batch)
 
@@ -252,7 +299,8 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
         def drain(self) -> None:
             """Take what is still queued (see the module docstring for when to stop)."""
             start = quiet_since = time.monotonic()
-            while not self.failed:
+            end = signal_deadline(self.stop_flag, SIGNAL_DRAIN_S, DRAIN_FINAL_MAX_S)
+            while not self.failed and time.monotonic() < end:
                 if self.take(50_000_000):
                     quiet_since = time.monotonic()
                 short = self.short_streams()
@@ -289,14 +337,29 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]]) -> typ
     return Recorder
 
 
-def open_writer(out: Path, scenario_path: Path | None) -> RecordingWriter:
+def scenario_text(scenario: str) -> str:
+    """YAML text kept in the metadata for ``--scenario``: an existing file as it is (a scenario or the
+    runner's fleet file), else a built-in scenario name or path, loaded and dumped (merged, checked)."""
+    from fsr_sim.config.scenario import load_scenario
+    from fsr_sim.config.validation import ConfigError
+
+    path = Path(scenario)
+    if path.is_file():
+        try:
+            return path.read_text(encoding="utf-8")
+        except OSError as error:
+            raise ValueError(f"--scenario: cannot read {path}: {error.strerror or error}") from None
+    try:
+        return load_scenario(scenario).dump()
+    except ConfigError as error:
+        raise ValueError(f"--scenario: {error}") from None
+
+
+def open_writer(out: Path, scenario: str | None) -> RecordingWriter:
     """Create the file and push its header to disk now, so that a bad path fails before subscribing."""
     metadata = None
-    if scenario_path is not None:
-        try:
-            metadata = {"fsr_scenario": {"yaml": scenario_path.read_text(encoding="utf-8")}}
-        except OSError as error:
-            raise ValueError(f"--scenario: cannot read {scenario_path}: {error.strerror or error}") from None
+    if scenario is not None:
+        metadata = {"fsr_scenario": {"yaml": scenario_text(scenario)}}
     writer = RecordingWriter(out, metadata=metadata, chunk_size=CHUNK_SIZE)
     try:
         writer.flush()
@@ -341,11 +404,11 @@ def main(argv: list[str] | None = None) -> int:
     nodes: list[object] = []
 
     def make_node(_args: list[str]) -> object:
-        node = make_recorder(writer, topics)()
+        node = make_recorder(writer, topics, args.keep_running)()
         nodes.append(node)
         return node
 
-    try:
+    try:  # the node's exit_code is EXIT_FAILURE once writing failed
         code = run_node(make_node, argv)
     finally:
         if not nodes:  # the node was never built: still leave a valid (empty) file
@@ -353,9 +416,7 @@ def main(argv: list[str] | None = None) -> int:
                 writer.close()
             except OSError:
                 pass
-    if nodes and getattr(nodes[0], "failed", False):
-        code = EXIT_FAILURE
-    return code
+    return code  # only reached when the node was never built: run_node ends the process otherwise
 
 
 if __name__ == "__main__":

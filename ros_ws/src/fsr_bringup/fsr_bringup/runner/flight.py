@@ -6,9 +6,10 @@ ends when the simulator exits (end of the scenario, divergence, or a failure). T
 in waves, with SIGTERM/SIGKILL fallbacks: the simulators (on Ctrl-C they are still running: they publish
 ``sim_status`` stopped with the last step), then the controllers and estimators (they answer every state up
 to that step), the recorder last (it drains until it holds every message up to that step, then closes the
-file).
+file). Nodes that already ended by themselves (``exit_on_finish``: code 0 once ``sim_status`` is final)
+are fine.
 
-A node that dies during the flight is reported by name; the flight goes on (the simulator applies the
+A node that dies (non-zero exit) during the flight is reported by name; the flight goes on (the simulator applies the
 scenario's failsafe when the controller is gone) and the run's exit code is non-zero.
 """
 
@@ -200,6 +201,8 @@ def fly_graph(
                 if code is None or node.name in reported or node.name in simulators:
                     continue
                 reported.add(node.name)
+                if code == 0:
+                    continue  # ended by itself at the end of the flight (exit_on_finish), or stopped on purpose
                 failures.append(f"{node.name} died during the flight ({describe_exit(code)})")
                 console.echo("fsr-fly", f"ERROR: {failures[-1]}; see {node.log_path}")
             if all(group.get(name).returncode is not None for name in simulators):

@@ -2,7 +2,9 @@
 
 Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``trajectory`` sections),
 ``controller_type`` (``geometric`` | ``voliro``, overrides the scenario), gain overrides ``k_p``, ``k_v``,
-``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal). An invalid value exits with code 2 and names it.
+``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal), ``exit_on_finish`` (default true: end by itself once
+``sim_status`` reports the end of the flight, :mod:`fsr_sim.ros.flight_end`). An invalid value exits with
+code 2 and names it.
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
@@ -41,7 +43,7 @@ from fsr_sim.ros.conversions import (
 )
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
-from fsr_sim.ros.runtime import RateLimitedWarning, run_node
+from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GAIN_PARAMETERS = ("k_p", "k_v", "k_d", "k_r", "k_w")
 
@@ -63,6 +65,7 @@ class ControllerNode(Node):
         super().__init__("controller")
         name = self.declare_parameter("scenario", "").value
         controller_type = self.declare_parameter("controller_type", "").value
+        exit_on_finish = exit_on_finish_parameter(self, "controller")
         if not name:
             raise ConfigError("scenario", "parameter is required (-p scenario:=<name or path>)", "controller")
         gains = {}
@@ -98,7 +101,8 @@ class ControllerNode(Node):
             self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
-        self.flight_end = FlightEnd(self)
+        self.flight_end = FlightEnd(self, exit_on_finish)
+        self.stop_flag: object = None  # run_node's StopFlag: bounds the drain after a signal
         self.answered_ns: int | None = None  # stamp of the last odom handled
         self.warn = RateLimitedWarning(self.get_logger())
         self.callback_seconds = 0.0
@@ -108,8 +112,12 @@ class ControllerNode(Node):
             f"{len(config.waypoints)} waypoint(s)"
         )
 
+    def done(self) -> bool:
+        return self.flight_end.ended()
+
     def on_odom(self, msg: Odometry) -> None:
         start = time.perf_counter()
+        self.flight_end.activity()
         if not odometry_is_finite(msg):
             self.warn("dropped an odom with NaN/inf values")
             return
@@ -139,8 +147,7 @@ class ControllerNode(Node):
         self.get_logger().info(f"new goal {position.tolist()} from t = {self.controller.last_stamp:.3f} s")
 
     def close(self) -> None:
-        publishers = [p for p in (self.rotor_pub, self.wrench_pub, self.reference_pub) if p is not None]
-        self.flight_end.drain(self, lambda: self.answered_ns, publishers)
+        self.flight_end.drain(lambda: self.answered_ns, list(self.publishers_by_topic.values()))
         saturation = self.controller.saturation
         if saturation.count:
             self.get_logger().warning(

@@ -7,9 +7,10 @@ force ``R_b^T f_e``, torque ``Q^-T tau_e``, stamped with the pair's stamp) and `
 kg).
 Messages with NaN/inf are dropped with a rate-limited warning. Service ``~/reset`` (std_srvs/Trigger).
 Asked to stop after the simulator ended (its final ``sim_status``), it first estimates every pair still
-queued up to the simulator's last state and waits for its subscribers' acknowledgements
+queued up to the simulator's last state and waits for its subscribers' acknowledgements; with
+``exit_on_finish`` (default true) it ends by itself once ``sim_status`` reports the end of the flight
 (:mod:`fsr_sim.ros.flight_end`).
-Parameters: :mod:`fsr_estimation.nodes.estimator_params`.
+Parameters: :mod:`fsr_estimation.nodes.estimator_params` and ``exit_on_finish``.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from fsr_sim.ros.conversions import (
 )
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_QOS
-from fsr_sim.ros.runtime import RateLimitedWarning, run_node
+from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 
 class EstimatorNode(Node):
@@ -48,6 +49,7 @@ class EstimatorNode(Node):
         dynamic = ParameterDescriptor(dynamic_typing=True)
         values = {name: self.declare_parameter(name, None, dynamic).value for name in PARAMETER_NAMES}
         settings = node_settings(values)
+        exit_on_finish = exit_on_finish_parameter(self, "estimator")
         self.config = settings.config
         self.enabled = self.config.enabled
         self.warn_input = RateLimitedWarning(self.get_logger())
@@ -61,7 +63,8 @@ class EstimatorNode(Node):
         self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS)
         self.create_service(Trigger, "~/reset", self._on_reset)
         period = settings.control_period
-        self.flight_end = FlightEnd(self)
+        self.flight_end = FlightEnd(self, exit_on_finish)
+        self.stop_flag: object = None  # run_node's StopFlag: bounds the drain after a signal
         self.get_logger().info(
             f"estimator: c0 = {c.c0} rad/s, r = {c.r}, mass = {c.mass} kg, inertia diag = "
             f"{np.diag(c.inertia).tolist()} kg m^2, control period = "
@@ -69,12 +72,12 @@ class EstimatorNode(Node):
             + ("" if self.enabled else " (disabled by the scenario)"))
 
     def done(self) -> bool:
-        return not self.enabled
+        return not self.enabled or self.flight_end.ended()
 
     def close(self) -> None:
         """Estimate every pair up to the simulator's last state before exiting (see the module docstring)."""
         if self.enabled:
-            self.flight_end.drain(self, lambda: self.estimator.last_stamp, [self.wrench_pub, self.mass_pub])
+            self.flight_end.drain(lambda: self.estimator.last_stamp, [self.wrench_pub, self.mass_pub])
 
     def _on_odom(self, msg: Odometry) -> None:
         stamp = ns_from_time(msg.header.stamp)
@@ -92,6 +95,7 @@ class EstimatorNode(Node):
         self._publish(lambda: self.estimator.add_command(stamp, *wrench_from_msg(msg)))
 
     def _publish(self, add: Callable[[], Estimate | None]) -> None:
+        self.flight_end.activity()
         try:
             estimate = add()
         except ValueError as error:  # a control period from the stamps the filter cannot run at

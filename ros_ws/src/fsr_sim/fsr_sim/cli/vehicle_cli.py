@@ -1,7 +1,8 @@
 """``fsr-vehicle NAME [--json]``: a vehicle's parameters and its allocation matrices.
 
 Markdown by default; ``--json`` prints an object with ``mass``, ``inertia`` (3x3), ``c_f``, ``c_m``,
-``arm_length``, ``rotor_radius``, rotor limits, ``rotors`` (position, spin, tilt axis), ``allocation``
+``arm_length``, ``rotor_radius``, ``contact_height`` (landing gear below the centre of mass), rotor limits,
+``rotors`` (position, spin, tilt axis), ``allocation``
 (6 x n, squared rotor speeds -> body wrench, rows f_x f_y f_z tau_x tau_y tau_z), for a coplanar vehicle
 also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a tilting vehicle
 ``allocation_static`` (6 x 2n, SPEC §3.2).
@@ -9,12 +10,12 @@ also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
 import numpy as np
 
+from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.model.allocation import (
     octocopter_allocation_4x8,
@@ -47,6 +48,7 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
         "c_m": vehicle.c_m,
         "arm_length": vehicle.arm_length,
         "rotor_radius": vehicle.rotor_radius,
+        "contact_height": vehicle.contact_height,
         "rotor_speed_min": vehicle.rotor_speed_min,
         "rotor_speed_max": vehicle.rotor_speed_max,
         "hover_rotor_speed": float(np.sqrt(vehicle.weight / (vehicle.rotor_count * vehicle.c_f))),
@@ -84,6 +86,7 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
         f"| c_m | {vehicle.c_m:.6g} N m/(rad/s)^2 |",
         f"| arm length | {s['arm_length']:.4g} m |",
         f"| rotor radius | {vehicle.rotor_radius} m |",
+        f"| contact height (feet below the CoM) | {vehicle.contact_height} m |",
         f"| rotor speed | {vehicle.rotor_speed_min} .. {vehicle.rotor_speed_max} rad/s |",
         f"| hover rotor speed | {s['hover_rotor_speed']:.1f} rad/s |",
         "",
@@ -109,7 +112,7 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="fsr-vehicle", description=__doc__.split("\n")[0])
+    parser = ArgumentParser(prog="fsr-vehicle", description=__doc__.split("\n")[0])
     parser.add_argument("vehicle", help=f"built-in name ({', '.join(builtin_names('vehicles'))}) or YAML path")
     parser.add_argument("--json", action="store_true", help="print JSON instead of Markdown")
     args = parser.parse_args(argv)

@@ -27,6 +27,7 @@ from fsr_sim.config.validation import (
     checked_spd,
     load_yaml_file,
     resolve_config_path,
+    yaml_error_text,
 )
 from fsr_sim.config.vehicle_file import load_vehicle_file
 from fsr_sim.model.disturbances import DisturbanceProfile
@@ -105,10 +106,7 @@ def scenario_from_mapping(data: dict[str, Any], source: str = "<python>", base_d
         apply_override(data, key.strip(), value, source)
     for key, value in (values or {}).items():
         set_value(data, str(key), copy.deepcopy(value), source)
-    known = top_level_keys()
-    unknown = sorted(str(k) for k in data if k not in known)
-    if unknown:
-        raise ConfigError(unknown[0], f"unknown key (known: {', '.join(known)})", source)
+    Section(data, "", source).reject_unknown(top_level_keys())  # names the closest known key of a typo
     return Scenario(data=data, source=source, base_dir=Path.cwd() if base_dir is None else Path(base_dir))
 
 
@@ -117,7 +115,8 @@ def apply_override(data: dict[str, Any], dotted_key: str, yaml_value: str, sourc
     try:
         value = yaml.safe_load(yaml_value)
     except yaml.YAMLError as error:
-        raise ConfigError(dotted_key, f"override value is not valid YAML ({error})", source) from None
+        reason = f"--set value {yaml_value!r} is not valid YAML{yaml_error_text(error, single_line=True)}"
+        raise ConfigError(dotted_key, reason, source) from None
     set_value(data, dotted_key, value, source)
 
 

@@ -45,15 +45,26 @@ def parse_yaml_mapping(text: str, source: str) -> dict[str, Any]:
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(error, "problem", None) or str(error)
-        raise ConfigError("", f"YAML syntax error{where}: {problem}", source) from None
+        raise ConfigError("", f"YAML syntax error{yaml_error_text(error)}", source) from None
     if data is None:
         data = {}
     if not isinstance(data, dict):
         raise ConfigError("", f"expected a mapping at the top level, got {type(data).__name__}", source)
     return data
+
+
+def yaml_error_text(error: yaml.YAMLError, single_line: bool = False) -> str:
+    """PyYAML's multi-line error as one line: `` at line L, column C: <problem>`` (line omitted if
+    ``single_line``, e.g. for a one-line ``--set`` value)."""
+    mark = getattr(error, "problem_mark", None)
+    if mark is None:
+        where = ""
+    elif single_line:
+        where = f" at column {mark.column + 1}"
+    else:
+        where = f" at line {mark.line + 1}, column {mark.column + 1}"
+    problem = getattr(error, "problem", None) or " ".join(str(error).split())
+    return f"{where}: {problem}"
 
 
 def builtin_config_dir(kind: str) -> Path:

@@ -52,12 +52,14 @@ from fsr_sim.nodes.lockstep import (
 from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
 from fsr_sim.nodes.state_messages import StateMessages
 from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_QOS
-from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node
+from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node, signal_deadline
 from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
 WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
 BATCH_WALL = 0.05  # s of stepping per spin_once call
 ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last messages
+ACK_SLICE = 0.05  # s per wait_for_all_acked call
+SIGNAL_ACK_LIMIT = 1.0  # s after SIGINT/SIGTERM: the same bound when stopped by a signal
 
 HANDSHAKE, FIRST_COMMAND, RUNNING, DONE = "handshake", "first_command", "running", "done"
 
@@ -140,12 +142,16 @@ class SimulatorNode(Node):
             signal_name = getattr(self.stop_flag, "signal_name", None)
             reason = f"received {signal_name}" if signal_name else "stopped before the end of the flight"
             self._finish("stopped", reason, self.exit_code)
-        deadline = time.monotonic() + ACK_TIMEOUT
+        start = time.monotonic()
         for pub in (self.odom_pub, self.wrench_pub, self.status_pub):
-            remaining = deadline - time.monotonic()
-            if remaining <= 0.0 or not pub.wait_for_all_acked(Duration(nanoseconds=int(remaining * 1e9))):
-                self.get_logger().warning(f"'{pub.topic_name}': not every subscriber acknowledged the last messages")
-                break
+            while not pub.wait_for_all_acked(Duration(nanoseconds=int(ACK_SLICE * 1e9))):
+                # re-evaluated every slice: a signal arriving meanwhile shortens the wait
+                if time.monotonic() >= min(start + ACK_TIMEOUT, signal_deadline(self.stop_flag, SIGNAL_ACK_LIMIT,
+                                                                                 ACK_TIMEOUT)):
+                    self.get_logger().warning(
+                        f"'{pub.topic_name}': not every subscriber acknowledged the last messages"
+                    )
+                    return
 
     # ----- start-up ---------------------------------------------------------------------------------
     def _handshake(self) -> None:

@@ -89,6 +89,8 @@ class Recording:
 def open_recording(path: str | Path) -> Recording:
     """Read the recording at ``path``; :class:`RecordingError` if it is missing or not MCAP."""
     path = Path(path)
+    if path.is_dir():
+        raise RecordingError(f"{path}: is a directory; expected an MCAP recording file (e.g. run.mcap)")
     if not path.is_file():
         raise RecordingError(f"{path}: no such file")
     with open(path, "rb") as stream:

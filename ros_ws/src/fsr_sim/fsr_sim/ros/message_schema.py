@@ -1,13 +1,15 @@
 """ROS 2 message definitions as rosbag2 writes them into MCAP schemas (encoding ``ros2msg``).
 
 The schema text is the root type's ``.msg`` file, then every nested type once, depth-first in field
-order, each introduced by a line of 80 ``=`` and ``MSG: pkg/Type``. The ``.msg`` files live under the
-Python environment's prefix (``$PREFIX/share/<pkg>/msg``), where the ROS wheels install them.
+order, each introduced by a line of 80 ``=`` and ``MSG: pkg/Type``. The ``.msg`` files live under an
+install prefix (``$PREFIX/share/<pkg>/msg``): the Python environment's, where the ROS wheels install them,
+or one on ``AMENT_PREFIX_PATH`` or above the message package's module.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 from functools import cache
 from pathlib import Path
@@ -33,13 +35,32 @@ def message_class(name: str) -> type:
     return getattr(importlib.import_module(f"{parts[0]}.{parts[1]}"), parts[2])
 
 
+def _share_prefixes(package: str) -> list[Path]:
+    """Install prefixes that may hold ``share/<package>/msg``: this environment's, ``AMENT_PREFIX_PATH``
+    (a ROS install or a colcon workspace), and every folder above the message package's Python module (an
+    environment that takes its ROS packages from another one, e.g. through a ``.pth`` file)."""
+    prefixes = [Path(sys.prefix), Path(sys.base_prefix)]
+    prefixes += [Path(p) for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    try:
+        module_file = importlib.import_module(package).__file__
+    except ImportError:
+        module_file = None
+    if module_file:
+        prefixes += list(Path(module_file).resolve().parents)
+    return prefixes
+
+
 @cache
 def _msg_text(package: str, name: str) -> str:
-    for prefix in (Path(sys.prefix), Path(sys.base_prefix)):
+    prefixes = _share_prefixes(package)
+    for prefix in prefixes:
         path = prefix / "share" / package / "msg" / f"{name}.msg"
         if path.is_file():
             return path.read_text(encoding="utf-8")
-    raise FileNotFoundError(f"No definition for {package}/msg/{name} under {sys.prefix}/share")
+    raise FileNotFoundError(
+        f"No definition for {package}/msg/{name}: no share/{package}/msg/{name}.msg under "
+        f"{', '.join(str(p) for p in dict.fromkeys(prefixes))}"
+    )
 
 
 def _nested_types(msg_class: type) -> list[tuple[str, str]]:

@@ -6,6 +6,14 @@
 * :func:`run_node` installs our own SIGINT/SIGTERM handlers (rclpy's may surface as ``RCLError`` under
   load), spins until the node says it is done or a signal arrives, then destroys the node and shuts the
   context down. The node's ``close()`` (if any) runs in ``finally`` so files are always finished.
+
+Shutdown is bounded (a node exits within ``SIGNAL_EXIT_BUDGET`` s of SIGINT/SIGTERM in any phase). The
+executor is shut down *before* the node is destroyed: its cached wait generator holds every entity handle
+(``with handle``) between two ``spin_once`` calls, so ``destroy_node`` could only mark them "destroy when
+not in use" and their real destruction happened later, at garbage collection, after the context was shut
+down (a by-hand estimator was seen spinning at 100 % CPU there for minutes). As a last resort a watchdog
+thread ends the process with ``os._exit`` (and says so on stderr) if teardown still has not finished by
+the budget's end.
 """
 
 from __future__ import annotations
@@ -13,6 +21,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from importlib import resources
@@ -23,6 +32,11 @@ EXIT_FAILURE = 1  # a node failed (or a file could not be written)
 EXIT_CONFIG_ERROR = 2  # invalid scenario, parameter or argument; nothing was started
 EXIT_DIVERGED = 3  # the flight diverged (NaN state, beyond physical bounds, crash)
 EXIT_INTERRUPTED = 130  # fsr-fly stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention)
+
+SIGNAL_EXIT_BUDGET = 2.0  # s from SIGINT/SIGTERM to process exit, in any phase
+SIGNAL_TEARDOWN_LIMIT = 1.8  # s after the signal: the watchdog ends the process if teardown still runs
+FINISH_TEARDOWN_LIMIT = 6.0  # s of teardown after the node ended by itself (acks, closing files)
+ACK_WAIT_AFTER_FINISH = 1.0  # s: after the flight ended, wait this long at most for subscribers' acks
 
 
 def configure_environment() -> None:
@@ -46,25 +60,35 @@ class StopFlag:
 
     def __init__(self) -> None:
         self.signal_name: str | None = None
+        self.received_at: float | None = None  # time.monotonic() of the first signal
 
     def __bool__(self) -> bool:
         return self.signal_name is not None
 
     def install(self) -> None:
         def handler(signum: int, _frame: object) -> None:
+            if self.received_at is None:
+                self.received_at = time.monotonic()
             self.signal_name = signal.Signals(signum).name
 
         signal.signal(signal.SIGINT, handler)
         signal.signal(signal.SIGTERM, handler)
 
 
-def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None) -> int:
+def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None,
+             exit_process: bool = True) -> int:
     """Create the node with ``make_node(args)`` and spin it until done or signalled; returns an exit code.
 
     The node may define ``done() -> bool`` (stop spinning, e.g. end of the flight), ``exit_code`` and
     ``close()``; it may define ``spin_once(executor, stop)`` to drive its own loop (the simulator's
     lockstep) instead of the executor's callbacks. ``ConfigError`` / ``ValueError`` raised while the node
-    is built are printed as one line and give exit code 2.
+    is built are printed as one line and give exit code 2. A node with a ``stop_flag`` attribute gets the
+    :class:`StopFlag`; its ``close()`` can then keep within the signal budget (:func:`signal_deadline`).
+
+    With ``exit_process`` (the console scripts), once a node was built and torn down the process ends right
+    here with ``os._exit(code)`` after flushing stdout/stderr: interpreter finalisation (garbage collection
+    of rclpy objects, Fast DDS global destructors) adds up to seconds on a loaded machine and is where a
+    by-hand node was seen to hang. Files are already closed by ``close()``.
     """
     configure_environment()
     import rclpy
@@ -78,13 +102,17 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     stop.install()
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     node = None
+    executor = None
     code = EXIT_OK
+    watchdog = TeardownWatchdog(stop)
     try:
         try:
             node = make_node(rclpy.utilities.remove_ros_args(argv)[1:])
         except (ConfigError, ValueError) as error:
             print(f"[fsr] error: {error}", file=sys.stderr, flush=True)
             return EXIT_CONFIG_ERROR
+        if hasattr(node, "stop_flag"):
+            node.stop_flag = stop  # lets close() keep within the signal budget
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         own_loop = getattr(node, "spin_once", None)
@@ -100,13 +128,92 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     except KeyboardInterrupt:
         pass
     finally:
-        if node is not None:
-            close = getattr(node, "close", None)
-            if close is not None:
-                close()
-            node.destroy_node()
-        rclpy.try_shutdown()
+        watchdog.start()
+        try:
+            if node is not None:
+                close = getattr(node, "close", None)
+                if close is not None:
+                    close()  # may still spin the executor (a drain of what is queued)
+                if not stop:
+                    wait_for_acks(node, ACK_WAIT_AFTER_FINISH)
+            if executor is not None:
+                executor.shutdown(timeout_sec=0.5)  # releases the entity handles its wait generator holds
+            if node is not None:
+                node.destroy_node()
+        finally:
+            rclpy.try_shutdown()
+            watchdog.cancel()
+    if exit_process and node is not None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     return code
+
+
+def exit_on_finish_parameter(node: object, node_kind: str) -> bool:
+    """Declare and read the boolean parameter ``exit_on_finish`` (default true): whether a helper node ends
+    by itself once the flight has ended (:mod:`fsr_sim.ros.flight_end`). Anything but a bool is refused."""
+    from rcl_interfaces.msg import ParameterDescriptor
+
+    from fsr_sim.config.validation import ConfigError
+
+    value = node.declare_parameter("exit_on_finish", True, ParameterDescriptor(dynamic_typing=True)).value
+    if not isinstance(value, bool):
+        raise ConfigError("parameter 'exit_on_finish'", f"must be true or false, got {value!r}", node_kind)
+    return value
+
+
+def signal_deadline(stop: object, limit: float, default: float) -> float:
+    """Monotonic deadline for shutdown work: ``limit`` s after the signal if ``stop`` (a :class:`StopFlag`)
+    received one, else ``default`` s from now."""
+    received = getattr(stop, "received_at", None)
+    return received + limit if received is not None else time.monotonic() + default
+
+
+def wait_for_acks(node: object, timeout: float) -> bool:
+    """Wait (at most ``timeout`` s in all) until every subscriber acknowledged each publisher's messages,
+    so that a node ending by itself does not take its last messages with it; False on timeout."""
+    from rclpy.duration import Duration
+
+    deadline = time.monotonic() + timeout
+    for publisher in list(getattr(node, "publishers", [])):
+        remaining = deadline - time.monotonic()
+        if remaining <= 0.0 or not publisher.wait_for_all_acked(Duration(nanoseconds=int(remaining * 1e9))):
+            return False
+    return True
+
+
+class TeardownWatchdog:
+    """Ends the process with ``os._exit`` if teardown outlives its bound (a hang in rcl/DDS must never
+    keep a node alive): :data:`SIGNAL_TEARDOWN_LIMIT` s after the signal, else
+    :data:`FINISH_TEARDOWN_LIMIT` s after teardown began."""
+
+    def __init__(self, stop: StopFlag) -> None:
+        self.stop = stop
+        self.finished = threading.Event()
+        self.thread: threading.Thread | None = None
+        self.began = time.monotonic()
+
+    def start(self) -> None:
+        self.began = time.monotonic()
+        self.thread = threading.Thread(target=self._watch, name="fsr-teardown-watchdog", daemon=True)
+        self.thread.start()
+
+    def deadline(self) -> float:
+        """Monotonic time at which teardown is cut short (moves earlier if a signal arrives meanwhile)."""
+        if self.stop.received_at is not None:
+            return self.stop.received_at + SIGNAL_TEARDOWN_LIMIT
+        return self.began + FINISH_TEARDOWN_LIMIT
+
+    def _watch(self) -> None:
+        while not self.finished.wait(max(0.0, min(0.05, self.deadline() - time.monotonic()))):
+            if time.monotonic() >= self.deadline():
+                print(f"[fsr] error: shutdown did not finish within {time.monotonic() - self.began:.1f} s "
+                      "(node teardown hung): exiting now", file=sys.stderr, flush=True)
+                os._exit(EXIT_FAILURE)
+
+    def cancel(self) -> None:
+        self.finished.set()
 
 
 class RateLimitedWarning:

@@ -1,0 +1,127 @@
+"""Every command in README.md's fenced ``bash`` blocks runs and succeeds.
+
+The commands are read from the README (a new or changed command is tested without touching this file) and
+run with ``bash -c`` in a scratch folder that links the repository's ``.venv``, ``scripts``,
+``requirements.txt``, ``ros_ws``, ``examples`` and ``benchmarks``, so relative paths work and outputs
+(``runs/...``) stay out of the work tree. ``my_flight.yaml`` is the README's own YAML example. Changes to
+the commands as written, to keep the run short:
+
+* every ``fsr-fly`` flight gets ``--duration 0.5`` appended (argparse: the last ``--duration`` wins);
+* the by-hand block (``export ROS_DOMAIN_ID=42`` and one node per line) runs as one scripted graph: the
+  nodes are started together in a leased ROS domain instead of 42 (localhost discovery), the simulator
+  line gets ``-p duration:=0.5``, and every node must end by itself (exit 0) with a complete recording;
+* ``bash scripts/setup.sh && .venv/bin/python -m pytest`` is not run: it is this test suite (CI runs it
+  as ``.ci/run``), running it here would recurse.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+import yaml
+
+from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
+from fsr_sim.config.scenario import load_scenario
+from fsr_sim.recording.reader import open_recording
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+LINKED = (".venv", "scripts", "requirements.txt", "ros_ws", "examples", "benchmarks")
+SHORT_FLIGHT = " --duration 0.5"
+SUITE_ITSELF = "python -m pytest"
+BY_HAND_MARK = "export ROS_DOMAIN_ID="
+
+
+def fenced_blocks(text: str, language: str) -> list[str]:
+    return re.findall(rf"^```{language}\n(.*?)^```", text, flags=re.S | re.M)
+
+
+def commands(block: str) -> list[str]:
+    """One string per command: continuation lines joined, comment lines and trailing comments dropped."""
+    joined = re.sub(r"\\\n\s*", " ", block)
+    found = []
+    for line in joined.splitlines():
+        line = re.split(r"\s+#\s", line.strip(), maxsplit=1)[0].strip()
+        if line and not line.startswith("#"):
+            found.append(line)
+    return found
+
+
+README_TEXT = README.read_text(encoding="utf-8")
+BLOCKS = [commands(block) for block in fenced_blocks(README_TEXT, "bash")]
+BY_HAND = next(block for block in BLOCKS if block and block[0].startswith(BY_HAND_MARK))
+SINGLE = [c for block in BLOCKS if block is not BY_HAND for c in block if SUITE_ITSELF not in c]
+
+
+def test_the_readme_has_the_commands_this_test_expects():
+    every = [c for block in BLOCKS for c in block]
+    assert every[0] == "bash scripts/setup.sh && .venv/bin/fsr-fly ex3_estimation --out runs/ex3_estimation.mcap"
+    assert every[1] == "bash scripts/setup.sh && .venv/bin/python -m pytest"
+    assert len(SINGLE) >= 10 and len(BY_HAND) == 5
+    yaml_blocks = fenced_blocks(README_TEXT, "yaml")
+    assert len(yaml_blocks) == 1 and "name: my_flight" in yaml_blocks[0]
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("readme")
+    for name in LINKED:
+        (path / name).symlink_to(ROOT / name)
+    (path / "my_flight.yaml").write_text(fenced_blocks(README_TEXT, "yaml")[0], encoding="utf-8")
+    return path
+
+
+def as_run(command: str) -> str:
+    return command + SHORT_FLIGHT if "fsr-fly" in command else command
+
+
+def test_my_flight_yaml_example_is_a_valid_scenario(workdir):
+    assert load_scenario(workdir / "my_flight.yaml").name == "my_flight"
+
+
+@pytest.mark.parametrize("command", SINGLE)
+def test_readme_command_runs(workdir, command):
+    env = {k: v for k, v in os.environ.items() if k not in ("ROS_DOMAIN_ID", "PYTHONPATH")}
+    result = subprocess.run(["bash", "-c", as_run(command)], cwd=workdir, env=env, capture_output=True,
+                            text=True, timeout=180, stdin=subprocess.DEVNULL)
+    assert result.returncode == 0, f"$ {as_run(command)}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}"
+    out = re.search(r"--out (\S+\.mcap)", command)
+    if out:
+        recording = open_recording(workdir / out.group(1))
+        assert not recording.truncated and recording.count("/odom") >= 500
+        assert (workdir / out.group(1)).with_suffix("").joinpath("metrics.json").is_file()
+
+
+@pytest.mark.graph
+def test_readme_by_hand_nodes_run_together_and_end_by_themselves(workdir):
+    assert BY_HAND[0] == "export ROS_DOMAIN_ID=42"
+    lines = BY_HAND[1:]
+    recording = workdir / re.search(r"--out (\S+)", next(line for line in lines if "fsr-record" in line)).group(1)
+    recording.parent.mkdir(parents=True, exist_ok=True)
+    with acquire_domain(TEST_RANGE) as lease:
+        env = {k: v for k, v in os.environ.items() if k not in ("ROS_LOCALHOST_ONLY", "PYTHONPATH")}
+        env.update(ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        processes = []
+        try:
+            for line in lines:
+                run = line + " -p duration:=0.5" if "simulator" in line.split()[0] else line
+                processes.append((run, subprocess.Popen(
+                    ["bash", "-c", f"exec {run}"], cwd=workdir, env=env, stdin=subprocess.DEVNULL,
+                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True,
+                )))
+            for run, process in processes:  # no signal: every node must end with the flight
+                output, _ = process.communicate(timeout=90)
+                assert process.returncode == 0, f"$ {run}\n{output[-3000:]}"
+        finally:
+            for _, process in processes:
+                if process.poll() is None:
+                    process.kill()
+                    process.wait(5)
+    result = open_recording(recording)
+    assert not result.truncated
+    assert len({t for t, _ in result.raw("/odom")}) == 501 and result.count("/wrench_estimate") == 501
+    assert yaml.safe_load(result.scenario_yaml)["name"] == "ex4_geometric"
