@@ -48,8 +48,8 @@ def lab_factory() -> Iterator:
     labs: list[NetLab] = []
     processes: list[subprocess.Popen] = []
 
-    def make(hosts: list[str]) -> NetLab:
-        lab = NetLab(hosts)
+    def make(hosts: list[str], multicast: bool = True) -> NetLab:
+        lab = NetLab(hosts, multicast)
         labs.append(lab)
         original = lab.popen
 
@@ -72,12 +72,13 @@ def lab_factory() -> Iterator:
             lab.close()
 
 
-def start_side(lab: NetLab, host: str, domain: int, tmp_path: Path, nodes: str, extra: list[str]) -> subprocess.Popen:
+def start_side(lab: NetLab, host: str, domain: int, tmp_path: Path, nodes: str, extra: list[str],
+               env: dict[str, str] | None = None) -> subprocess.Popen:
     """``fsr-fly ... --network --nodes NODES`` on ``host``; output in ``tmp_path/<host>.out`` / ``.err``."""
     out = tmp_path / host
     argv = [FLY, *extra, "--network", "--domain-id", str(domain), "--nodes", nodes, "--quiet", "--no-analysis",
             "--out", str(out / f"{host}.mcap")]
-    return lab.popen(host, argv, env=network_environment(domain), stdout=open(tmp_path / f"{host}.out", "w"),
+    return lab.popen(host, argv, env=env or network_environment(domain), stdout=open(tmp_path / f"{host}.out", "w"),
                      stderr=open(tmp_path / f"{host}.err", "w"), cwd=tmp_path)
 
 
@@ -246,3 +247,18 @@ def test_fleet_with_each_controller_on_its_own_host(lab_factory, domain_id, tmp_
         positions[i] = odom_positions(recording, f"{ns}/odom")
     for a, b in ((1, 2), (2, 3), (1, 3)):  # the vehicles do not cross: they stay metres apart
         assert np.min(np.linalg.norm(positions[a] - positions[b], axis=1)) > 1.0
+
+
+def test_static_peers_join_hosts_on_a_network_without_multicast(lab_factory, domain_id, tmp_path):
+    lab = lab_factory(["sim", "ctl"], multicast=False)
+    routes = subprocess.run(lab.command("ctl", ["ip", "route"]), capture_output=True, text=True, check=True).stdout
+    assert "224.0.0.0/4" not in routes  # SUBNET discovery alone cannot find the other host
+    flight = ["ex4_geometric", "--duration", "0.5"]
+    sides = {}
+    for host, other, nodes in (("sim", "ctl", "simulator,estimator,recorder"), ("ctl", "sim", "controller")):
+        env = {**network_environment(domain_id), "ROS_STATIC_PEERS": lab.address(other)}
+        sides[host] = start_side(lab, host, domain_id, tmp_path, nodes, flight, env)
+    codes = {name: finish(process, name, tmp_path) for name, process in sides.items()}
+    assert codes == {"sim": 0, "ctl": 0}
+    recording = open_recording(tmp_path / "sim" / "sim.mcap")
+    assert recording.count("odom") == 501 and recording.count("wrench_cmd") == 501

@@ -2,7 +2,8 @@
 
 :class:`NetLab` builds one namespace holding a bridge (the "switch") and one namespace per host, each
 joined to the bridge by a veth pair whose host end is ``eth0`` with a private address (``10.77.0.x/24``)
-and the multicast route (``224.0.0.0/4 dev eth0``) that SUBNET discovery needs. Nothing is created in the
+and the multicast route (``224.0.0.0/4 dev eth0``) that SUBNET discovery needs (``multicast=False``
+leaves it out: discovery then needs static peers, ``ROS_STATIC_PEERS``). Nothing is created in the
 caller's namespace: the veth pairs are made inside the bridge namespace and their host ends moved, so
 traffic and discovery can only reach the lab's hosts. Names carry the creating process id (parallel runs
 never collide). :meth:`NetLab.close` deletes every namespace it created (with them their links) and is
@@ -55,7 +56,7 @@ def unavailable_reason() -> str | None:
 class NetLab:
     """Hosts ``names`` (e.g. ``("sim", "ctl", "est")``) on one bridge; ``address(name)``, ``popen``, link faults."""
 
-    def __init__(self, names: Sequence[str]) -> None:
+    def __init__(self, names: Sequence[str], multicast: bool = True) -> None:
         reason = unavailable_reason()
         if reason is not None:
             raise NetLabUnavailableError(reason)
@@ -64,6 +65,7 @@ class NetLab:
         self.hosts = {name: f"{tag}-{name}" for name in names}
         self.ports = {name: f"p{index}" for index, name in enumerate(names, start=1)}  # bridge-side veth ends
         self.addresses = {name: f"{SUBNET}.{index}" for index, name in enumerate(names, start=1)}
+        self.multicast = multicast  # False: no multicast route, as on networks without multicast (static peers)
         self.created: list[str] = []
         try:
             self._build()
@@ -89,7 +91,8 @@ class NetLab:
             _ip("link", "set", port, "up", netns=self.switch)
             _ip("addr", "add", f"{self.addresses[name]}/24", "dev", "eth0", netns=netns)
             _ip("link", "set", "eth0", "up", netns=netns)
-            _ip("route", "add", MULTICAST, "dev", "eth0", netns=netns)
+            if self.multicast:
+                _ip("route", "add", MULTICAST, "dev", "eth0", netns=netns)
 
     def address(self, name: str) -> str:
         return self.addresses[name]
