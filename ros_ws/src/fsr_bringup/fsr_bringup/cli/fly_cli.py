@@ -4,6 +4,8 @@
     fsr-fly my_flight.yaml --out runs/a.mcap --set disturbances.0.force=[0.5,0,0] --duration 10
     fsr-fly ex4_geometric --in-process              # same modules, no DDS: fastest
     fsr-fly three_vehicles                          # a fleet: /uav1../uav3 in one domain (runner/fleet.py)
+    fsr-fly ex4_geometric --network --domain-id 42 --nodes simulator,recorder    # host A of a flight over
+    fsr-fly ex4_geometric --network --domain-id 42 --nodes controller,estimator  # two hosts (runner/remote.py)
 
 Starts the simulator, controller, estimator and recorder as separate processes in a ROS domain of their
 own (localhost-only discovery), streams their logs with a prefix per node, shows progress on a terminal,
