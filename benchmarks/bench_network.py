@@ -69,10 +69,11 @@ def fly_namespaces(work: Path, duration: float, delay_ms: float) -> tuple[int, f
                 argv = [FLY, "ex4_geometric", "--duration", str(duration), "--network", "--domain-id",
                         str(lease.domain_id), "--nodes", nodes, "--quiet", "--no-analysis",
                         "--out", str(work / host / f"{host}.mcap")]
-                processes.append(lab.popen(host, argv, env=env, stdout=subprocess.DEVNULL))
-            for process in processes:
+                processes.append(lab.popen(host, argv, env=env, stdout=subprocess.DEVNULL,
+                                           stderr=open(work / f"{host}.err", "w")))
+            for (host, _), process in zip(SIDES, processes, strict=True):
                 if process.wait(timeout=600) != 0:
-                    raise RuntimeError(f"a side exited with {process.returncode}")
+                    raise RuntimeError(f"{host} exited with {process.returncode}: {(work / f'{host}.err').read_text()}")
         finally:
             for process in processes:
                 if process.poll() is None:
