@@ -211,9 +211,10 @@ class SimulatorNode(Node):
             answered = self._await_command(self.messages.stamp_ns, stop)
             if answered is None:
                 return  # stop requested while waiting
-            self._note_wait(time.monotonic() - waiting_since, answered)
+            waited = time.monotonic() - waiting_since
+            self._note_wait(waited, answered)
             if answered:
-                if self.command_wait.answered() == "recovered":
+                if self.command_wait.answered(waited) == "recovered":
                     self.get_logger().info(
                         f"{self.command_topic}: the controller answers again at {self._where()} "
                         f"({self.command_wait.missed_steps} step(s) on the failsafe so far)"
