@@ -47,12 +47,15 @@ def times_and_positions(flight):
     return t, p
 
 
-def assert_finished(flight, steps):
+def assert_finished(flight, steps, failsafe_steps=0):
     assert flight.exit_code == 0, flight.log
-    assert flight.final_status == {
-        "state": "finished", "reason": flight.final_status["reason"], "sim_time": pytest.approx(steps * 1e-3),
-        "steps": steps,
+    status = flight.final_status
+    assert status == {
+        "state": "finished", "reason": status["reason"], "sim_time": pytest.approx(steps * 1e-3), "steps": steps,
+        "failsafe_steps": failsafe_steps, "incidents": 1 if failsafe_steps else 0,
+        "late_commands": status["late_commands"], "longest_wait_s": status["longest_wait_s"],
     }
+    assert 0.0 <= status["longest_wait_s"] < 60.0
     # t_0 .. t_N, each exactly once (the handshake never repeats a state), none missing
     assert flight.odom_stamps_ns() == [k * 1_000_000 for k in range(steps + 1)]
 
@@ -156,7 +159,8 @@ def test_timeout_applies_failsafe_and_goes_on(ros_graph, scenario_file, failsafe
     commands = ros_graph.publisher("rotor_cmd", JointState)
     sim = start_simulator(ros_graph, path)
     flight = ros_graph.run_controller(sim, rotor_answer(speeds, until=0.1), commands)  # silent from t = 0.1 s
-    assert_finished(flight, 400)
+    assert_finished(flight, 400, failsafe_steps=300)  # steps 100..399 on the failsafe, one incident
+    assert flight.final_status["longest_wait_s"] >= 0.4  # the first missed step waited the whole timeout
     assert "did not answer step 100 (t = 0.1000 s)" in flight.log
     assert f"failsafe '{failsafe}'" in flight.log and "/graph_test" in flight.log
     t, p = times_and_positions(flight)
@@ -186,7 +190,7 @@ def test_controller_gone_simulator_finishes_alone(ros_graph, scenario_file):
 
     flight = ros_graph.run_controller(sim, answer, commands)
     assert time.monotonic() - gone[0] < 5.0  # finished without waiting for the 10 s timeout
-    assert_finished(flight, 400)
+    assert_finished(flight, 400, failsafe_steps=300)
     assert "no publisher any more" in flight.log
     t, p = times_and_positions(flight)
     np.testing.assert_allclose(p[:, 2], Z0 + 0.5 * GRAVITY * np.maximum(t - 0.1, 0.0) ** 2, rtol=0, atol=1e-9)

@@ -8,7 +8,9 @@ from fsr_sim.nodes.lockstep import (
     DEGRADED,
     GONE,
     LOCKSTEP,
+    RECOVERY_FACTOR,
     STALE,
+    TYPICAL_WEIGHT,
     CommandWait,
     CommandWatchdog,
     FreeRunPacer,
@@ -73,3 +75,27 @@ def test_watchdog_fires_once_per_silence():
     assert not dog.expired(2.5)
     assert dog.expired(2.7)
     assert dog.feed(2.8) is True and dog.feed(2.9) is False
+
+
+def test_degraded_wait_follows_the_typical_answer_time():
+    """A controller whose cycle is longer than RECOVERY_WAIT (a network, a loaded machine) must be able to catch
+    up after an outage: the degraded wait scales with the waits measured while it answered, capped by timeout."""
+    wait = CommandWait(timeout=0.5, recovery_wait=0.002)
+    for _ in range(50):
+        assert wait.answered(0.004) is None  # 4 ms per answered step
+    assert wait.typical_wait == pytest.approx(0.004)
+    wait.answered(1.0)  # a pause (a brief outage) barely moves it
+    assert wait.typical_wait == pytest.approx(0.004 + TYPICAL_WEIGHT * 3 * 0.004)
+    wait.typical_wait = 0.004
+    wait.missed(publisher_count=1)
+    assert wait.budget() == pytest.approx(RECOVERY_FACTOR * 0.004)
+    assert wait.answered(0.3) == "recovered"  # a degraded answer does not count as typical
+    assert wait.typical_wait == pytest.approx(0.004)
+    slow = CommandWait(timeout=0.05, recovery_wait=0.002)
+    slow.answered(0.04)
+    slow.missed(publisher_count=1)
+    assert slow.budget() == 0.05  # never beyond the timeout
+    fast = CommandWait(timeout=1.0, recovery_wait=0.002)
+    fast.answered(0.0001)
+    fast.missed(publisher_count=1)
+    assert fast.budget() == 0.002  # never below recovery_wait

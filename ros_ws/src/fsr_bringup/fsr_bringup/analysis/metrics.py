@@ -298,7 +298,8 @@ def flight_metrics(
         "odom_messages": len(odom.t) if odom is not None else 0,
         "message_counts": dict(flight.message_counts),
         "sim_status": (
-            {key: status.get(key) for key in ("state", "reason", "sim_time", "steps")} if status else None
+            {key: status.get(key) for key in ("state", "reason", "sim_time", "steps", "failsafe_steps", "incidents",
+                                              "late_commands") if key in status} if status else None
         ),
         "interrupted_at_s": interrupted_at(status),
     }

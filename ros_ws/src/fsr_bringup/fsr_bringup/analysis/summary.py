@@ -38,6 +38,10 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
         end = f"**interrupted at t = {metrics['interrupted_at_s']:.3f} s** ({status.get('reason')})"
     rows.append(("end state", end + (" - **truncated recording**" if metrics.get("truncated") else "")))
     rows.append(("duration [s] / steps", f"{_num(metrics.get('duration_s'))} / {_num(metrics.get('steps'))}"))
+    if status and status.get("failsafe_steps"):  # the controller missed steps (killed, hung, link down)
+        rows.append(("lockstep failsafe", f"**{status['failsafe_steps']} steps** on the failsafe in "
+                                          f"{status.get('incidents', '?')} incident(s), "
+                                          f"{status.get('late_commands', 0)} late command(s) ignored"))
     tracking = metrics.get("tracking")
     if tracking:
         against = "R_c, commanded" if tracking.get("attitude_vs") == "attitude_cmd" else "R_d, planner"

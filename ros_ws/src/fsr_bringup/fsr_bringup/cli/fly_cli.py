@@ -4,6 +4,8 @@
     fsr-fly my_flight.yaml --out runs/a.mcap --set disturbances.0.force=[0.5,0,0] --duration 10
     fsr-fly ex4_geometric --in-process              # same modules, no DDS: fastest
     fsr-fly three_vehicles                          # a fleet: /uav1../uav3 in one domain (runner/fleet.py)
+    fsr-fly ex4_geometric --network --domain-id 42 --nodes simulator,recorder    # host A of a flight over
+    fsr-fly ex4_geometric --network --domain-id 42 --nodes controller,estimator  # two hosts (runner/remote.py)
 
 Starts the simulator, controller, estimator and recorder as separate processes in a ROS domain of their
 own (localhost-only discovery), streams their logs with a prefix per node, shows progress on a terminal,
@@ -24,13 +26,15 @@ import yaml
 from fsr_bringup.cli.analyze_cli import add_figure_arguments, figure_options
 from fsr_bringup.runner.domains import acquire_domain, fixed_domain
 from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_path, load_fleet
-from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
+from fsr_bringup.runner.flight import Console, FlightMember, fly_graph, node_commands
+from fsr_bringup.runner.remote import parse_node_selection
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.config.validation import ConfigError, builtin_names
 
 EXIT_CONFIG_ERROR = 2
+REMOTE_STARTUP_TIMEOUT = 300.0  # s: with --nodes the other hosts' nodes may be started by hand, later
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -51,6 +55,15 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--in-process", action="store_true", help="run without DDS (same modules, one process)")
     parser.add_argument("--domain-id", type=int, help="ROS domain id to use (default: a free one, 150..232)")
     parser.add_argument("--network", action="store_true", help="allow DDS discovery beyond localhost")
+    parser.add_argument(
+        "--nodes", metavar="LIST",
+        help="start only these nodes here (comma-separated roles simulator,controller,estimator,recorder or "
+        "process names like uav2/controller); the others run on other hosts: needs --domain-id",
+    )
+    parser.add_argument(
+        "--startup-timeout", type=float, metavar="S",
+        help="how long the simulator waits for the other nodes (default 20 s; 300 s with --nodes)",
+    )
     parser.add_argument("--no-analysis", action="store_true", help="skip figures and metrics")
     parser.add_argument("--quiet", action="store_true", help="do not stream node logs")
     add_figure_arguments(parser)
@@ -92,6 +105,15 @@ def write_scenarios(members: list[FleetMember], run_dir: Path) -> tuple[Path, li
     return combined, flight_members
 
 
+def local_nodes(text: str | None, members: list[FlightMember], recording: Path, scenario_path: Path
+                ) -> set[str] | None:
+    """The process names ``--nodes`` selects for this host (None: the whole graph)."""
+    if text is None:
+        return None
+    names = [name for name, _command in node_commands(members, recording, scenario_path)]
+    return parse_node_selection(text, names)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     try:
@@ -110,6 +132,10 @@ def main(argv: list[str] | None = None) -> int:
         options = None if args.no_analysis else figure_options(args)
     except ValueError as error:
         print(f"fsr-fly: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    if args.nodes is not None and (args.in_process or args.domain_id is None):
+        print("fsr-fly: --nodes runs part of a graph: it needs --domain-id (the same on every host) and no "
+              "--in-process", file=sys.stderr)
         return EXIT_CONFIG_ERROR
     run_dir = recording.with_suffix("")
     try:
@@ -133,12 +159,29 @@ def main(argv: list[str] | None = None) -> int:
         except (ValueError, RuntimeError) as error:
             print(f"fsr-fly: {error}", file=sys.stderr)
             return EXIT_CONFIG_ERROR
+        try:
+            nodes = local_nodes(args.nodes, flight_members, recording, scenario_path)
+        except ValueError as error:
+            print(f"fsr-fly: {error}", file=sys.stderr)
+            return EXIT_CONFIG_ERROR
+        startup_timeout = args.startup_timeout
+        if startup_timeout is None and nodes is not None:
+            startup_timeout = REMOTE_STARTUP_TIMEOUT
         with domain:
-            print(f"fsr-fly: ROS domain {domain.domain_id}, logs in {run_dir / 'logs'}", flush=True)
+            here = "" if nodes is None else f", nodes here: {', '.join(sorted(nodes))}"
+            print(f"fsr-fly: ROS domain {domain.domain_id}{here}, logs in {run_dir / 'logs'}", flush=True)
             result = fly_graph(
                 flight_members, recording, scenario_path, run_dir / "logs", domain, duration,
-                Console(quiet=args.quiet), localhost_only=not args.network,
+                Console(quiet=args.quiet), localhost_only=not args.network, nodes=nodes,
+                startup_timeout=startup_timeout,
             )
+        if nodes is not None and "recorder" not in nodes:  # the recording is written on another host
+            for failure in result.failures:
+                print(f"fsr-fly: ERROR: {failure}", file=sys.stderr, flush=True)
+            print(f"fsr-fly: flight {'interrupted' if result.interrupted else 'ended'}: simulated "
+                  f"{result.sim_time:.3f} s in {result.wall_time:.2f} s wall; the recording is on the recorder's "
+                  "host", flush=True)
+            return result.exit_code
     print(
         f"fsr-fly: flight {'interrupted' if result.interrupted else 'ended'}: simulated {result.sim_time:.3f} s "
         f"in {result.wall_time:.2f} s wall (real-time factor {result.real_time_factor:.2f})",

@@ -28,6 +28,8 @@ from fsr_bringup.runner.processes import ProcessGroup, describe_exit, executable
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_INTERRUPTED, configure_environment
 
 EXIT_NODE_FAILED = EXIT_FAILURE
+MISSING_REPORT_AFTER = 3.0  # s: first warning naming the nodes not discovered yet (--nodes)
+MISSING_REPORT_EVERY = 5.0  # s: then again this often until the flight starts
 
 
 @dataclass
@@ -63,6 +65,18 @@ class Console:
                 sys.stdout.write(self.progress_line)
             sys.stdout.flush()
 
+    def notice(self, text: str) -> None:
+        """A line of fsr-fly's own on stderr, shown even with ``--quiet`` (e.g. nodes not discovered yet)."""
+        with self.lock:
+            if self.tty and self.progress_line:
+                sys.stdout.write("\r\033[K")
+                sys.stdout.flush()
+            sys.stderr.write(f"fsr-fly: {text}\n")
+            sys.stderr.flush()
+            if self.tty and self.progress_line:
+                sys.stdout.write(self.progress_line)
+                sys.stdout.flush()
+
     def progress(self, text: str) -> None:
         if not self.tty or self.quiet:
             return
@@ -92,10 +106,10 @@ class FlightMember:
 
 
 def node_commands(
-    members: list[FlightMember], recording: Path, scenario_path: Path
+    members: list[FlightMember], recording: Path, scenario_path: Path, startup_timeout: float | None = None
 ) -> list[tuple[str, list[str]]]:
     """(name, argv) of each node of the graph, in start order: recorder, then per vehicle the estimator,
-    the controller and the simulator (whose lockstep handshake waits for the others)."""
+    the controller and the simulator (whose lockstep handshake waits for the others, local or remote)."""
     recorder = [executable("fsr-record"), "--out", str(recording), "--scenario", str(scenario_path)]
     for member in members:
         if member.namespace:
@@ -112,6 +126,8 @@ def node_commands(
         simulator = [executable("simulator"), *ros_args, "-p", f"wait_for_subscribers:={odom_subscribers}"]
         if index > 0:
             simulator += ["-p", "publish_clock:=false"]  # one /clock for the whole run
+        if startup_timeout is not None:
+            simulator += ["-p", f"startup_timeout:={float(startup_timeout)!r}"]
         commands.append((member.process_name("simulator"), simulator))
     return commands
 
@@ -172,10 +188,21 @@ def fly_graph(
     duration: float,
     console: Console,
     localhost_only: bool = True,
+    nodes: set[str] | None = None,
+    startup_timeout: float | None = None,
 ) -> FlightResult:
-    """Run the graph until every simulator has ended; stop everything; report failures by node name."""
+    """Run the graph until every simulator has ended; stop everything; report failures by node name.
+
+    ``nodes``: the process names this host starts (``None``: all of them); the others run on other hosts
+    of the same domain (``runner/remote.py``). Without a local simulator the flight ends when every
+    vehicle's ``sim_status`` reports a final state.
+    """
+    from fsr_bringup.runner.remote import RemoteWatcher, expected_node_paths
+
     log_dir.mkdir(parents=True, exist_ok=True)
     env = child_environment(domain, localhost_only)
+    for key in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "FASTRTPS_DEFAULT_PROFILES_FILE"):  # the watcher's own context
+        os.environ[key] = env[key]
     group = ProcessGroup(env, log_dir, console.echo)
     interrupted: list[str] = []
 
@@ -183,17 +210,24 @@ def fly_graph(
         interrupted.append(signal.Signals(signum).name)
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    simulators = [m.process_name("simulator") for m in members]
+    commands = node_commands(members, recording, scenario_path, startup_timeout)
+    all_names = [name for name, _command in commands]
+    local = set(all_names) if nodes is None else set(nodes)
+    simulators = [m.process_name("simulator") for m in members if m.process_name("simulator") in local]
+    expected = expected_node_paths([name for name in all_names if name not in local])  # on other hosts
     watcher = None
     start = time.monotonic()
     failures: list[str] = []
     sim_time = 0.0
+    remote_end: dict[str, dict] | None = None
     try:
-        for name, command in node_commands(members, recording, scenario_path):
-            group.start(name, command)
-        watcher = ClockWatcher(domain.domain_id)
+        for name, command in commands:
+            if name in local:
+                group.start(name, command)
+        watcher = RemoteWatcher(domain.domain_id, [m.namespace for m in members])
         reported: set[str] = set()
         last_progress = 0.0
+        next_missing_report = start + MISSING_REPORT_AFTER
         while not interrupted:
             watcher.spin(0.05)
             for node in group.nodes:
@@ -205,9 +239,19 @@ def fly_graph(
                     continue  # ended by itself at the end of the flight (exit_on_finish), or stopped on purpose
                 failures.append(f"{node.name} died during the flight ({describe_exit(code)})")
                 console.echo("fsr-fly", f"ERROR: {failures[-1]}; see {node.log_path}")
-            if all(group.get(name).returncode is not None for name in simulators):
+            if simulators and all(group.get(name).returncode is not None for name in simulators):
                 break
+            if not simulators:
+                remote_end = watcher.final_statuses()
+                if remote_end is not None:
+                    break
             now = time.monotonic()
+            if nodes is not None and now >= next_missing_report and not watcher.started():
+                next_missing_report = now + MISSING_REPORT_EVERY
+                missing = watcher.missing(expected)
+                if missing:
+                    console.notice(f"WARNING: after {now - start:.0f} s, nodes of other hosts not discovered yet "
+                                   f"in domain {domain.domain_id}: {', '.join(missing)}")
             if now - last_progress > 0.25:
                 last_progress = now
                 wall = now - start
@@ -228,6 +272,15 @@ def fly_graph(
     if recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
         failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
     exit_code = EXIT_NODE_FAILED if failures else 0
+    for namespace, status in (remote_end or {}).items():  # the simulators ran on another host
+        where = f"{namespace}/simulator" if namespace else "simulator"
+        sim_time = max(sim_time, float(status.get("sim_time", 0.0)))
+        if status.get("state") == "diverged":
+            failures.append(f"{where} (remote): the flight diverged: {status.get('reason', '')}")
+            exit_code = EXIT_DIVERGED
+        elif status.get("state") == "stopped":
+            failures.append(f"{where} (remote) stopped: {status.get('reason', '')}")
+            exit_code = exit_code if exit_code == EXIT_DIVERGED else EXIT_NODE_FAILED
     for name in simulators:
         code = group.get(name).returncode
         if code == EXIT_DIVERGED:

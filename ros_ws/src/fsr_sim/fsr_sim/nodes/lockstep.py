@@ -8,9 +8,12 @@ already taken on the failsafe); a newer stamp cannot be an answer to anything pu
 
 * ``lockstep``: wait up to ``timeout`` [s] for the answer. If it does not come, apply the failsafe and
   switch to ``degraded``.
-* ``degraded``: the controller missed a step; wait only ``recovery_wait`` [s] per step (a live controller
-  answers in well under a millisecond) so that a hung controller does not cost ``timeout`` per step. The
-  first answer in time switches back to ``lockstep``.
+* ``degraded``: the controller missed a step; wait only ``recovery_wait`` [s] per step, or ``RECOVERY_FACTOR``
+  times the typical wait of the answered steps if that is longer (a controller on one host answers in well
+  under a millisecond; over a network, or on a loaded machine, a cycle takes longer, and a controller that
+  has to work through the states it missed could never catch up with a simulator stepping faster than it
+  answers), so that a hung controller does not cost ``timeout`` per step. The first answer in time switches
+  back to ``lockstep``.
 * ``gone``: the command topic has no publisher (the controller exited); do not wait at all, so the flight
   still reaches its end. A publisher that reappears moves to ``degraded``.
 
@@ -27,7 +30,9 @@ LOCKSTEP = "lockstep"
 DEGRADED = "degraded"
 GONE = "gone"
 
-RECOVERY_WAIT = 0.002  # s: per-step wait after a missed step
+RECOVERY_WAIT = 0.002  # s: per-step wait after a missed step (at least)
+RECOVERY_FACTOR = 4.0  # degraded wait: this many typical answered waits, if longer than RECOVERY_WAIT
+TYPICAL_WEIGHT = 0.05  # weight of a new answered wait in the running mean ``typical_wait``
 
 
 def classify_stamp(stamp_ns: int, expected_ns: int) -> str:
@@ -48,18 +53,25 @@ class CommandWait:
         self.mode = LOCKSTEP
         self.missed_steps = 0  # steps run on the failsafe
         self.incidents = 0  # times the controller stopped answering (lockstep -> degraded / gone)
+        self.typical_wait = 0.0  # s: running mean of the waits of steps answered in lockstep
 
     def budget(self) -> float:
         """Seconds to wait for the current step's command."""
         if self.mode == LOCKSTEP:
             return self.timeout
         if self.mode == DEGRADED:
-            return self.recovery_wait
+            return min(self.timeout, max(self.recovery_wait, RECOVERY_FACTOR * self.typical_wait))
         return 0.0
 
-    def answered(self) -> str | None:
-        """The command arrived in time; returns ``'recovered'`` when this ends a degraded/gone spell."""
+    def answered(self, waited: float | None = None) -> str | None:
+        """The command arrived in time, after ``waited`` [s] if known; returns ``'recovered'`` when this ends a
+        degraded/gone spell."""
         if self.mode == LOCKSTEP:
+            if waited is not None and self.typical_wait:  # one long pause (an outage) barely moves the mean
+                self.typical_wait += TYPICAL_WEIGHT * (min(waited, RECOVERY_FACTOR * self.typical_wait)
+                                                       - self.typical_wait)
+            elif waited is not None:
+                self.typical_wait = waited
             return None
         self.mode = LOCKSTEP
         return "recovered"

@@ -2,8 +2,10 @@
 
 Publishes ``/clock`` (if ``publish_clock``), ``odom`` and ``wrench_truth`` (STREAM_QOS) and ``sim_status``
 (std_msgs/String JSON ``{"state": "running"|"finished"|"diverged"|"stopped", "reason", "sim_time",
-"steps"}``, LATCHED_QOS); subscribes ``rotor_cmd`` (sensor_msgs/JointState) or, with ``actuation:
-wrench``, ``wrench_cmd`` (geometry_msgs/WrenchStamped). Parameters: :mod:`fsr_sim.nodes.simulator_params`.
+"steps", "failsafe_steps", "incidents", "late_commands", "longest_wait_s"}``, LATCHED_QOS; also published
+when the controller stops answering and when it answers again); subscribes ``rotor_cmd``
+(sensor_msgs/JointState) or, with ``actuation: wrench``, ``wrench_cmd`` (geometry_msgs/WrenchStamped).
+Parameters: :mod:`fsr_sim.nodes.simulator_params`.
 
 Lockstep (default):
 
@@ -57,6 +59,7 @@ from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
 WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
 BATCH_WALL = 0.05  # s of stepping per spin_once call
+LONG_WAIT = 0.1  # s: a lockstep wait at least this long is logged (a pause of the flight)
 ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last messages
 ACK_SLICE = 0.05  # s per wait_for_all_acked call
 SIGNAL_ACK_LIMIT = 1.0  # s after SIGINT/SIGTERM: the same bound when stopped by a signal
@@ -101,6 +104,7 @@ class SimulatorNode(Node):
         self.startup_deadline = time.monotonic() + self.params.startup_timeout
         self.wall_start = 0.0
         self.stale_commands = 0
+        self.longest_wait = 0.0  # s: longest wait for a command in lockstep
         self.surfaces_at_cap: set[str] = set()  # surfaces whose effect-cap warning was logged
         mode = "lockstep" if self.config.lockstep else f"free-running at {self.config.real_time_factor}x real time"
         self.get_logger().info(
@@ -209,12 +213,19 @@ class SimulatorNode(Node):
     # ----- stepping ---------------------------------------------------------------------------------
     def _lockstep_step(self, stop: object) -> None:
         if not self.have_command:
+            waiting_since = time.monotonic()
             answered = self._await_command(self.messages.stamp_ns, stop)
             if answered is None:
                 return  # stop requested while waiting
+            waited = time.monotonic() - waiting_since
+            self._note_wait(waited, answered)
             if answered:
-                if self.command_wait.answered() == "recovered":
-                    self.get_logger().info(f"{self.command_topic}: the controller answers again at {self._where()}")
+                if self.command_wait.answered(waited) == "recovered":
+                    self.get_logger().info(
+                        f"{self.command_topic}: the controller answers again at {self._where()} "
+                        f"({self.command_wait.missed_steps} step(s) on the failsafe so far)"
+                    )
+                    self._publish_status("running", "controller back in the loop")
             else:
                 self._on_missed(self.command_sub.get_publisher_count())
         self._advance()
@@ -233,6 +244,12 @@ class SimulatorNode(Node):
             if self.command_sub.get_publisher_count() == 0:
                 return False
 
+    def _note_wait(self, waited: float, answered: bool) -> None:
+        """Keep the longest lockstep wait (a pause: slow controller, network outage) and report long ones."""
+        self.longest_wait = max(self.longest_wait, waited)
+        if answered and waited >= LONG_WAIT:
+            self.get_logger().info(f"lockstep paused {waited:.3f} s at {self._where()} for {self.command_topic}")
+
     def _on_missed(self, publishers: int) -> None:
         event = self.command_wait.missed(publishers)
         failsafe = self.config.failsafe
@@ -250,6 +267,8 @@ class SimulatorNode(Node):
             )
         elif event == "publisher_back":
             self.get_logger().info(f"{self.command_topic} has a publisher again at {self._where()}")
+        if event in ("timeout", "gone"):  # an incident: in the latched status until the next one
+            self._publish_status("running", f"failsafe '{failsafe}': controller not answering ({event})")
         if failsafe == "cut":
             self.plant.cut_thrust()
 
@@ -356,7 +375,9 @@ class SimulatorNode(Node):
             self.clock_pub.publish(messages.clock)
 
     def _publish_status(self, state: str, reason: str) -> None:
-        status = {"state": state, "reason": reason, "sim_time": self.plant.time, "steps": self.plant.step_index}
+        status = {"state": state, "reason": reason, "sim_time": self.plant.time, "steps": self.plant.step_index,
+                  "failsafe_steps": self.command_wait.missed_steps, "incidents": self.command_wait.incidents,
+                  "late_commands": self.stale_commands, "longest_wait_s": round(self.longest_wait, 6)}
         self.status_pub.publish(String(data=json.dumps(status)))
 
     def _finish(self, state: str, reason: str, exit_code: int) -> None:

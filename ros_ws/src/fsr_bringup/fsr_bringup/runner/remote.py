@@ -1,0 +1,99 @@
+"""One flight over several hosts: which nodes this host runs, who is still missing, when the flight ended.
+
+``fsr-fly SCENARIO --network --domain-id N --nodes simulator,recorder`` on one host and ``... --nodes
+controller,estimator`` on another run one flight: DDS joins the nodes (discovery range SUBNET, or static
+peers), the simulator's handshake waits for its odom subscribers and its command publisher wherever they run.
+
+* :func:`parse_node_selection` turns ``--nodes`` into the set of process names this host starts: a role
+  (``simulator``, ``controller``, ``estimator``, ``recorder``) selects that node of every vehicle, a
+  process name (``uav2/controller``) one vehicle's node.
+* :class:`RemoteWatcher` follows each vehicle's latched ``sim_status`` (a host without the simulator ends
+  its nodes when the flight's final status arrives) and the graph's node names (which expected nodes have
+  not been discovered yet).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+
+from fsr_bringup.runner.flight import ClockWatcher
+
+ROLES = ("simulator", "controller", "estimator", "recorder")
+RECORDER_NODE = "fsr_recorder"  # the recorder's ROS node name (its process is called "recorder")
+FINAL_STATES = ("finished", "diverged", "stopped")
+
+
+def parse_node_selection(text: str, process_names: Iterable[str]) -> set[str]:
+    """The process names selected by ``--nodes`` (comma-separated roles or process names).
+
+    ``process_names`` are the run's processes (``recorder``, ``simulator`` or ``uav1/simulator``, ...).
+    Raises ``ValueError`` naming an entry that selects nothing.
+    """
+    names = list(process_names)
+    selected: set[str] = set()
+    entries = [entry.strip().strip("/") for entry in text.split(",") if entry.strip()]
+    if not entries:
+        raise ValueError("--nodes needs at least one of " + ", ".join(ROLES))
+    for entry in entries:
+        matches = {n for n in names if n == entry or n.rsplit("/", 1)[-1] == entry}
+        if not matches:
+            raise ValueError(f"--nodes: '{entry}' is not a node of this run (nodes: {', '.join(names)})")
+        selected |= matches
+    return selected
+
+
+def expected_node_paths(process_names: Iterable[str]) -> dict[str, str]:
+    """{ROS node path: process name} of the run's nodes (``uav1/controller`` -> ``/uav1/controller``)."""
+    paths = {}
+    for name in process_names:
+        if name == "recorder":
+            paths["/" + RECORDER_NODE] = name
+        else:
+            paths["/" + name] = name
+    return paths
+
+
+def parse_status(data: str) -> dict:
+    """The ``sim_status`` JSON as a dict (``{}`` if it is not JSON)."""
+    try:
+        status = json.loads(data)
+    except ValueError:
+        return {}
+    return status if isinstance(status, dict) else {}
+
+
+class RemoteWatcher(ClockWatcher):
+    """``/clock`` (progress), every vehicle's ``sim_status`` and the graph's node names, in the run's domain."""
+
+    def __init__(self, domain_id: int, namespaces: list[str]) -> None:
+        super().__init__(domain_id)
+        from std_msgs.msg import String
+
+        from fsr_sim.ros.qos import LATCHED_QOS
+
+        self.statuses: dict[str, dict] = {}
+        for namespace in namespaces:
+            topic = f"{namespace.rstrip('/')}/sim_status" if namespace else "/sim_status"
+            self.node.create_subscription(
+                String, topic, lambda msg, ns=namespace: self._on_status(ns, msg.data), LATCHED_QOS
+            )
+        self.namespaces = namespaces
+
+    def _on_status(self, namespace: str, data: str) -> None:
+        self.statuses[namespace] = parse_status(data)
+
+    def final_statuses(self) -> dict[str, dict] | None:
+        """Every vehicle's final ``sim_status`` once all of them ended, else None."""
+        if all(self.statuses.get(ns, {}).get("state") in FINAL_STATES for ns in self.namespaces):
+            return {ns: self.statuses[ns] for ns in self.namespaces}
+        return None
+
+    def started(self) -> bool:
+        """True once every simulator reported ``running`` (or ended)."""
+        return all(ns in self.statuses for ns in self.namespaces)
+
+    def missing(self, expected: dict[str, str]) -> list[str]:
+        """Process names of the expected nodes (``{node path: process name}``) not discovered yet."""
+        present = {f"{ns.rstrip('/')}/{name}" for name, ns in self.node.get_node_names_and_namespaces()}
+        return [process for path, process in expected.items() if path not in present]
