@@ -49,7 +49,23 @@ class ControlLaw(Protocol):
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
                 angular_velocity_body: np.ndarray) -> WrenchCommand:
-        """The body wrench for this state and reference."""
+        """The body wrench for this state and reference.
+
+        Parameters
+        ----------
+        reference : Reference
+            The planner's desired state at this time.
+        position, velocity_world : numpy.ndarray, shape (3,)
+            [m], [m/s], world NED.
+        rotation : numpy.ndarray, shape (3, 3)
+            Body FRD -> world NED.
+        angular_velocity_body : numpy.ndarray, shape (3,)
+            [rad/s], body FRD.
+
+        Returns
+        -------
+        WrenchCommand
+        """
 
 
 def gain_rows(gain: np.ndarray) -> Mat3:

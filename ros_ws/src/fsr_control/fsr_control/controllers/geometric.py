@@ -73,18 +73,7 @@ class GeometricController:
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
     ) -> WrenchCommand:
-        """Body wrench ``[0, 0, -u_T]``, ``tau_b`` and ``R_d`` for the state (frames: module docstring).
-
-        Parameters
-        ----------
-        reference : Reference
-            The planner's desired state at this time.
-        position, velocity_world : numpy.ndarray, shape (3,)
-            [m], [m/s], world NED.
-        rotation : numpy.ndarray, shape (3, 3)
-            Body FRD -> world NED.
-        angular_velocity_body : numpy.ndarray, shape (3,)
-            [rad/s], body FRD.
+        """Body wrench ``[0, 0, -u_T]``, ``tau_b`` and ``R_d`` for the state (arguments: :meth:`ControlLaw.compute`).
 
         Returns
         -------

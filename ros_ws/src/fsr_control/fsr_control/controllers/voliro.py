@@ -74,18 +74,7 @@ class VoliroController:
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
     ) -> WrenchCommand:
-        """Body wrench ``B^-1 (-b + [v; w])`` for the state (module docstring).
-
-        Parameters
-        ----------
-        reference : Reference
-            The planner's desired state (full attitude) at this time.
-        position, velocity_world : numpy.ndarray, shape (3,)
-            [m], [m/s], world NED.
-        rotation : numpy.ndarray, shape (3, 3)
-            Body FRD -> world NED.
-        angular_velocity_body : numpy.ndarray, shape (3,)
-            [rad/s], body FRD.
+        """Body wrench ``B^-1 (-b + [v; w])`` for the state (arguments: :meth:`ControlLaw.compute`).
 
         Returns
         -------
