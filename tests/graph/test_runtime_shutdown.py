@@ -10,7 +10,11 @@ import sys
 import textwrap
 import time
 
+import pytest
+
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
+
+pytestmark = pytest.mark.graph  # child processes with their own rclpy context, in a leased domain
 
 HELD_HANDLES = textwrap.dedent('''
     from rclpy.node import Node
