@@ -140,7 +140,7 @@ class ControllerNode(Node):
         self.get_logger().info(f"new goal {position.tolist()} from t = {self.controller.last_stamp:.3f} s")
 
     def close(self) -> None:
-        publishers = [p for p in (self.rotor_pub, self.wrench_pub, self.reference_pub) if p is not None]
+        publishers = list(self.publishers_by_topic.values())
         self.flight_end.drain(self, lambda: self.answered_ns, publishers)
         saturation = self.controller.saturation
         if saturation.count:
