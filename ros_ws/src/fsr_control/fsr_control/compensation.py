@@ -130,6 +130,7 @@ class WrenchCompensator:
         self.report = CompensationReport()
         self._ready = False  # the observer holds an estimate of the previous stamp
         self._history: list[tuple[float, float, float]] = []  # the last (up to 3) force estimates, newest last
+        self._smooth = config.r >= 2
         self._last_stamp: float | None = None
         self._contact = False
 
@@ -137,7 +138,10 @@ class WrenchCompensator:
         """``(f_hat world NED [N], tau_hat body FRD [N m], f_hat_dot [N/s], f_hat_ddot [N/s^2])`` of the
         previous stamp for the state at ``stamp_s`` [s], or None (in contact, first step, after a gap): the
         law then runs uncompensated. The rates are the backward differences of the last estimates (zero until
-        there are two, three)."""
+        there are two, three). ``f_hat_ddot`` only for ``r >= 2``: with ``r = 1`` the estimate's rate jumps
+        with every step of its input (``c0`` times the step: the disturbance switching on, a lift-off), so its
+        second difference is an impulse of ``c0 * step / T``, which through ``w_dot_d`` kicked the attitude
+        (ex3 with ``c0 = 100``, ``r = 1`` diverged with it); ``r = 1`` uses zero."""
         previous, self._last_stamp = self._last_stamp, stamp_s
         period = self.config.control_period
         if previous is not None and abs(stamp_s - previous - period) > PERIOD_TOLERANCE * period:
@@ -161,7 +165,7 @@ class WrenchCompensator:
         if len(history) >= 2:
             (ax, ay, az), (bx, by, bz) = history[-2], history[-1]
             rate = ((bx - ax) / period, (by - ay) / period, (bz - az) / period)
-        if len(history) == 3:
+        if len(history) == 3 and self._smooth:  # r >= 2: the estimate's rate is continuous
             (cx, cy, cz), (ax, ay, az), (bx, by, bz) = history
             scale = 1.0 / (period * period)
             acceleration = ((bx - 2.0 * ax + cx) * scale, (by - 2.0 * ay + cy) * scale, (bz - 2.0 * az + cz) * scale)
