@@ -49,6 +49,10 @@ COMPENSATION_MODES = ("none", "estimate")
 CONTACT_TOLERANCE = 0.002  # m: feet (or top) this close to a surface count as touching it
 PERIOD_TOLERANCE = 0.01  # relative: a stamp step further than this from the control period is a gap
 ZERO = (0.0, 0.0, 0.0)
+# Largest c0 * T accepted with compensation (the observer alone takes c0 T < 2). Measured with the report's gains,
+# in-process: c0 in 1..100 and r in 1..5 never diverge (scripts/sweep_compensation.py, c0 T <= 0.1), ex3 flies
+# at c0 T = 0.5 and 0.7 (r = 1..5) and diverges at c0 T = 1.0 (r = 1 and 5) and 1.9: half of that, refused above.
+MAX_C0_PERIOD = 0.5
 
 
 @dataclass(frozen=True)

@@ -178,3 +178,12 @@ def test_geometric_meets_a_force_by_tilting_and_cancels_the_torque():
     only_torque = law.compute(reference, *state, (zero, tau_hat, zero, zero))
     np.testing.assert_allclose(only_torque.torque_body, plain.torque_body - np.array(tau_hat), atol=1e-12)
     np.testing.assert_array_equal(only_torque.force_body, plain.force_body)
+
+
+def test_a_filter_too_fast_for_the_compensated_loop_is_refused():
+    """c0 T = 1 diverges with compensation (ex3, measured); the config refuses c0 T > 0.5 and names the key."""
+    controller_config(with_keys("ex3_estimation", controller__compensation="estimate", estimator__c0=500.0))
+    with pytest.raises(ConfigError, match="lower estimator.c0") as error:
+        controller_config(with_keys("ex3_estimation", controller__compensation="estimate", estimator__c0=1000.0))
+    assert error.value.key == "controller.compensation"
+    assert controller_config(with_keys("ex3_estimation", estimator__c0=1000.0)).compensation is None  # none: no limit

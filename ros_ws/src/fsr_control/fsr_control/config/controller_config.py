@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsr_control.allocation import ALLOCATION_STRATEGIES
-from fsr_control.compensation import COMPENSATION_MODES, CompensationConfig, surfaces_for
+from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig, surfaces_for
 from fsr_control.controllers import geometric, voliro
 from fsr_control.planning.trajectory import Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
@@ -118,9 +118,10 @@ def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> 
     env = sim.environment
     surfaces = surfaces_for(vehicle, env.ground.height if env.ground.enabled else None,
                             env.ceiling.height if env.ceiling.enabled else None)
-    if estimation.c0 * sim.control_period >= 2.0:
-        raise controller.error("compensation", f"the observer needs estimator.c0 * control period < 2, got "
-                                               f"{estimation.c0:g} * {sim.control_period:g}")
+    if estimation.c0 * sim.control_period > MAX_C0_PERIOD:
+        raise controller.error("compensation", f"estimator.c0 * control period must be <= {MAX_C0_PERIOD:g} with "
+                                               f"compensation (the compensated loop diverges from about 1), got "
+                                               f"{estimation.c0:g} * {sim.control_period:g} s; lower estimator.c0")
     return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces)
 
 
