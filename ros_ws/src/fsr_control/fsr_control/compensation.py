@@ -36,13 +36,14 @@ filter's own dynamics instead of jumping, and a touch-down switches it off.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from fsr_control.controllers.common import Compensation
 from fsr_estimation.core.observer import MomentumObserver
-from fsr_sim.model.so3 import euler_rates, euler_zyx_from_rotation
+from fsr_sim.model.so3 import Mat3, euler_zyx_from_rotation_rows, mat_t_vec3, mat_vec3
 from fsr_sim.model.vehicle import Vehicle
 
 COMPENSATION_MODES = ("none", "estimate")
@@ -135,6 +136,7 @@ class WrenchCompensator:
         self._ready = False  # the observer holds an estimate of the previous stamp
         self._history: list[tuple[float, float, float]] = []  # the last (up to 3) force estimates, newest last
         self._smooth = config.r >= 2
+        self._rate_inverse: Mat3 = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         self._last_stamp: float | None = None
         self._contact = False
 
@@ -173,20 +175,33 @@ class WrenchCompensator:
             (cx, cy, cz), (ax, ay, az), (bx, by, bz) = history
             scale = 1.0 / (period * period)
             acceleration = ((bx - 2.0 * ax + cx) * scale, (by - 2.0 * ay + cy) * scale, (bz - 2.0 * az + cz) * scale)
-        tx, ty, tz = self.observer.wrench_body()[1].tolist()
+        tx, ty, tz = mat_t_vec3(self._rate_inverse, self.observer.estimate[3:].tolist())  # Q^-T tau_e (body)
         return (fx, fy, fz), (tx, ty, tz), rate, acceleration
 
     def record(self, rotation: np.ndarray, velocity_world: np.ndarray, angular_velocity_body: np.ndarray,
                force_body: np.ndarray, torque_body: np.ndarray) -> None:
         """Feed the observer the state of this stamp and the body wrench commanded for it [N, N m]."""
-        eta = euler_zyx_from_rotation(rotation)
-        self.observer.update(velocity_world, eta, euler_rates(eta, angular_velocity_body), force_body, torque_body)
+        phi, theta, psi = euler_zyx_from_rotation_rows(rotation.tolist())
+        inverse = inverse_euler_rate_rows(phi, theta)
+        self._rate_inverse = inverse  # Q^-1 of this sample: the estimate's torque in the body frame next step
+        eta_dot = mat_vec3(inverse, angular_velocity_body.tolist())
+        self.observer.update(velocity_world, (phi, theta, psi), eta_dot, force_body, torque_body)
         self._ready = True
 
     @property
     def in_contact(self) -> bool:
         """Whether the last state was in contact with a surface (compensation gated off)."""
         return self._contact
+
+
+def inverse_euler_rate_rows(phi: float, theta: float) -> Mat3:
+    """Rows of ``Q(eta)^-1`` (``eta_dot = Q^-1 omega_body``, ZYX, :func:`fsr_sim.model.so3.euler_rate_rows`):
+    ``[[1, s_phi t_theta, c_phi t_theta], [0, c_phi, -s_phi], [0, s_phi / c_theta, c_phi / c_theta]]``, singular
+    at pitch = +-90 deg (ZeroDivisionError)."""
+    cph, sph = math.cos(phi), math.sin(phi)
+    cth = math.cos(theta)
+    tth = math.sin(theta) / cth
+    return ((1.0, sph * tth, cph * tth), (0.0, cph, -sph), (0.0, sph / cth, cph / cth))
 
 
 def surfaces_for(vehicle: Vehicle, ground_height: float | None, ceiling_height: float | None) -> Surfaces:
