@@ -162,7 +162,7 @@ class WrenchCompensator:
             self._history.clear()
             return None
         self.report.compensated_steps += 1
-        fx, fy, fz = self.observer.estimate[:3].tolist()
+        fx, fy, fz, ex, ey, ez = self.observer.estimate.tolist()  # [f_e (world); tau_e (eta coordinates)]
         history = self._history
         history.append((fx, fy, fz))
         if len(history) > 3:
@@ -175,7 +175,7 @@ class WrenchCompensator:
             (cx, cy, cz), (ax, ay, az), (bx, by, bz) = history
             scale = 1.0 / (period * period)
             acceleration = ((bx - 2.0 * ax + cx) * scale, (by - 2.0 * ay + cy) * scale, (bz - 2.0 * az + cz) * scale)
-        tx, ty, tz = mat_t_vec3(self._rate_inverse, self.observer.estimate[3:].tolist())  # Q^-T tau_e (body)
+        tx, ty, tz = mat_t_vec3(self._rate_inverse, (ex, ey, ez))  # Q^-T tau_e (body)
         return (fx, fy, fz), (tx, ty, tz), rate, acceleration
 
     def record(self, rotation: np.ndarray, velocity_world: np.ndarray, angular_velocity_body: np.ndarray,

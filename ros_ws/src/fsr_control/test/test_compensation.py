@@ -105,7 +105,8 @@ def test_estimate_of_the_previous_stamp_and_its_convergence():
     assert compensator.report.compensated_steps == 1000 and compensator.report.late_estimates == 0
 
 
-def test_contact_and_gaps_restart_the_observer():
+def converged_compensator() -> WrenchCompensator:
+    """Hovering 200 steps at 2 m with the thrust 1 N short: an estimate far from zero."""
     compensator, mass = hover_compensator()
     rotation, zero = np.eye(3), np.zeros(3)
     force_cmd = np.array([0.0, 0.0, -(mass * 9.81 - 1.0)])
@@ -113,13 +114,22 @@ def test_contact_and_gaps_restart_the_observer():
         compensator.estimate(k * 1e-3, np.array([0.0, 0.0, -2.0]))
         compensator.record(rotation, zero, zero, force_cmd, zero)
     assert abs(compensator.observer.estimate[2]) > 0.5
-    on_ground = np.array([0.0, 0.0, compensator.config.surfaces.ground_rest_z or 0.0])
-    if compensator.config.surfaces.ground_rest_z is None:  # step_disturbance has no ground: test a gap instead
-        assert compensator.estimate(0.5, np.array([0.0, 0.0, -2.0])) is None  # 0.2 -> 0.5 s: a gap
-        assert compensator.report.gaps == 1
-    else:
-        assert compensator.estimate(0.2, on_ground) is None
-        assert compensator.in_contact
+    return compensator
+
+
+def test_a_stamp_gap_restarts_the_observer():
+    compensator = converged_compensator()
+    assert compensator.estimate(0.5, np.array([0.0, 0.0, -2.0])) is None  # 0.199 -> 0.5 s: not one period
+    assert compensator.report.gaps == 1 and not compensator.in_contact
+    assert not np.any(compensator.observer.estimate)
+
+
+def test_touching_the_ground_restarts_the_observer():
+    compensator = converged_compensator()
+    ground_rest_z = compensator.config.surfaces.ground_rest_z
+    assert ground_rest_z == pytest.approx(-0.1)  # step_disturbance: ground at 0, quadrotor feet 0.1 m down
+    assert compensator.estimate(0.2, np.array([0.0, 0.0, ground_rest_z])) is None
+    assert compensator.in_contact and compensator.report.contact_steps == 1 and compensator.report.gaps == 0
     assert not np.any(compensator.observer.estimate)
 
 
