@@ -10,7 +10,7 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
     ],
-    install_requires=["setuptools", "numpy", "scipy", "fsr_sim"],
+    install_requires=["setuptools", "numpy", "scipy", "fsr_sim", "fsr_estimation"],
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",

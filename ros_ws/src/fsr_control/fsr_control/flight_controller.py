@@ -2,8 +2,9 @@
 
 ``FlightController.command(t, p, R, v_world, w_body)`` evaluates the reference at ``t`` [s], runs the
 configured law (:class:`fsr_control.controllers.common.ControlLaw`: geometric or Voliro, both returning a
-body wrench) on the nominal vehicle model, and allocates the wrench to rotor speeds (and tilts) or passes it
-through in wrench actuation. The controller node and the in-process loop
+body wrench) on the nominal vehicle model (with ``controller.compensation: estimate``, cancelling the wrench its
+own observer estimated at the previous stamp, :mod:`fsr_control.compensation`), and allocates the wrench to
+rotor speeds (and tilts) or passes it through in wrench actuation. The controller node and the in-process loop
 both call exactly this, once per lockstep step (1 kHz), so it does no allocation beyond small arrays.
 
 Frames: position world NED [m], ``R`` body FRD -> world, velocity world [m/s], angular velocity body
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_control.allocation import FixedRotorActuation, TiltingActuation, WrenchActuation
+from fsr_control.compensation import WrenchCompensator
 from fsr_control.config.controller_config import ControllerConfig
 from fsr_control.controllers.common import ControlLaw, WrenchCommand
 from fsr_control.controllers.geometric import GeometricController
@@ -110,6 +112,8 @@ class FlightController:
             )
         else:
             self.actuator = FixedRotorActuation(vehicle, config.allocation)
+        self.compensator = (WrenchCompensator(config.compensation, vehicle)
+                            if config.compensation is not None else None)
         self.trajectory: Trajectory | None = None
         self._pending_goal: tuple[np.ndarray, np.ndarray, float] | None = None
         self.last_stamp = start_time
@@ -124,6 +128,10 @@ class FlightController:
     @property
     def tilt_saturation(self) -> SaturationReport:
         return self.actuator.tilt_saturation
+
+    def compensation_summary(self) -> dict[str, int | str]:
+        """``{"mode": "none"}``, or what the compensation did (:class:`fsr_control.compensation.CompensationReport`)."""
+        return {"mode": "none"} if self.compensator is None else self.compensator.report.as_dict()
 
     def _plan(self, position: np.ndarray, rotation: np.ndarray, time: float) -> None:
         self.trajectory = Trajectory(
@@ -151,8 +159,17 @@ class FlightController:
             self._plan(position, rotation, stamp_s)
         self.last_stamp = stamp_s
         reference = self.trajectory.evaluate(stamp_s)
-        desired = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body)
-        actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
+        compensator = self.compensator
+        if compensator is None:
+            desired = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body)
+            actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
+        else:  # cancel the estimate of t_(k-1); then feed the observer this state and this command
+            estimate = compensator.estimate(stamp_s, position)
+            desired = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body,
+                                       estimate)
+            actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
+            compensator.record(rotation, velocity_world, angular_velocity_body, actuated.force_body,
+                               actuated.torque_body)
         return ControlOutput(
             stamp_s, actuated.force_body, actuated.torque_body, actuated.rotor_speeds, actuated.tilt_angles,
             reference, actuated.saturated, desired, actuated.shortfall,

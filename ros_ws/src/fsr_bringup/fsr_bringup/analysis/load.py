@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_control.compensation import CompensationConfig
+from fsr_control.config.controller_config import controller_config
 from fsr_estimation.config.estimator_config import EstimatorConfig, estimator_config
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
@@ -95,6 +97,8 @@ class Flight:
     scenario_name: str
     config: SimulationConfig | None
     estimator: EstimatorConfig | None = None  # the observer's model (mass, inertia) and filter, from the scenario
+    compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none or unknown)
+    compensation_mode: str | None = None  # the scenario's controller.compensation (None without a scenario)
     odom: Odometry | None = None
     reference: Reference | None = None
     wrench_truth: Wrench | None = None
@@ -146,6 +150,7 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     namespace = "/" + namespace.strip("/") if namespace.strip("/") else "/"
     config, scenario_name, estimator = _scenario(recording, notes)
     flight = Flight(recording, namespace, scenario_name, config, estimator, notes=notes)
+    flight.compensation_mode, flight.compensation = _compensation(recording, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(_topic(namespace, name) for name in ("/clock", *STANDARD_TOPICS))}):
@@ -204,6 +209,20 @@ def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig 
         notes.append(f"estimator section of the scenario cannot be used: {error}")
         estimator = None
     return config, scenario.name, estimator
+
+
+def _compensation(recording: Recording, notes: list[str]) -> tuple[str | None, CompensationConfig | None]:
+    """(``controller.compensation`` of the scenario in the metadata, its validated settings or None)."""
+    text = recording.scenario_yaml
+    if text is None:
+        return None, None
+    source = f"{recording.path} (fsr_scenario metadata)"
+    try:
+        scenario = Scenario(data=parse_yaml_mapping(text, source), source=source, base_dir=recording.path.parent)
+        return ("estimate", config) if (config := controller_config(scenario).compensation) else ("none", None)
+    except ConfigError as error:
+        notes.append(f"controller section of the scenario cannot be used: {error}")
+        return None, None
 
 
 def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:

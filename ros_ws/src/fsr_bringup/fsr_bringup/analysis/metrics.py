@@ -152,6 +152,22 @@ def saturation(flight: Flight) -> dict[str, Any] | None:
     return result
 
 
+def compensation(flight: Flight) -> dict[str, Any] | None:
+    """Whether the controller cancelled the estimated external wrench (``controller.compensation`` of the
+    scenario in the metadata) and, if so, the states in which the contact rule switched it off
+    (:meth:`fsr_control.compensation.Surfaces.contact_mask` on ``odom``) and the late estimates: 0, the
+    observer runs inside the controller (:mod:`fsr_control.compensation`). None without a scenario."""
+    if flight.compensation_mode is None:
+        return None
+    if flight.compensation is None:
+        return {"mode": flight.compensation_mode}
+    contact = None
+    if flight.odom is not None:
+        contact = int(flight.compensation.surfaces.contact_mask(flight.odom.position[:, 2]).sum())
+    return {"mode": "estimate", "observer": "controller", "late_estimates": 0, "contact_steps": contact,
+            "c0": flight.compensation.c0, "r": flight.compensation.r}
+
+
 def wrench_shortfall(flight: Flight) -> dict[str, Any] | None:
     """Per body axis (``force_x`` .. ``torque_z``): steps that gave way (``|demanded - commanded| >
     SHORTFALL_TOLERANCE``), their fraction, and the largest shortfall [N or N m] with its time; None without
@@ -328,6 +344,7 @@ def flight_metrics(
     if metrics["saturation"] is None:
         notes.append("saturation skipped: rotor_cmd or scenario missing")
     metrics["wrench_shortfall"] = wrench_shortfall(flight)
+    metrics["compensation"] = compensation(flight)
     if metrics["wrench_shortfall"] is None:
         notes.append("wrench shortfall skipped: wrench_shortfall missing")
     if errors is not None and not errors.attitude_commanded:

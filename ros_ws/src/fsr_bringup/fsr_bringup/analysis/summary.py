@@ -71,6 +71,14 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("rotor speed saturation", text))
         if saturation.get("tilt"):
             rows.append(("tilt saturation", f"{saturation['tilt']['steps']} steps"))
+    compensation = metrics.get("compensation")
+    if compensation:
+        text = compensation["mode"]
+        if compensation["mode"] == "estimate":
+            text = (f"estimate (controller's own observer, c0 = {_num(compensation['c0'])}, r = {compensation['r']}); "
+                    f"late estimates {compensation['late_estimates']}; off in contact: "
+                    f"{_num(compensation['contact_steps'])} states")
+        rows.append(("disturbance compensation", text))
     shortfall = metrics.get("wrench_shortfall")
     if shortfall:
         gave_way = [

@@ -61,6 +61,10 @@ class FlightRun:
         The estimator's outputs (None when it is disabled).
     end_reason : str
         ``finished``, ``diverged`` or ``stopped`` (interrupted); ``reason`` says why.
+    compensation : dict
+        ``{"mode": "none"}``, or with ``controller.compensation: estimate`` the steps compensated, the steps
+        switched off by contact, the late estimates (0: the observer is in the controller) and the gaps
+        (:class:`fsr_control.compensation.CompensationReport`).
     """
 
     time: np.ndarray
@@ -89,6 +93,7 @@ class FlightRun:
     scenario: Scenario | None = None
     failures: list[str] = field(default_factory=list)
     interrupted: bool = False
+    compensation: dict[str, Any] = field(default_factory=lambda: {"mode": "none"})  # FlightController's summary
 
     @property
     def sim_time(self) -> float:
@@ -257,4 +262,5 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         end_reason=end_reason, reason=reason, wall_time=wall, rotation_commanded=rotation_commanded[keep],
         force_desired=arrays["force_desired"][keep], torque_desired=arrays["torque_desired"][keep],
         scenario=scenario, failures=failures.get(end_reason, []), interrupted=interrupted,
+        compensation=controller.compensation_summary(),
     )

@@ -15,6 +15,8 @@ controller:
   angular_feedforward: consistent   # voliro only: consistent | report
   secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
   allocation: priority              # beyond the rotor limits: priority (yaw gives way first) | clamp
+  compensation: none                # none | estimate: cancel the external wrench the controller's own
+                                    # observer estimates (needs estimator.enabled; fsr_control.compensation)
 ```
 
 Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix; gains not given
@@ -28,9 +30,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsr_control.allocation import ALLOCATION_STRATEGIES
+from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig, surfaces_for
 from fsr_control.controllers import geometric, voliro
 from fsr_control.planning.trajectory import Waypoint
-from fsr_sim.config.scenario import Scenario, load_vehicle_for
+from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import Section, checked_spd
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
@@ -61,6 +64,7 @@ class ControllerConfig:
     goal_duration: float = DEFAULT_GOAL_DURATION
     source: str = ""
     allocation: str = DEFAULT_ALLOCATION  # clamp | priority (fsr_control.allocation)
+    compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none)
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
@@ -98,6 +102,29 @@ def _waypoints(section: Section, vehicle: Vehicle) -> list[Waypoint]:
     return waypoints
 
 
+def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> CompensationConfig | None:
+    """``controller.compensation``: None for ``none``; for ``estimate`` the observer's filter (the scenario's
+    ``estimator`` c0 and r), sample time and the contact surfaces. Refused when the estimator is off."""
+    mode = controller.string("compensation", "none", choices=COMPENSATION_MODES)
+    if mode == "none":
+        return None
+    from fsr_estimation.config.estimator_config import estimator_config
+
+    estimation = estimator_config(scenario)
+    if not estimation.enabled:
+        raise controller.error("compensation", "'estimate' needs the estimator: set estimator.enabled: true "
+                                               "(or controller.compensation: none)")
+    sim = simulation_config(scenario)
+    env = sim.environment
+    surfaces = surfaces_for(vehicle, env.ground.height if env.ground.enabled else None,
+                            env.ceiling.height if env.ceiling.enabled else None)
+    if estimation.c0 * sim.control_period > MAX_C0_PERIOD:
+        raise controller.error("compensation", f"estimator.c0 * control period must be <= {MAX_C0_PERIOD:g} with "
+                                               f"compensation (the compensated loop diverges from about 1), got "
+                                               f"{estimation.c0:g} * {sim.control_period:g} s; lower estimator.c0")
+    return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces)
+
+
 def controller_config(scenario: Scenario) -> ControllerConfig:
     """Validate ``controller`` and ``trajectory`` of ``scenario``; :class:`ConfigError` names file and key."""
     vehicle = load_vehicle_for(scenario)
@@ -129,6 +156,7 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
         if secondary.exponent % 2:
             raise objective.error("exponent", f"must be an even integer >= 4, got {secondary.exponent}")
         objective.reject_unknown()
+    compensation = _compensation(scenario, controller, vehicle)
     controller.reject_unknown()
 
     trajectory = scenario.section("trajectory")
@@ -136,4 +164,4 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
     trajectory.reject_unknown()
     return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source,
-                            allocation)
+                            allocation, compensation)

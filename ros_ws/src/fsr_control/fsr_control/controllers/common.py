@@ -17,6 +17,11 @@ import numpy as np
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.model.so3 import Mat3, Vec3
 
+Compensation = tuple[Vec3, Vec3, Vec3, Vec3]
+"""The estimated external wrench a law cancels (:mod:`fsr_control.compensation`): ``(f_hat, tau_hat, f_hat_dot,
+f_hat_ddot)``: force [N] world NED, torque [N m] body FRD, the force's first and second time differences
+[N/s, N/s^2] (world; the geometric law turns ``R_d`` with them)."""
+
 
 @dataclass
 class WrenchCommand:
@@ -48,7 +53,7 @@ class ControlLaw(Protocol):
     ``rotation`` body FRD -> world NED, angular velocity body FRD [rad/s])."""
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
-                angular_velocity_body: np.ndarray) -> WrenchCommand:
+                angular_velocity_body: np.ndarray, compensation: Compensation | None = None) -> WrenchCommand:
         """The body wrench for this state and reference.
 
         Parameters
@@ -61,6 +66,9 @@ class ControlLaw(Protocol):
             Body FRD -> world NED.
         angular_velocity_body : numpy.ndarray, shape (3,)
             [rad/s], body FRD.
+        compensation : Compensation, optional
+            The estimated external wrench to cancel (:data:`Compensation`; None: uncompensated, bit for bit
+            the law as written). How each law uses it: its own ``compute``.
 
         Returns
         -------

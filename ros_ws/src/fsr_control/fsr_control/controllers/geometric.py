@@ -19,6 +19,9 @@ step), and the jerk error ``e_j`` the model's ``p_dddot = -(u_T_dot R_b e3 + u_T
 feedback part of these rates (only the reference's) the attitude loop lags the outer loop and, with the
 report's gains and the exercise-4 inertia (1.24 kg m^2), the lateral loop is unstable:
 ``1.49 s^4 + 12 s^3 + 12 s^2 + 200 s + 200`` fails Routh's test. The controller uses the nominal model (mass, inertia).
+With ``controller.compensation: estimate`` the estimated external wrench is cancelled: ``a -= f_hat`` (world)
+before ``u_T`` and ``z_bd`` (and its rates in ``a_dot``, ``a_ddot``), ``tau_b -= tau_hat`` (body); see
+:mod:`fsr_control.compensation`.
 Report gains: ``K_p = K_v = diag(20, 20, 100)``, ``K_R = K_w = diag(10, 10, 100)``.
 """
 
@@ -26,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import WrenchCommand, gain_rows, linear_feedback, tracking_errors
+from fsr_control.controllers.common import Compensation, WrenchCommand, gain_rows, linear_feedback, tracking_errors
 from fsr_control.planning.flatness import attitude_rows_from_thrust_vector
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.model.frames import GRAVITY
@@ -72,8 +75,19 @@ class GeometricController:
         rotation: np.ndarray,
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
+        compensation: Compensation | None = None,
     ) -> WrenchCommand:
         """Body wrench ``[0, 0, -u_T]``, ``tau_b`` and ``R_d`` for the state (arguments: :meth:`ControlLaw.compute`).
+
+        Parameters
+        ----------
+        compensation : Compensation, optional
+            The estimated external wrench to cancel (:mod:`fsr_control.compensation`): ``f_hat`` [N] in world
+            NED enters the desired force before the thrust direction is taken, ``a -= f_hat`` (a side wind is
+            met by tilting), and its rates the rates of ``R_d`` (``a_dot -= f_hat_dot``, ``a_ddot -=
+            f_hat_ddot``: without them ``R_d`` turns with the estimate unannounced and the attitude lags);
+            ``tau_hat`` [N m] in body FRD the torque, ``tau_b -= tau_hat``. None: the law as written (bit for
+            bit).
 
         Returns
         -------
@@ -85,6 +99,9 @@ class GeometricController:
         e_p, e_v = tracking_errors(reference, position, velocity_world)
         a = linear_feedback(k_p, e_p, k_v, e_v, m, reference.acceleration.tolist())
         a = (a[0], a[1], a[2] - m * GRAVITY)  # - m g e3
+        if compensation is not None:
+            f_hat = compensation[0]
+            a = (a[0] - f_hat[0], a[1] - f_hat[1], a[2] - f_hat[2])  # - f_hat (world)
         r = rotation.tolist()
         z_b = (r[0][2], r[1][2], r[2][2])
         thrust = -dot3(a, z_b)
@@ -95,9 +112,14 @@ class GeometricController:
         acc_d, jerk_d = reference.acceleration.tolist(), reference.jerk.tolist()
         e_a = (acceleration[0] - acc_d[0], acceleration[1] - acc_d[1], acceleration[2] - acc_d[2])
         a_dot = linear_feedback(k_p, e_v, k_v, e_a, m, jerk_d)
+        if compensation is not None:  # the estimate changes too: R_d turns with it (w_d, w_dot_d)
+            f_dot, f_ddot = compensation[2], compensation[3]
+            a_dot = (a_dot[0] - f_dot[0], a_dot[1] - f_dot[1], a_dot[2] - f_dot[2])
         thrust_dot = -dot3(a_dot, z_b) - dot3(a, z_b_dot)
         e_j = tuple(-(thrust_dot * z_b[i] + thrust * z_b_dot[i]) / m - jerk_d[i] for i in range(3))
         a_ddot = linear_feedback(k_p, e_a, k_v, e_j, m, reference.snap.tolist())
+        if compensation is not None:
+            a_ddot = (a_ddot[0] - f_ddot[0], a_ddot[1] - f_ddot[1], a_ddot[2] - f_ddot[2])
         rotation_desired, omega_d, omega_dot_d = attitude_rows_from_thrust_vector(
             (-a[0], -a[1], -a[2]), (-a_dot[0], -a_dot[1], -a_dot[2]), (-a_ddot[0], -a_ddot[1], -a_ddot[2]),
             reference.yaw, reference.yaw_rate, reference.yaw_acceleration,
@@ -112,6 +134,9 @@ class GeometricController:
         e_r = attitude_error3(r, rotation_desired)
         feedback = linear_feedback(self._k_r, e_r, self._k_w, e_w, 0.0, (0.0, 0.0, 0.0))
         torque = tuple(feedback[i] + gyro[i] - feedforward[i] for i in range(3))
+        if compensation is not None:
+            tau_hat = compensation[1]
+            torque = (torque[0] - tau_hat[0], torque[1] - tau_hat[1], torque[2] - tau_hat[2])
         return WrenchCommand(np.array((0.0, 0.0, -thrust)), np.array(torque), np.array(rotation_desired))
 
     def _measured_acceleration(self, t: float, velocity_world: Vec3, thrust: float, z_b: Vec3) -> Vec3:

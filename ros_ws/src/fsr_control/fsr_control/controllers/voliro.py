@@ -16,6 +16,8 @@ same solutions and, ``A`` having full row rank, the same minimum-norm one, ``A^+
 
 is the wrench returned by :meth:`VoliroController.compute`. ``G^+`` is constant (no per-step SVD), and the
 null space of ``A`` is that of ``G`` (see :mod:`fsr_control.nullspace` for the secondary objective).
+With ``controller.compensation: estimate`` the estimated external wrench ``(f_hat, tau_hat)`` is subtracted from
+this wrench, all six axes (:mod:`fsr_control.compensation`).
 Report gains: ``K_p = diag(50, 50, 100)``, ``K_d = diag(10, 10, 50)``, ``K_R = diag(100, 100, 100)``,
 ``K_w = diag(10, 10, 50)``.
 """
@@ -24,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import WrenchCommand, gain_rows, linear_feedback, tracking_errors
+from fsr_control.controllers.common import Compensation, WrenchCommand, gain_rows, linear_feedback, tracking_errors
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.so3 import attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3
@@ -73,8 +75,16 @@ class VoliroController:
         rotation: np.ndarray,
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
+        compensation: Compensation | None = None,
     ) -> WrenchCommand:
         """Body wrench ``B^-1 (-b + [v; w])`` for the state (arguments: :meth:`ControlLaw.compute`).
+
+        Parameters
+        ----------
+        compensation : Compensation, optional
+            The estimated external wrench to cancel (:mod:`fsr_control.compensation`), the whole 6-D wrench:
+            ``force_body = R_b^T (m (v - g e3) - f_hat)`` with ``f_hat`` [N] world NED, ``torque_body =
+            I_b w + w_b x I_b w_b - tau_hat`` with ``tau_hat`` [N m] body FRD. None: the law as written.
 
         Returns
         -------
@@ -100,8 +110,13 @@ class VoliroController:
         else:
             w = tuple(feedback[i] - turn[i] + omega_dot_d_body[i] for i in range(3))
         m = self.mass
-        force_body = mat_t_vec3(r, (v[0], v[1], v[2] - GRAVITY))
         inertia_w = mat_vec3(inertia, w)
         gyro = cross3(w_b, mat_vec3(inertia, w_b))
+        if compensation is not None:
+            (fx, fy, fz), (tx, ty, tz) = compensation[0], compensation[1]
+            force = mat_t_vec3(r, (m * v[0] - fx, m * v[1] - fy, m * (v[2] - GRAVITY) - fz))
+            return WrenchCommand(np.array(force), np.array((inertia_w[0] + gyro[0] - tx, inertia_w[1] + gyro[1] - ty,
+                                                            inertia_w[2] + gyro[2] - tz)), reference.rotation)
+        force_body = mat_t_vec3(r, (v[0], v[1], v[2] - GRAVITY))
         return WrenchCommand(np.array((m * force_body[0], m * force_body[1], m * force_body[2])),
                              np.array(tuple(inertia_w[i] + gyro[i] for i in range(3))), reference.rotation)

@@ -14,7 +14,8 @@ contract; :func:`fsr_control.nodes.messages.controller_messages`).
 NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
 final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
 for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation
-summary and the callback's cost.
+summary, the disturbance compensation's (``controller.compensation``: steps compensated, off in contact, late
+estimates) and the callback's cost.
 """
 
 from __future__ import annotations
@@ -160,6 +161,15 @@ class ControllerNode(Node):
                                       + (", ".join(gave_way) or "no axis"))
         else:
             self.get_logger().info("rotor saturation: none")
+        summary = self.controller.compensation_summary()
+        if summary["mode"] == "estimate":
+            self.get_logger().info(
+                f"compensation: estimate (own observer), {summary['compensated_steps']} steps compensated, "
+                f"{summary['contact_steps']} off in contact, {summary['late_estimates']} late estimates, "
+                f"{summary['gaps']} gaps"
+            )
+        else:
+            self.get_logger().info("compensation: none")
         if self.callbacks:
             self.get_logger().info(
                 f"{self.callbacks} odom answered, {1e6 * self.callback_seconds / self.callbacks:.0f} us per callback"
