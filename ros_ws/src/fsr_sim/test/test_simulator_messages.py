@@ -99,3 +99,26 @@ def test_state_messages_stamp_past_one_second(tmp_path):
     assert messages.is_finite()
     plant.state_vector[0] = math.nan
     assert not messages.is_finite()
+
+
+@pytest.mark.parametrize("disturbed", [False, True])
+def test_packed_state_messages_equal_the_message_objects(disturbed):
+    """StatePackets (the bytes the simulator publishes) holds exactly StateMessages' values."""
+    from geometry_msgs.msg import WrenchStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.serialization import deserialize_message
+    from rosgraph_msgs.msg import Clock
+
+    from fsr_sim.nodes.state_packets import StatePackets
+
+    rng = np.random.default_rng(1)
+    messages, packets = StateMessages(), StatePackets()
+    for k in range(100):
+        state = rng.normal(size=13)
+        state[6:10] /= np.linalg.norm(state[6:10])
+        external = (rng.normal(size=3), rng.normal(size=3)) if disturbed else None
+        messages.fill_from(k * 1_234_567, state, external)
+        packets.fill_from(k * 1_234_567, state, external)
+        assert deserialize_message(packets.odom, Odometry) == messages.odom
+        assert deserialize_message(packets.wrench, WrenchStamped) == messages.wrench
+        assert deserialize_message(packets.clock, Clock) == messages.clock

@@ -181,7 +181,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     if recording is not None:
         from fsr_bringup.recording.flight_recording import FlightRecorder
 
-        recorder = FlightRecorder(Path(recording), scenario.dump(), rotors)
+        recorder = FlightRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.is_tilting)
     end_reason, reason, interrupted = "finished", f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"

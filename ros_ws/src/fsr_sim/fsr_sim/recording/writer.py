@@ -12,6 +12,8 @@ serialises an rclpy message instance first.
 
 from __future__ import annotations
 
+import struct
+from collections.abc import Sequence
 from pathlib import Path
 from typing import IO, Any
 
@@ -20,6 +22,9 @@ from mcap.writer import CompressionType, Writer
 from fsr_sim.ros.message_schema import message_class, message_definition
 
 DEFAULT_CHUNK_SIZE = 256 * 1024
+_MESSAGE_OPCODE = 0x05
+_MESSAGE_HEAD = struct.Struct("<BQHIQQ")  # opcode, record length, channel, sequence, log time, publish time
+_MESSAGE_FIELDS = 2 + 4 + 8 + 8
 
 
 class RecordingWriter:
@@ -44,6 +49,7 @@ class RecordingWriter:
         self.message_counts: dict[str, int] = {}
         for name, data in (metadata or {}).items():
             self._writer.add_metadata(name, dict(data))
+        self._fast = _FastMessages.attach(self._writer)
 
     def add_topic(self, topic: str, type_name: str) -> None:
         """Register ``topic`` (absolute name) with its type (``nav_msgs/msg/Odometry``); idempotent."""
@@ -78,6 +84,29 @@ class RecordingWriter:
             sequence=sequence,
         )
 
+    def write_batch(self, messages: Sequence[tuple[str, bytes]], log_time_ns: int) -> None:
+        """Append CDR messages of registered topics that share ``log_time_ns`` (publish time = log time).
+
+        The file is the one :meth:`write` would produce message by message (tested byte for byte); with the
+        pinned ``mcap`` writer the records go straight into its current chunk (~2 us per message instead of
+        ~15 us through ``Writer.add_message``)."""
+        fast = self._fast
+        if fast is None:
+            for topic, data in messages:
+                self.write(topic, data, log_time_ns)
+            return
+        channels, sequences, counts = self._channels, self._sequence, self.message_counts
+        batch = []
+        for topic, data in messages:
+            channel_id = channels.get(topic)
+            if channel_id is None:
+                raise KeyError(f"topic '{topic}' was not registered with add_topic()")
+            sequence = sequences[topic]
+            sequences[topic] = sequence + 1
+            counts[topic] += 1
+            batch.append((channel_id, sequence, data))
+        fast.add(batch, int(log_time_ns))
+
     def write_message(self, topic: str, msg: Any, log_time_ns: int) -> None:
         """Serialise an rclpy message instance and append it (registering the topic if new)."""
         from rclpy.serialization import serialize_message
@@ -107,3 +136,61 @@ class RecordingWriter:
 
     def __exit__(self, *_exc: object) -> None:
         self.close()
+
+
+class _FastMessages:
+    """Appends message records to an ``mcap.writer.Writer``'s open chunk exactly as ``add_message`` does
+    (same record bytes, chunk message index, chunk and file statistics), without a ``Message`` object and
+    four small writes per message. Used only with the writer internals it was written against."""
+
+    def __init__(self, writer: Writer) -> None:
+        self.writer = writer
+        self.builder = writer._Writer__chunk_builder  # noqa: SLF001 - see attach()
+        self.statistics = writer._Writer__statistics  # noqa: SLF001
+        self.maybe_finalize = writer._Writer__maybe_finalize_chunk  # noqa: SLF001
+        self.chunk_size = writer._Writer__chunk_size  # noqa: SLF001
+
+    @classmethod
+    def attach(cls, writer: Writer) -> _FastMessages | None:
+        """The fast path for ``writer``, or None if its internals are not the expected ones (any other
+        ``mcap`` version: :meth:`RecordingWriter.write_batch` then calls ``add_message``)."""
+        try:
+            fast = cls(writer)
+            builder = fast.builder
+            ok = (builder is not None and hasattr(builder, "message_indices") and hasattr(builder, "num_messages")
+                  and hasattr(builder.record_writer, "_buffer") and hasattr(fast.statistics, "channel_message_counts"))
+        except AttributeError:
+            return None
+        return fast if ok else None
+
+    def add(self, batch: list[tuple[int, int, bytes]], log_time: int) -> None:
+        from mcap.records import MessageIndex
+
+        statistics, builder, chunk_size = self.statistics, self.builder, self.chunk_size
+        if statistics.message_count == 0:
+            statistics.message_start_time = log_time
+        else:
+            statistics.message_start_time = min(log_time, statistics.message_start_time)
+        statistics.message_end_time = max(log_time, statistics.message_end_time)
+        statistics.message_count += len(batch)
+        channel_counts = statistics.channel_message_counts
+        indices = builder.message_indices
+        buffer = builder.record_writer._buffer  # noqa: SLF001
+        pack = _MESSAGE_HEAD.pack
+        for channel_id, sequence, data in batch:
+            channel_counts[channel_id] += 1
+            if builder.num_messages == 0:
+                builder.message_start_time = log_time
+            else:
+                builder.message_start_time = min(builder.message_start_time, log_time)
+            builder.message_end_time = max(builder.message_end_time, log_time)
+            index = indices.get(channel_id)
+            if not index:
+                index = indices[channel_id] = MessageIndex(channel_id=channel_id, records=[])
+            index.records.append((log_time, buffer.tell()))
+            builder.num_messages += 1
+            buffer.write(pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel_id, sequence, log_time, log_time))
+            buffer.write(data)
+            if buffer.tell() > chunk_size:  # what add_message does after each message
+                self.maybe_finalize()
+                buffer = builder.record_writer._buffer  # noqa: SLF001 - a new one after the chunk

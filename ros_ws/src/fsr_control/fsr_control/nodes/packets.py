@@ -1,0 +1,66 @@
+"""The controller's per-step messages as packed CDR bytes: what the controller node publishes and what an
+in-process recording writes (:mod:`fsr_sim.ros.cdr_pack`; no rclpy needed).
+
+Same topics and values as :func:`fsr_control.nodes.messages.controller_messages` (tested equal field by
+field): ``rotor_cmd`` (rotor actuation only: ``rotor_i`` velocities, zero positions, and ``tilt_i`` positions
+with zero velocities for a tilting vehicle), ``wrench_cmd``, ``wrench_shortfall`` (when the allocation reports
+one), ``reference``, ``attitude_cmd``, ``wrench_desired``, all stamped with the answered state's stamp.
+"""
+
+from __future__ import annotations
+
+from fsr_control.flight_controller import ControlOutput
+from fsr_sim.model.so3 import quaternion_from_rotation
+from fsr_sim.ros import cdr_pack
+
+WORLD_FRAME = "world_ned"
+BODY_FRAME = "base_link_frd"
+
+
+class ControllerPackets:
+    """Packs a :class:`ControlOutput` into ``(topic, CDR bytes)`` pairs (relative topic names).
+
+    ``rotor_count`` and ``tilting`` fix ``rotor_cmd``'s joint names (rotor actuation, ``rotors`` True)."""
+
+    def __init__(self, rotors: bool, rotor_count: int = 0, tilting: bool = False) -> None:
+        self.rotors = rotors
+        self.rotor_count = rotor_count
+        self.tilting = tilting
+        names = [f"rotor_{i + 1}" for i in range(rotor_count)]
+        if tilting:
+            names += [f"tilt_{i + 1}" for i in range(rotor_count)]
+        count = len(names)
+        self._rotor = cdr_pack.joint_state(BODY_FRAME, names, count, count) if rotors else None
+        self._zeros = [0.0] * rotor_count
+        self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
+        self._reference = cdr_pack.trajectory_point(WORLD_FRAME, BODY_FRAME)
+        self._attitude = cdr_pack.quaternion_stamped(WORLD_FRAME)
+
+    def pack(self, stamp_ns: int, output: ControlOutput) -> list[tuple[str, bytes]]:
+        """Everything the controller publishes for the state stamped ``stamp_ns`` [ns], in publication order."""
+        wrench = self._wrench.pack
+        packets: list[tuple[str, bytes]] = []
+        if self.rotors:
+            speeds = output.rotor_speeds.tolist()
+            if output.tilt_angles is not None:
+                values = [*self._zeros, *output.tilt_angles.tolist(), *speeds, *self._zeros]
+            else:
+                values = [*self._zeros, *speeds]
+            packets.append(("rotor_cmd", self._rotor.pack(stamp_ns, values)))
+        packets.append(("wrench_cmd", wrench(stamp_ns, (*output.force_body.tolist(), *output.torque_body.tolist()))))
+        if output.shortfall is not None:
+            packets.append(("wrench_shortfall", wrench(stamp_ns, output.shortfall.tolist())))
+        reference = output.reference
+        rotation = reference.rotation
+        packets.append(("reference", self._reference.pack(stamp_ns, (
+            *reference.position.tolist(), *quaternion_from_rotation(rotation).tolist(),
+            *reference.velocity.tolist(), *(rotation @ reference.angular_velocity).tolist(),
+            *reference.acceleration.tolist(), *(rotation @ reference.angular_acceleration).tolist(),
+        ))))
+        x, y, z, w = quaternion_from_rotation(output.rotation_cmd).tolist()
+        if w < 0.0:
+            x, y, z, w = -x, -y, -z, -w
+        packets.append(("attitude_cmd", self._attitude.pack(stamp_ns, (x, y, z, w))))
+        packets.append(("wrench_desired", wrench(stamp_ns, (*output.force_desired.tolist(),
+                                                            *output.torque_desired.tolist()))))
+        return packets

@@ -1,0 +1,141 @@
+"""The packed CDR encoders against rclpy's own ``serialize_message``, byte for byte.
+
+For every message type fsr packs and a set of value patterns (zeros, negatives, tiny/huge, NaN/inf, stamps
+with and without a seconds part, frames and names of every length modulo 4): every data byte (counts,
+strings, numbers, as the CDR walker of :mod:`fsr_sim.recording.cdr_columns` finds them) equals rclpy's,
+every padding byte is zero, the message ends where its data ends, and rclpy reads it back equal.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import QuaternionStamped, Transform, Twist, WrenchStamped
+from nav_msgs.msg import Odometry
+from rclpy.serialization import deserialize_message, serialize_message
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64, String
+from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
+
+from fsr_sim.recording.cdr_columns import message_layout
+from fsr_sim.ros import cdr_pack
+
+STAMPS = [0, 1, 999_999_999, 1_000_000_000, 12_345_678_901, 2**31 * 1_000_000_000 - 1]
+VALUE_PATTERNS = [
+    lambda i: 0.0,
+    lambda i: -1.5 * (i + 1),
+    lambda i: 1e-300 * (i + 1),
+    lambda i: 1e300 / (i + 1),
+    lambda i: (-0.0, math.pi, math.inf, -math.inf, 1 / 3)[i % 5],
+]
+FRAMES = ["", "a", "ab", "abc", "world_ned", "base_link_frd", "world_ned_x"]
+
+
+def _time(stamp_ns: int) -> Time:
+    return Time(sec=stamp_ns // 1_000_000_000, nanosec=stamp_ns % 1_000_000_000)
+
+
+def _covered(data: bytes, cls: type) -> tuple[set[int], int]:
+    """Byte positions holding data (encapsulation, counts, strings, numbers) and where the data ends."""
+    layout = message_layout(data, cls)
+    covered: set[int] = set()
+    for offset, length in layout.key_spans:
+        covered.update(range(offset, offset + length))
+    for offset, dtype, count in layout.numbers.values():
+        size = int(dtype[-1]) * (1 if count is None else count)
+        covered.update(range(offset, offset + size))
+    return covered, max(covered) + 1
+
+
+def check_bytes(ours: bytes, msg: object) -> None:
+    cls = type(msg)
+    reference = serialize_message(msg)
+    covered, end = _covered(ours, cls)
+    assert len(ours) == end, "the message must end where its data ends"
+    reference_covered, _ = _covered(reference, cls)
+    assert covered == reference_covered
+    assert all(ours[i] == reference[i] for i in covered)
+    assert all(ours[i] == 0 for i in range(len(ours)) if i not in covered), "padding must be zero"
+    assert len(reference) >= end  # rclpy appends uninitialised bytes after an empty trailing sequence
+    assert deserialize_message(ours, cls) == msg or _nan_equal(deserialize_message(ours, cls), msg)
+
+
+def _nan_equal(a: object, b: object) -> bool:
+    return serialize_message(a)[:16] == serialize_message(b)[:16] and repr(a) == repr(b)
+
+
+def _values(pattern: int, count: int) -> list[float]:
+    return [float(VALUE_PATTERNS[pattern](i)) for i in range(count)]
+
+
+@pytest.mark.parametrize("pattern", range(len(VALUE_PATTERNS)))
+@pytest.mark.parametrize("frame", FRAMES)
+def test_odometry_wrench_quaternion(pattern: int, frame: str) -> None:
+    for stamp in STAMPS:
+        v = _values(pattern, 13)
+        msg = Odometry()
+        msg.header.stamp, msg.header.frame_id, msg.child_frame_id = _time(stamp), frame, frame[::-1] + "c"
+        p, o = msg.pose.pose.position, msg.pose.pose.orientation
+        p.x, p.y, p.z, o.x, o.y, o.z, o.w = v[:7]
+        t = msg.twist.twist
+        t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z = v[7:]
+        check_bytes(cdr_pack.odometry(frame, frame[::-1] + "c").pack(stamp, v), msg)
+
+        w = WrenchStamped()
+        w.header.stamp, w.header.frame_id = _time(stamp), frame
+        f, q = w.wrench.force, w.wrench.torque
+        f.x, f.y, f.z, q.x, q.y, q.z = v[:6]
+        check_bytes(cdr_pack.wrench_stamped(frame).pack(stamp, v[:6]), w)
+
+        a = QuaternionStamped()
+        a.header.stamp, a.header.frame_id = _time(stamp), frame
+        a.quaternion.x, a.quaternion.y, a.quaternion.z, a.quaternion.w = v[:4]
+        check_bytes(cdr_pack.quaternion_stamped(frame).pack(stamp, v[:4]), a)
+
+
+@pytest.mark.parametrize("pattern", range(len(VALUE_PATTERNS)))
+@pytest.mark.parametrize("frame", FRAMES)
+def test_trajectory_point(pattern: int, frame: str) -> None:
+    for stamp in STAMPS:
+        v = _values(pattern, 19)
+        msg = MultiDOFJointTrajectory()
+        msg.header.stamp, msg.header.frame_id = _time(stamp), frame
+        msg.joint_names = [frame + "_joint"]
+        transform = Transform()
+        tr, ro = transform.translation, transform.rotation
+        tr.x, tr.y, tr.z, ro.x, ro.y, ro.z, ro.w = v[:7]
+        velocity, acceleration = Twist(), Twist()
+        for twist, part in ((velocity, v[7:13]), (acceleration, v[13:19])):
+            twist.linear.x, twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y, twist.angular.z = part
+        msg.points = [MultiDOFJointTrajectoryPoint(transforms=[transform], velocities=[velocity],
+                                                   accelerations=[acceleration])]
+        check_bytes(cdr_pack.trajectory_point(frame, frame + "_joint").pack(stamp, v), msg)
+
+
+@pytest.mark.parametrize("rotors", [1, 4, 6, 8])
+@pytest.mark.parametrize("tilting", [False, True])
+@pytest.mark.parametrize("pattern", range(len(VALUE_PATTERNS)))
+def test_joint_state(rotors: int, tilting: bool, pattern: int) -> None:
+    names = [f"rotor_{i + 1}" for i in range(rotors)] + ([f"tilt_{i + 1}" for i in range(rotors)] if tilting else [])
+    count = len(names)
+    for stamp in STAMPS:
+        positions, velocities = _values(pattern, count), _values((pattern + 1) % len(VALUE_PATTERNS), count)
+        msg = JointState(name=names, position=positions, velocity=velocities)
+        msg.header.stamp, msg.header.frame_id = _time(stamp), "base_link_frd"
+        packer = cdr_pack.joint_state("base_link_frd", names, count, count)
+        check_bytes(packer.pack(stamp, positions + velocities), msg)
+    empty = JointState(name=names, velocity=velocities)
+    check_bytes(cdr_pack.joint_state("", names, 0, count).pack(0, velocities), empty)
+
+
+@pytest.mark.parametrize("pattern", range(len(VALUE_PATTERNS)))
+def test_float64_clock_string(pattern: int) -> None:
+    for value in _values(pattern, 5):
+        check_bytes(cdr_pack.float64().pack(0, (value,)), Float64(data=value))
+    for stamp in STAMPS:
+        check_bytes(cdr_pack.clock().pack(stamp, ()), Clock(clock=_time(stamp)))
+    for text in ["", "a", '{"state": "running"}', "é" * 7, "x" * 101]:
+        check_bytes(cdr_pack.string(text), String(data=text))
