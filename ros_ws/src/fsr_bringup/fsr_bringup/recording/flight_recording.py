@@ -56,8 +56,15 @@ class FlightRecorder:
     def step(self, stamp_ns: int, state_vector: np.ndarray, external: tuple[np.ndarray, np.ndarray] | None,
              output: Any, estimate: Any) -> None:
         """Write everything published for the state stamped ``stamp_ns``."""
+        from fsr_sim.model.odometry import odometry_values
+
+        self.step_values(stamp_ns, odometry_values(state_vector), external, output, estimate)
+
+    def step_values(self, stamp_ns: int, published: tuple, external: tuple[np.ndarray, np.ndarray] | None,
+                    output: Any, estimate: Any) -> None:
+        """:meth:`step` with the state's :func:`~fsr_sim.model.odometry.odometry_values` already at hand."""
         state = self.state_packets
-        state.fill_from(stamp_ns, state_vector, external)
+        state.fill_from_values(stamp_ns, published, external)
         batch = [("/odom", state.odom), ("/wrench_truth", state.wrench)]
         batch += [("/" + topic, data) for topic, data in self.controller_packets.pack(stamp_ns, output)]
         if estimate is not None:

@@ -168,15 +168,11 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     n = sim.vehicle.rotor_count
     steps = sim.step_count if max_steps is None else min(sim.step_count, int(max_steps))
     size = steps + 1
-    arrays = {key: np.zeros((size, 3)) for key in ("p", "v", "a", "force", "torque", "force_desired",
-                                                    "torque_desired", "ext_force", "ext_torque")}
-    times, states = np.zeros(size), np.zeros((size, 13))
-    ref_rotation, rotation_commanded = np.zeros((size, 3, 3)), np.zeros((size, 3, 3))
-    speeds = np.zeros((size, n)) if rotors else None
-    tilts = np.zeros((size, n)) if rotors and sim.vehicle.is_tilting else None
-    est_force = np.zeros((size, 3)) if estimator is not None else None
-    est_torque = np.zeros((size, 3)) if estimator is not None else None
-    mass_est = np.zeros(size) if estimator is not None else None
+    # Per-step values are collected in lists (one append per value, no small numpy writes) and stacked at the end.
+    rows: dict[str, list] = {key: [] for key in (
+        "time", "state", "quaternion", "p", "v", "a", "ref_rotation", "rotation_commanded", "force", "torque",
+        "force_desired", "torque_desired", "speeds", "tilts", "ext_force", "ext_torque", "est_force", "est_torque",
+        "mass_est")}
     recorder = None
     if recording is not None:
         from fsr_bringup.recording.flight_recording import FlightRecorder
@@ -185,6 +181,9 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     end_reason, reason, interrupted = "finished", f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
+    disturbed = bool(sim.disturbances)
+    tilting = rotors and sim.vehicle.is_tilting
+    append = {key: values.append for key, values in rows.items()}
     start = time.perf_counter()
     last = -1
     try:
@@ -192,37 +191,41 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
             recorder.status(0, "running", "", 0)
         for k in range(size):
             stamp_ns = plant.stamp_ns
-            position, rotation, velocity_world, angular_velocity = state_from_odometry_values(
-                *odometry_values(plant.state_vector))
+            state_vector = plant.state_vector
+            published = odometry_values(state_vector)
+            position, rotation, velocity_world, angular_velocity = state_from_odometry_values(*published)
             output = controller.command(seconds_from_ns(stamp_ns), position, rotation, velocity_world,
                                         angular_velocity)
-            force_world, torque_body = plant.external_wrench()
-            external = (rotation.T @ force_world if sim.disturbances else np.zeros(3),
-                        np.asarray(torque_body, dtype=float))
+            external_wrench = plant.external_wrench() if disturbed else None
+            if external_wrench is not None:
+                append["ext_force"](rotation.T @ external_wrench[0])
+                append["ext_torque"](external_wrench[1])
             estimate = None
             if estimator is not None:
                 estimator.add_state(stamp_ns, rotation, velocity_world, angular_velocity)
                 estimate = estimator.add_command(stamp_ns, output.force_body, output.torque_body)
-                est_force[k], est_torque[k], mass_est[k] = estimate.force_body, estimate.torque_body, estimate.mass
-            times[k] = seconds_from_ns(stamp_ns)
-            states[k] = plant.state_vector
-            states[k, 6:10] = odometry_values(plant.state_vector)[1]
+                append["est_force"](estimate.force_body)
+                append["est_torque"](estimate.torque_body)
+                append["mass_est"](estimate.mass)
+            append["time"](seconds_from_ns(stamp_ns))
+            append["state"](state_vector.tolist())
+            append["quaternion"](published[1])
             reference = output.reference
-            arrays["p"][k], arrays["v"][k], arrays["a"][k] = (reference.position, reference.velocity,
-                                                              reference.acceleration)
-            ref_rotation[k] = reference.rotation
-            rotation_commanded[k] = output.desired.rotation_commanded
-            arrays["force_desired"][k], arrays["torque_desired"][k] = (output.desired.force_body,
-                                                                       output.desired.torque_body)
-            arrays["force"][k], arrays["torque"][k] = output.force_body, output.torque_body
-            if speeds is not None:
-                speeds[k] = output.rotor_speeds
-            if tilts is not None:
-                tilts[k] = output.tilt_angles
-            arrays["ext_force"][k], arrays["ext_torque"][k] = external
+            append["p"](reference.position)
+            append["v"](reference.velocity)
+            append["a"](reference.acceleration)
+            append["ref_rotation"](reference.rotation)
+            append["rotation_commanded"](output.desired.rotation_commanded)
+            append["force_desired"](output.desired.force_body)
+            append["torque_desired"](output.desired.torque_body)
+            append["force"](output.force_body)
+            append["torque"](output.torque_body)
+            if rotors:
+                append["speeds"](output.rotor_speeds)
+                if tilting:
+                    append["tilts"](output.tilt_angles)
             if recorder is not None:
-                recorder.step(stamp_ns, plant.state_vector, plant.external_wrench() if sim.disturbances else None,
-                              output, estimate)
+                recorder.step_values(stamp_ns, published, external_wrench, output, estimate)
             last = k
             if k == steps:
                 break
@@ -240,27 +243,40 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     finally:
         if recorder is not None:
             try:
-                final_ns = int(round(times[max(last, 0)] * 1e9)) if last >= 0 else 0
+                final_ns = int(round(rows["time"][last] * 1e9)) if last >= 0 else 0
                 recorder.status(final_ns, end_reason, reason, max(last, 0))
             finally:
                 recorder.close()
     wall = time.perf_counter() - start
-    keep = slice(0, last + 1)
+    count = last + 1
 
-    def cut(array: np.ndarray | None) -> np.ndarray | None:
-        return None if array is None else array[keep]
+    def stack(key: str, shape: tuple[int, ...], present: bool = True) -> np.ndarray | None:
+        """The first ``count`` rows of a column (zeros where the loop did not fill it), or None."""
+        if not present:
+            return None
+        values = rows[key][:count]
+        if not values:
+            return np.zeros((count, *shape))
+        return np.array(values, dtype=float).reshape((len(values), *shape))
 
+    states = stack("state", (13,))
+    states[:, 6:10] = stack("quaternion", (4,))
+    external_force = stack("ext_force", (3,)) if disturbed else np.zeros((count, 3))
+    external_torque = stack("ext_torque", (3,)) if disturbed else np.zeros((count, 3))
+    with_estimator = estimator is not None
     failures = {"diverged": [f"flight diverged: {reason}"], "stopped": ["flight interrupted (SIGINT)"]}
     return FlightRun(
-        time=times[keep], state=states[keep], reference_position=arrays["p"][keep],
-        reference_velocity=arrays["v"][keep], reference_acceleration=arrays["a"][keep],
-        reference_rotation=ref_rotation[keep], force_cmd=arrays["force"][keep], torque_cmd=arrays["torque"][keep],
-        rotor_speeds=cut(speeds), tilt_angles=cut(tilts), external_force_body=arrays["ext_force"][keep],
-        external_torque_body=arrays["ext_torque"][keep], estimate_force_body=cut(est_force),
-        estimate_torque_body=cut(est_torque), mass_estimate=cut(mass_est),
+        time=np.array(rows["time"][:count], dtype=float), state=states, reference_position=stack("p", (3,)),
+        reference_velocity=stack("v", (3,)), reference_acceleration=stack("a", (3,)),
+        reference_rotation=stack("ref_rotation", (3, 3)), force_cmd=stack("force", (3,)),
+        torque_cmd=stack("torque", (3,)), rotor_speeds=stack("speeds", (n,), rotors),
+        tilt_angles=stack("tilts", (n,), tilting), external_force_body=external_force,
+        external_torque_body=external_torque, estimate_force_body=stack("est_force", (3,), with_estimator),
+        estimate_torque_body=stack("est_torque", (3,), with_estimator),
+        mass_estimate=stack("mass_est", (), with_estimator),
         saturation=controller.saturation.as_dict(), tilt_saturation=controller.tilt_saturation.as_dict(),
-        end_reason=end_reason, reason=reason, wall_time=wall, rotation_commanded=rotation_commanded[keep],
-        force_desired=arrays["force_desired"][keep], torque_desired=arrays["torque_desired"][keep],
+        end_reason=end_reason, reason=reason, wall_time=wall, rotation_commanded=stack("rotation_commanded", (3, 3)),
+        force_desired=stack("force_desired", (3,)), torque_desired=stack("torque_desired", (3,)),
         scenario=scenario, failures=failures.get(end_reason, []), interrupted=interrupted,
         compensation=controller.compensation_summary(),
     )

@@ -31,6 +31,7 @@ from fsr_sim.model.so3 import (
     euler_rate_derivative_rows,
     euler_rate_matrix,
     euler_rate_rows,
+    euler_rate_transpose_solve3,
     mat_t_mat3,
     mat_t_vec3,
     mat_vec3,
@@ -89,6 +90,7 @@ class MomentumObserver:
         self._mass_rows = ((0.0,) * 3,) * 3  # M(eta[k-1]), rows
         self._rotation_rows = identity  # R_b of the latest sample, rows
         self._rate_rows = identity  # Q(eta) of the latest sample, rows
+        self._eta = (0.0, 0.0)  # roll, pitch of the latest sample [rad]
         self.samples = 0
 
     def reset(self) -> None:
@@ -152,7 +154,7 @@ class MomentumObserver:
         tx, ty, tz = mat_t_vec3(rate, np.asarray(torque_body, dtype=float).tolist())  # Q^T tau_b
         self._previous_rate[:] = (fx, fy, fz + self._weight, cx + tx, cy + ty, cz + tz)
         self._mass_rows = mat_t_mat3(rate, mat_t_mat3(inertia, rate))  # Q^T (I_b Q), I_b symmetric
-        self._rotation_rows, self._rate_rows = rotation, rate
+        self._rotation_rows, self._rate_rows, self._eta = rotation, rate, (phi, theta)
 
     @property
     def estimate(self) -> np.ndarray:
@@ -162,7 +164,7 @@ class MomentumObserver:
     def wrench_body(self) -> tuple[np.ndarray, np.ndarray]:
         """Latest estimate in body FRD: (force ``R_b^T f_e`` [N], torque ``Q^-T tau_e`` [N m]), as ``wrench_truth``."""
         force = np.array(mat_t_vec3(self._rotation_rows, self._estimate[:3].tolist()))
-        torque = np.linalg.solve(np.array(self._rate_rows).T, self._estimate[3:])
+        torque = np.array(euler_rate_transpose_solve3(*self._eta[:2], self._estimate[3:].tolist()))
         return force, torque
 
     @property

@@ -115,6 +115,25 @@ def euler_rate_rows(phi: float, theta: float) -> Mat3:
     return ((1.0, 0.0, -sth), (0.0, cph, cth * sph), (0.0, -sph, cth * cph))
 
 
+def euler_rates3(phi: float, theta: float, omega: Vec3) -> Vec3:
+    """``eta_dot = Q(eta)^-1 omega_body`` [rad/s] on floats (closed form of :func:`euler_rates`; equal to it to
+    rounding). Singular at pitch = +-pi/2 (``ZeroDivisionError``)."""
+    cph, sph = math.cos(phi), math.sin(phi)
+    cth, sth = math.cos(theta), math.sin(theta)
+    wx, wy, wz = omega
+    turn = sph * wy + cph * wz
+    return (wx + sth * turn / cth, cph * wy - sph * wz, turn / cth)
+
+
+def euler_rate_transpose_solve3(phi: float, theta: float, torque: Vec3) -> Vec3:
+    """``x`` with ``Q(eta)^T x = torque`` (``Q^-T tau``) on floats; singular at pitch = +-pi/2."""
+    cph, sph = math.cos(phi), math.sin(phi)
+    cth, sth = math.cos(theta), math.sin(theta)
+    t0, t1, t2 = torque
+    b = (t2 + sth * t0) / cth
+    return (t0, cph * t1 + sph * b, -sph * t1 + cph * b)
+
+
 def euler_rate_derivative_rows(phi: float, theta: float, phi_dot: float, theta_dot: float) -> Mat3:
     """Rows of ``Q_dot(eta, eta_dot)`` (see :func:`euler_rate_matrix_derivative`)."""
     cph, sph = math.cos(phi), math.sin(phi)

@@ -34,7 +34,12 @@ class StatePackets:
                   external: tuple[np.ndarray, np.ndarray] | None) -> None:
         """Pack the messages of a state vector (13,) and the true external wrench (force world [N], torque
         body [N m]; None: zero) at ``stamp_ns`` [ns]."""
-        position, quaternion, velocity_body, angular_velocity = odometry_values(state_vector)
+        self.fill_from_values(stamp_ns, odometry_values(state_vector), external)
+
+    def fill_from_values(self, stamp_ns: int, published: tuple, external: tuple[np.ndarray, np.ndarray] | None
+                         ) -> None:
+        """:meth:`fill_from` with the state's :func:`~fsr_sim.model.odometry.odometry_values` already at hand."""
+        position, quaternion, velocity_body, angular_velocity = published
         self.odom = self._odom.pack(stamp_ns, (*position, *quaternion, *velocity_body, *angular_velocity))
         if external is None:
             wrench = _ZERO_WRENCH

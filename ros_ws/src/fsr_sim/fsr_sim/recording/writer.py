@@ -164,8 +164,6 @@ class _FastMessages:
         return fast if ok else None
 
     def add(self, batch: list[tuple[int, int, bytes]], log_time: int) -> None:
-        from mcap.records import MessageIndex
-
         statistics, builder, chunk_size = self.statistics, self.builder, self.chunk_size
         if statistics.message_count == 0:
             statistics.message_start_time = log_time
@@ -186,7 +184,7 @@ class _FastMessages:
             builder.message_end_time = max(builder.message_end_time, log_time)
             index = indices.get(channel_id)
             if not index:
-                index = indices[channel_id] = MessageIndex(channel_id=channel_id, records=[])
+                index = indices[channel_id] = _message_index_class()(channel_id=channel_id, records=[])
             index.records.append((log_time, buffer.tell()))
             builder.num_messages += 1
             buffer.write(pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel_id, sequence, log_time, log_time))
@@ -194,3 +192,24 @@ class _FastMessages:
             if buffer.tell() > chunk_size:  # what add_message does after each message
                 self.maybe_finalize()
                 buffer = builder.record_writer._buffer  # noqa: SLF001 - a new one after the chunk
+
+
+def _message_index_class() -> type:
+    """``mcap.records.MessageIndex`` whose ``write`` packs all its entries at once (the same bytes)."""
+    global _MESSAGE_INDEX
+    if _MESSAGE_INDEX is None:
+        from mcap.records import MessageIndex
+
+        class PackedMessageIndex(MessageIndex):
+            def write(self, stream: Any) -> None:
+                entries = [value for entry in self.records for value in entry]
+                stream.start_record(_MESSAGE_INDEX_OPCODE)
+                stream.write(struct.pack(f"<HI{len(entries)}Q", self.channel_id, 8 * len(entries), *entries))
+                stream.finish_record()
+
+        _MESSAGE_INDEX = PackedMessageIndex
+    return _MESSAGE_INDEX
+
+
+_MESSAGE_INDEX: type | None = None
+_MESSAGE_INDEX_OPCODE = 0x07
