@@ -1,22 +1,29 @@
 """Reading ROS 2 MCAP recordings, including ones whose writer was killed before it closed the file.
 
-The file is read sequentially (``mcap.stream_reader.StreamReader``), keeping each channel's raw CDR
+The file is read sequentially (``mcap.stream_reader.StreamReader``, chunks handed over whole and their
+message records split with ``struct``: ~1 us per message instead of ~30 us), keeping each channel's raw CDR
 messages; they are decoded with ``mcap_ros2``'s dynamic decoder only when a topic is asked for. A file
 without its footer (writer killed) is read up to its last complete chunk and flagged ``truncated``.
 """
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass, field
+from io import BytesIO
 from pathlib import Path
 from typing import Any
 
-from mcap.records import Channel, DataEnd, Footer, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
+from mcap.data_stream import ReadDataStream
+from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader, get_chunk_data_stream
 from mcap_ros2.decoder import DecoderFactory
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 SCENARIO_METADATA = "fsr_scenario"
+_RECORD_HEAD = struct.Struct("<BQ")  # opcode, length
+_MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
+_MESSAGE_OPCODE, _SCHEMA_OPCODE, _CHANNEL_OPCODE = 0x05, 0x03, 0x04
 
 
 class RecordingError(ValueError):
@@ -102,8 +109,10 @@ def open_recording(path: str | Path) -> Recording:
         metadata: dict[str, dict[str, str]] = {}
         complete = False
         try:
-            for record in StreamReader(stream, record_size_limit=1 << 30).records:
-                if isinstance(record, Message):
+            for record in StreamReader(stream, record_size_limit=1 << 30, emit_chunks=True).records:
+                if isinstance(record, Chunk):
+                    _read_chunk(record, by_id, schemas)
+                elif isinstance(record, Message):
                     channel = by_id.get(record.channel_id)
                     if channel is not None:
                         channel.times.append(record.log_time)
@@ -123,3 +132,29 @@ def open_recording(path: str | Path) -> Recording:
     channels = {c.topic: c for c in by_id.values()}
     topics = {c.topic: c.schema.name if c.schema else "" for c in by_id.values()}
     return Recording(path, topics, metadata, truncated=not complete, _channels=channels)
+
+
+def _read_chunk(chunk: Chunk, by_id: dict[int, _ChannelData], schemas: dict[int, Schema]) -> None:
+    """Register the chunk's schemas and channels and append its messages to their channels, in file order."""
+    stream, size = get_chunk_data_stream(chunk)
+    data = stream.read(size)
+    position = 0
+    head, message_head = _RECORD_HEAD.unpack_from, _MESSAGE_HEAD.unpack_from
+    while position + 9 <= size:
+        opcode, length = head(data, position)
+        start, position = position + 9, position + 9 + length
+        if position > size:
+            raise ValueError("chunk record runs past the end of the chunk")
+        if opcode == _MESSAGE_OPCODE:
+            channel_id, _, log_time, _ = message_head(data, start)
+            channel = by_id.get(channel_id)
+            if channel is not None:
+                channel.times.append(log_time)
+                channel.payloads.append(data[start + 22:position])
+        elif opcode == _SCHEMA_OPCODE:
+            schema = Schema.read(ReadDataStream(BytesIO(data[start:position])))
+            schemas[schema.id] = schema
+        elif opcode == _CHANNEL_OPCODE:
+            record = Channel.read(ReadDataStream(BytesIO(data[start:position])))
+            if record.id not in by_id:
+                by_id[record.id] = _ChannelData(record.topic, schemas.get(record.schema_id), record.message_encoding)
