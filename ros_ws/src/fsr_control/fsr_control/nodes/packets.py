@@ -9,8 +9,9 @@ one), ``reference``, ``attitude_cmd``, ``wrench_desired``, all stamped with the 
 
 from __future__ import annotations
 
+import math
+
 from fsr_control.flight_controller import ControlOutput
-from fsr_sim.model.so3 import quaternion_from_rotation
 from fsr_sim.ros import cdr_pack
 
 WORLD_FRAME = "world_ned"
@@ -51,16 +52,41 @@ class ControllerPackets:
         if output.shortfall is not None:
             packets.append(("wrench_shortfall", wrench(stamp_ns, output.shortfall.tolist())))
         reference = output.reference
-        rotation = reference.rotation
+        rows = reference.rotation.tolist()
         packets.append(("reference", self._reference.pack(stamp_ns, (
-            *reference.position.tolist(), *quaternion_from_rotation(rotation).tolist(),
-            *reference.velocity.tolist(), *(rotation @ reference.angular_velocity).tolist(),
-            *reference.acceleration.tolist(), *(rotation @ reference.angular_acceleration).tolist(),
+            *reference.position.tolist(), *quaternion_of_rows(rows),
+            *reference.velocity.tolist(), *_mat_vec(rows, reference.angular_velocity.tolist()),
+            *reference.acceleration.tolist(), *_mat_vec(rows, reference.angular_acceleration.tolist()),
         ))))
-        x, y, z, w = quaternion_from_rotation(output.rotation_cmd).tolist()
-        if w < 0.0:
-            x, y, z, w = -x, -y, -z, -w
-        packets.append(("attitude_cmd", self._attitude.pack(stamp_ns, (x, y, z, w))))
+        packets.append(("attitude_cmd", self._attitude.pack(stamp_ns, quaternion_of_rows(
+            output.rotation_cmd.tolist()))))
         packets.append(("wrench_desired", wrench(stamp_ns, (*output.force_desired.tolist(),
                                                             *output.torque_desired.tolist()))))
         return packets
+
+
+def quaternion_of_rows(r: list[list[float]]) -> tuple[float, float, float, float]:
+    """Unit quaternion ``[x, y, z, w]``, ``w >= 0``, of the rows of a rotation matrix: Shepperd's method of
+    :func:`fsr_sim.model.so3.quaternion_from_rotation` on floats (equal to it to rounding, ~1 us instead of ~7)."""
+    trace = r[0][0] + r[1][1] + r[2][2]
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = ((r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s, 0.25 * s)
+    elif r[0][0] > r[1][1] and r[0][0] > r[2][2]:
+        s = 2.0 * math.sqrt(1.0 + r[0][0] - r[1][1] - r[2][2])
+        q = (0.25 * s, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s, (r[2][1] - r[1][2]) / s)
+    elif r[1][1] > r[2][2]:
+        s = 2.0 * math.sqrt(1.0 + r[1][1] - r[0][0] - r[2][2])
+        q = ((r[0][1] + r[1][0]) / s, 0.25 * s, (r[1][2] + r[2][1]) / s, (r[0][2] - r[2][0]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2][2] - r[0][0] - r[1][1])
+        q = ((r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, 0.25 * s, (r[1][0] - r[0][1]) / s)
+    x, y, z, w = q
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if w < 0.0:
+        norm = -norm
+    return x / norm, y / norm, z / norm, w / norm
+
+
+def _mat_vec(rows: list[list[float]], v: list[float]) -> tuple[float, float, float]:
+    return tuple(row[0] * v[0] + row[1] * v[1] + row[2] * v[2] for row in rows)
