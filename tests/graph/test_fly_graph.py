@@ -127,6 +127,12 @@ def test_graph_and_in_process_runs_agree(tmp_path):
         a, b = odom_positions(graph), odom_positions(local)
         assert a.shape == b.shape == (501, 3)
         assert np.max(np.abs(a - b)) < 1e-9
+        # The same messages, byte for byte: what the nodes publish is what an in-process recording writes.
+        g, loc = open_recording(graph), open_recording(local)
+        per_step = sorted(t for t in set(g.topics) & set(loc.topics) if t not in ("/sim_status", "/clock"))
+        assert len(per_step) >= 9, per_step  # rotor_cmd too in rotor actuation
+        for topic in per_step:
+            assert [data for _, data in g.raw(topic)] == [data for _, data in loc.raw(topic)], topic
 
 
 def test_killed_controller_is_reported_and_the_recording_is_complete(tmp_path):

@@ -10,7 +10,8 @@ Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
 axis gave way at the rotor limits, see fsr_control.allocation), ``reference``, ``attitude_cmd`` (the commanded
 attitude ``R_c``) and ``wrench_desired`` (the law's wrench before allocation), all stamped ``t_k`` (lockstep
-contract; :func:`fsr_control.nodes.messages.controller_messages`).
+contract), published as packed CDR bytes (:class:`fsr_control.nodes.packets.ControllerPackets`: the bytes an
+in-process recording writes).
 NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
 final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
 for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation
@@ -33,7 +34,8 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController, seconds_from_ns
-from fsr_control.nodes.messages import controller_messages, goal_from_message
+from fsr_control.nodes.messages import goal_from_message
+from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.model.allocation import WRENCH_AXES
@@ -91,6 +93,7 @@ class ControllerNode(Node):
             config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation
         )
         self.rotors = sim.actuation == "rotors"
+        self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.is_tilting)
         self.publishers_by_topic = {
             "wrench_cmd": self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS),
             "reference": self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS),
@@ -132,8 +135,8 @@ class ControllerNode(Node):
             self.warn(f"no command for odom at {stamp_ns * 1e-9:.3f} s: {error}")
             self.answered_ns = stamp_ns
             return
-        for topic, message in controller_messages(stamp_ns, output, self.rotors):
-            self.publishers_by_topic[topic].publish(message)
+        for topic, packet in self.packets.pack(stamp_ns, output):
+            self.publishers_by_topic[topic].publish(packet)
         self.answered_ns = stamp_ns
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1

@@ -28,7 +28,7 @@ from std_srvs.srv import Trigger
 
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, node_settings
-from fsr_estimation.nodes.messages import estimate_messages
+from fsr_estimation.nodes.packets import EstimatePackets
 from fsr_sim.ros.conversions import (
     ns_from_time,
     odometry_is_finite,
@@ -57,6 +57,7 @@ class EstimatorNode(Node):
         c = self.config
         self.estimator = StampedEstimator(c.mass, c.inertia, c.c0, c.r, settings.control_period, self.warn_timing)
         self.estimates_published = 0
+        self.packets = EstimatePackets()  # the bytes an in-process recording writes
         self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_estimate", STREAM_QOS)
         self.mass_pub = self.create_publisher(Float64, "mass_estimate", STREAM_QOS)
         self.create_subscription(Odometry, "odom", self._on_odom, STREAM_QOS)
@@ -104,8 +105,8 @@ class EstimatorNode(Node):
             return
         if estimate is None:
             return
-        for publisher, msg in zip((self.wrench_pub, self.mass_pub), estimate_messages(estimate), strict=True):
-            publisher.publish(msg)
+        for publisher, packet in zip((self.wrench_pub, self.mass_pub), self.packets.pack(estimate), strict=True):
+            publisher.publish(packet)
         self.estimates_published += 1
 
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:

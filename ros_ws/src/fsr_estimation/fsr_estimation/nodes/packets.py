@@ -1,6 +1,6 @@
 """The estimator's per-step messages as packed CDR bytes (the node publishes them; an in-process recording
 writes them): ``wrench_estimate`` (WrenchStamped, ``base_link_frd``, the pair's stamp) and ``mass_estimate``
-(Float64 [kg]); the values of :func:`fsr_estimation.nodes.messages.estimate_messages`."""
+(Float64 [kg]): the estimate's body-frame force [N] and torque [N m] and its mass [kg]."""
 
 from __future__ import annotations
 
