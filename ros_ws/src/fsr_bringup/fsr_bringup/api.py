@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,7 @@ def simulate(
     set: dict[str, Any] | None = None,  # noqa: A002 - the name of fsr-fly's --set
     duration: float | None = None,
     record: str | Path | None = None,
+    stop: Callable[[], str | None] | None = None,
 ) -> FlightRun:
     """Fly a scenario in one process (the node graph's modules and lockstep, without DDS).
 
@@ -36,6 +38,8 @@ def simulate(
         Flight duration [s] (overrides the scenario's).
     record : str or Path, optional
         Also write the MCAP recording there (as ``fsr-fly --in-process`` does).
+    stop : callable, optional
+        Polled before each step; returning a reason (e.g. a signal name) ends the flight there as interrupted.
 
     Returns
     -------
@@ -59,4 +63,4 @@ def simulate(
     checked = check_scenario(loaded)
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
-    return fly_in_process(checked.scenario, None if record is None else Path(record))
+    return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop)

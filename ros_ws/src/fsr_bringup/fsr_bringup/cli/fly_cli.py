@@ -17,8 +17,11 @@ a summary. Exit codes: 0 success, 1 a node failed (named in the message), 2 inva
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import yaml
@@ -114,6 +117,23 @@ def local_nodes(text: str | None, members: list[FlightMember], recording: Path, 
     return parse_node_selection(text, names)
 
 
+@contextmanager
+def interrupts_end_the_flight() -> Iterator[Callable[[], str | None]]:
+    """SIGINT and SIGTERM end an in-process flight between two steps (also where the shell started fsr-fly
+    with SIGINT ignored, e.g. in the background): yields the ``stop`` poll for :func:`fsr_bringup.simulate`."""
+    received: list[str] = []
+
+    def note(signum: int, _frame: object) -> None:
+        received.append(signal.Signals(signum).name)
+
+    previous = {signum: signal.signal(signum, note) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield lambda: received[0] if received else None
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     try:
@@ -152,7 +172,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.in_process:
         from fsr_bringup.api import simulate
 
-        result = simulate(members[0].checked.scenario, record=recording)
+        with interrupts_end_the_flight() as stop:
+            result = simulate(members[0].checked.scenario, record=recording, stop=stop)
     else:
         try:
             domain = fixed_domain(args.domain_id) if args.domain_id is not None else acquire_domain()

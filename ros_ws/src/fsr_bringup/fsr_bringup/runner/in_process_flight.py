@@ -20,6 +20,7 @@ nodes publish, with their own message functions. Ctrl-C (KeyboardInterrupt) ends
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -147,11 +148,22 @@ class FlightRun:
 InProcessResult = FlightRun  # the name before the Python API
 
 
-def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None) -> FlightRun:
+class _Stopped(KeyboardInterrupt):
+    """``stop()`` asked for the end of the flight (between two steps)."""
+
+    def __init__(self, signal_name: str) -> None:
+        super().__init__(signal_name)
+        self.signal_name = signal_name
+
+
+def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None,
+                   stop: Callable[[], str | None] | None = None) -> FlightRun:
     """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process.
 
     ``recording``: write the MCAP file there. ``max_steps``: stop after that many steps (default: the
-    scenario's duration). Ctrl-C ends the flight early (``end_reason`` ``stopped``, ``interrupted``).
+    scenario's duration). ``stop``: polled before each step; a signal name (e.g. ``"SIGINT"``) ends the flight
+    there, between two steps (``end_reason`` ``stopped``, ``interrupted``). A KeyboardInterrupt (Ctrl-C in a
+    notebook) ends it too, wherever it strikes.
     """
     from fsr_estimation.config.estimator_config import estimator_config
     from fsr_estimation.core.stamped import StampedEstimator
@@ -190,6 +202,9 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         if recorder is not None:
             recorder.status(0, "running", "", 0)
         for k in range(size):
+            signal_name = stop() if stop is not None else None
+            if signal_name:
+                raise _Stopped(signal_name)
             stamp_ns = plant.stamp_ns
             state_vector = plant.state_vector
             published = odometry_values(state_vector)
@@ -238,8 +253,8 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
             if divergence is not None:
                 end_reason, reason = "diverged", divergence
                 break
-    except KeyboardInterrupt:
-        end_reason, reason, interrupted = "stopped", "received SIGINT", True
+    except KeyboardInterrupt as stop:  # Ctrl-C (fsr-fly also turns SIGTERM into one)
+        end_reason, reason, interrupted = "stopped", f"received {getattr(stop, 'signal_name', 'SIGINT')}", True
     finally:
         if recorder is not None:
             try:
@@ -264,7 +279,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     external_force = stack("ext_force", (3,)) if disturbed else np.zeros((count, 3))
     external_torque = stack("ext_torque", (3,)) if disturbed else np.zeros((count, 3))
     with_estimator = estimator is not None
-    failures = {"diverged": [f"flight diverged: {reason}"], "stopped": ["flight interrupted (SIGINT)"]}
+    failures = {"diverged": [f"flight diverged: {reason}"], "stopped": [f"flight interrupted ({reason})"]}
     return FlightRun(
         time=np.array(rows["time"][:count], dtype=float), state=states, reference_position=stack("p", (3,)),
         reference_velocity=stack("v", (3,)), reference_acceleration=stack("a", (3,)),
