@@ -7,7 +7,8 @@
   load), spins until the node says it is done or a signal arrives, then destroys the node and shuts the
   context down. The node's ``close()`` (if any) runs in ``finally`` so files are always finished.
 
-Shutdown is bounded (a node exits within ``SIGNAL_EXIT_BUDGET`` s of SIGINT/SIGTERM in any phase). The
+Shutdown is bounded (a node exits within ``SIGNAL_EXIT_BUDGET`` s of SIGINT/SIGTERM in any phase; only
+finishing a file, which is never cut short, can take longer on an overloaded machine). The
 executor is shut down *before* the node is destroyed: its cached wait generator holds every entity handle
 (``with handle``) between two ``spin_once`` calls, so ``destroy_node`` could only mark them "destroy when
 not in use" and their real destruction happened later, at garbage collection, after the context was shut
@@ -36,6 +37,7 @@ EXIT_INTERRUPTED = 130  # fsr-fly stopped by SIGINT/SIGTERM (128 + SIGINT, the s
 SIGNAL_EXIT_BUDGET = 2.0  # s from SIGINT/SIGTERM to process exit, in any phase
 SIGNAL_TEARDOWN_LIMIT = 1.8  # s after the signal: the watchdog ends the process if teardown still runs
 FINISH_TEARDOWN_LIMIT = 6.0  # s of teardown after the node ended by itself (acks, closing files)
+RCL_TEARDOWN_MIN = 0.5  # s: the rcl/DDS teardown always gets at least this long
 ACK_WAIT_AFTER_FINISH = 1.0  # s: after the flight ended, wait this long at most for subscribers' acks
 
 
@@ -128,14 +130,18 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     except KeyboardInterrupt:
         pass
     finally:
-        watchdog.start()
         try:
+            # The node's own close() comes first and is not cut short: it finishes files (a recording must
+            # stay valid even on a machine so loaded that closing it takes longer than the signal budget);
+            # its drains keep within the budget themselves (signal_deadline). The watchdog guards what can
+            # hang: the rcl/DDS teardown below.
             if node is not None:
                 close = getattr(node, "close", None)
                 if close is not None:
                     close()  # may still spin the executor (a drain of what is queued)
                 if not stop:
                     wait_for_acks(node, ACK_WAIT_AFTER_FINISH)
+            watchdog.start()
             if executor is not None:
                 executor.shutdown(timeout_sec=0.5)  # releases the entity handles its wait generator holds
             if node is not None:
@@ -185,8 +191,9 @@ def wait_for_acks(node: object, timeout: float) -> bool:
 
 class TeardownWatchdog:
     """Ends the process with ``os._exit`` if teardown outlives its bound (a hang in rcl/DDS must never
-    keep a node alive): :data:`SIGNAL_TEARDOWN_LIMIT` s after the signal, else
-    :data:`FINISH_TEARDOWN_LIMIT` s after teardown began."""
+    keep a node alive): :data:`SIGNAL_TEARDOWN_LIMIT` s after the signal (at least :data:`RCL_TEARDOWN_MIN`
+    s of teardown), else :data:`FINISH_TEARDOWN_LIMIT` s after teardown began. Started after the node's
+    ``close()``, so files are always finished."""
 
     def __init__(self, stop: StopFlag) -> None:
         self.stop = stop
@@ -202,7 +209,7 @@ class TeardownWatchdog:
     def deadline(self) -> float:
         """Monotonic time at which teardown is cut short (moves earlier if a signal arrives meanwhile)."""
         if self.stop.received_at is not None:
-            return self.stop.received_at + SIGNAL_TEARDOWN_LIMIT
+            return max(self.stop.received_at + SIGNAL_TEARDOWN_LIMIT, self.began + RCL_TEARDOWN_MIN)
         return self.began + FINISH_TEARDOWN_LIMIT
 
     def _watch(self) -> None:
