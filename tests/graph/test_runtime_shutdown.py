@@ -60,7 +60,7 @@ HELD_HANDLES = textwrap.dedent('''
     print("destroyed" if nodes[0].sub.handle.pointer == 0 else "NOT destroyed", code, flush=True)
 ''')
 
-HUNG_CLOSE = textwrap.dedent('''
+HUNG_TEARDOWN = textwrap.dedent('''
     import os
     import signal
     import time
@@ -69,7 +69,9 @@ HUNG_CLOSE = textwrap.dedent('''
 
     from fsr_sim.ros.runtime import run_node
 
-    class HangsOnClose(Node):
+    class HangsInTeardown(Node):
+        """The rcl/DDS teardown hangs (as destroy_node was seen to): the watchdog must end the process."""
+
         def __init__(self):
             super().__init__("hangs")
 
@@ -77,10 +79,10 @@ HUNG_CLOSE = textwrap.dedent('''
             os.kill(os.getpid(), signal.SIGINT)
             time.sleep(0.05)
 
-        def close(self):
+        def destroy_node(self):
             time.sleep(60.0)  # a teardown that never ends
 
-    run_node(lambda args: HangsOnClose(), ["hangs"])
+    run_node(lambda args: HangsInTeardown(), ["hangs"])
 ''')
 
 
@@ -102,7 +104,7 @@ def test_entities_are_destroyed_although_the_executor_held_their_handles():
 
 
 def test_watchdog_ends_a_hung_teardown_within_the_signal_budget():
-    result, _ = run_child(HUNG_CLOSE, timeout=60.0)
+    result, _ = run_child(HUNG_TEARDOWN, timeout=60.0)
     assert result.returncode == 1, result.stdout + result.stderr
     lines = [line for line in result.stderr.splitlines() if "shutdown did not finish" in line]
     assert len(lines) == 1 and lines[0].endswith("(node teardown hung): exiting now"), result.stderr
