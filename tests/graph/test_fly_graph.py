@@ -11,13 +11,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fsr_sim.recording.reader import RecordingError, open_recording
+from fsr_bringup.testing.graph import wait_for_recorded, wait_for_text
+from fsr_sim.recording.reader import open_recording
 
 pytestmark = pytest.mark.graph
 
@@ -54,30 +54,6 @@ def children(pid: int) -> dict[int, str]:
         if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
             found[int(entry.name)] = cmdline
     return found
-
-
-def wait_for_text(path: Path, text: str, timeout: float = 60.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if path.is_file() and text in path.read_text(errors="replace"):
-            return
-        time.sleep(0.05)
-    raise AssertionError(f"'{text}' not in {path} after {timeout} s")
-
-
-def wait_for_recorded(path: Path, topic: str, count: int, timeout: float = 60.0) -> int:
-    """Wait until the recording being written (flushed every 0.5 s) holds ``count`` messages of ``topic``."""
-    deadline = time.monotonic() + timeout
-    recorded = 0
-    while time.monotonic() < deadline:
-        try:
-            recorded = open_recording(path).count(topic)
-        except RecordingError:  # not created yet, or the topic's channel not written yet
-            recorded = 0
-        if recorded >= count:
-            return recorded
-        time.sleep(0.1)  # polling a file another process writes
-    raise AssertionError(f"{path}: {recorded} of {count} '{topic}' messages after {timeout} s")
 
 
 def node_pid(fly_pid: int, executable: str) -> int:

@@ -21,8 +21,9 @@ import numpy as np
 import pytest
 
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
+from fsr_bringup.testing.graph import wait_for_recorded, wait_for_text
 from fsr_bringup.testing.netns import NetLab, network_environment, unavailable_reason
-from fsr_sim.recording.reader import RecordingError, open_recording
+from fsr_sim.recording.reader import open_recording
 
 pytestmark = pytest.mark.graph
 
@@ -87,30 +88,6 @@ def finish(process: subprocess.Popen, name: str, tmp_path: Path) -> int:
     output = (tmp_path / f"{name}.out").read_text() + (tmp_path / f"{name}.err").read_text()
     print(f"--- {name}: exit {code}\n{output}")
     return code
-
-
-def wait_for_text(path: Path, text: str, timeout: float) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if path.is_file() and text in path.read_text(errors="replace"):
-            return
-        time.sleep(0.05)  # polling a file another process writes
-    raise AssertionError(f"'{text}' not in {path} after {timeout} s")
-
-
-def wait_for_recorded(path: Path, topic: str, count: int, timeout: float = 90.0) -> int:
-    """Wait until the recording being written (flushed every 0.5 s) holds ``count`` messages of ``topic``."""
-    deadline = time.monotonic() + timeout
-    recorded = 0
-    while time.monotonic() < deadline:
-        try:
-            recorded = open_recording(path).count(topic)
-        except RecordingError:
-            recorded = 0
-        if recorded >= count:
-            return recorded
-        time.sleep(0.1)  # polling a file another process writes
-    raise AssertionError(f"{path}: {recorded} of {count} '{topic}' messages after {timeout} s")
 
 
 def in_process_positions(tmp_path: Path, flight: list[str]) -> np.ndarray:

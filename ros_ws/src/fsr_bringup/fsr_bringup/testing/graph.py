@@ -337,6 +337,35 @@ class GraphHarness:
                 self.lease.release()
 
 
+def wait_for_text(path: Path, text: str, timeout: float = 60.0) -> None:
+    """Wait until the log file ``path`` (written by another process) contains ``text``; AssertionError after
+    ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if path.is_file() and text in path.read_text(errors="replace"):
+            return
+        time.sleep(0.05)  # polling a file another process writes
+    raise AssertionError(f"'{text}' not in {path} after {timeout} s")
+
+
+def wait_for_recorded(path: Path, topic: str, count: int, timeout: float = 90.0) -> int:
+    """Wait until the recording being written (flushed every 0.5 s) holds ``count`` messages of ``topic``;
+    the count reached, or AssertionError after ``timeout`` s."""
+    from fsr_sim.recording.reader import RecordingError, open_recording
+
+    deadline = time.monotonic() + timeout
+    recorded = 0
+    while time.monotonic() < deadline:
+        try:
+            recorded = open_recording(path).count(topic)
+        except RecordingError:  # not created yet, or the topic's channel not written yet
+            recorded = 0
+        if recorded >= count:
+            return recorded
+        time.sleep(0.1)  # polling a file another process writes
+    raise AssertionError(f"{path}: {recorded} of {count} '{topic}' messages after {timeout} s")
+
+
 def _signal(process: subprocess.Popen, signum: int) -> None:
     try:
         process.send_signal(signum)
