@@ -8,13 +8,14 @@ Three actuations, one interface ``allocate(time, force_body, torque_body) -> Act
 * :class:`TiltingActuation`: ``u = G_static^+ wrench (+ N z, the secondary objective)``, then eq. 5:
   ``u_w,i = |(u_v,i, u_l,i)| / c_f``, ``alpha_i = atan2(u_l,i, u_v,i)``.
 
-Saturation (``controller.allocation``): with ``clamp`` rotor speeds ``w_i = sqrt(u_w,i)`` [rad/s] are clamped
-to the vehicle's ``[w_min, w_max]`` one by one (tilts to ``+-tilt_angle_max``). With ``priority`` (default) a
-command beyond the speed limits is first reallocated by :mod:`fsr_sim.model.desaturation`: fixed rotors keep
-roll/pitch torque, then thrust, and yaw torque gives way first; tilting rotors keep force, then roll/pitch,
-then yaw. A command within the limits is the same with either strategy (bit for bit). Every saturated
-command is recorded in a :class:`SaturationReport` (count, first time, worst rotor, and per wrench axis the
-steps it gave way and the largest shortfall) and flagged in the result, never clipped silently.
+Saturation (``controller.allocation``, ``controller.air_mode``): with ``clamp`` rotor speeds ``w_i =
+sqrt(u_w,i)`` [rad/s] are clamped to the vehicle's ``[w_min, w_max]`` one by one (tilts to
+``+-tilt_angle_max``). With ``priority`` (default) a command beyond the speed limits is first reallocated by
+:mod:`fsr_sim.model.desaturation`: fixed rotors keep roll/pitch torque, then thrust, and yaw torque gives way
+first (with ``air_mode: false``: thrust first, then roll/pitch, then yaw); tilting rotors keep force, then
+roll/pitch, then yaw. A command within the limits is the same with either strategy (bit for bit). Every
+saturated command is recorded in a :class:`SaturationReport` (count, first time, worst rotor, and per wrench
+axis the steps it gave way and the largest shortfall) and flagged in the result, never clipped silently.
 ``force_body`` / ``torque_body`` of the result are what the final command produces through the nominal
 allocation (what the plant applies, ground effect aside): that is the ``wrench_cmd`` the controller
 publishes; ``shortfall`` is the demanded minus that wrench (``wrench_shortfall``).
@@ -78,11 +79,17 @@ def _checked_strategy(strategy: str) -> str:
 
 class FixedRotorActuation:
     """Fixed rotors: pseudo-inverse of the 4 x n (coplanar) block; beyond the limits either clamp rotor by
-    rotor (``strategy='clamp'``) or reallocate with priorities (``'priority'``, fsr_sim.model.desaturation)."""
+    rotor (``strategy='clamp'``) or reallocate with priorities (``'priority'``, fsr_sim.model.desaturation).
 
-    def __init__(self, vehicle: Vehicle, strategy: str = "priority") -> None:
+    ``air_mode`` (``controller.air_mode``, priority only): True (default), roll/pitch torque comes before thrust
+    and the thrust may rise to make room for it; False, the commanded thrust is kept exactly and roll/pitch
+    (then yaw) torque is scaled to what fits at it (PX4 without air mode; the priority allocation only when the
+    thrust alone is out of reach)."""
+
+    def __init__(self, vehicle: Vehicle, strategy: str = "priority", air_mode: bool = True) -> None:
         self.vehicle = vehicle
         self.strategy = _checked_strategy(strategy)
+        self.air_mode = air_mode
         self.allocator = FixedRotorAllocator(vehicle)
         self.allocation = self.allocator.allocation
         self.saturation = self.allocator.saturation
@@ -102,7 +109,11 @@ class FixedRotorActuation:
         if saturated and self.desaturation is not None:
             torque = (float(torque_body[0]), float(torque_body[1]), float(torque_body[2]))
             if math.isfinite(thrust) and all(math.isfinite(t) for t in torque):
-                desaturated = self.desaturation.allocate(thrust, torque)
+                desaturated = None
+                if not self.air_mode:  # the law's thrust exact, its torque scaled (else the priority order)
+                    desaturated = self.desaturation.allocate_keeping_thrust(thrust, torque)
+                if desaturated is None:
+                    desaturated = self.desaturation.allocate(thrust, torque)
                 if desaturated is not None:  # inside the box up to rounding: the clamp removes only that
                     speeds = clamp_rotor_speeds(self.vehicle, np.array(desaturated))[0]
         wrench = self.allocation @ (np.abs(speeds) * speeds)

@@ -111,7 +111,7 @@ class FlightController:
                 vehicle, objective.type, objective.exponent, objective.iterations, config.allocation
             )
         else:
-            self.actuator = FixedRotorActuation(vehicle, config.allocation)
+            self.actuator = FixedRotorActuation(vehicle, config.allocation, config.air_mode)
         self.compensator = (WrenchCompensator(config.compensation, vehicle)
                             if config.compensation is not None else None)
         self.trajectory: Trajectory | None = None

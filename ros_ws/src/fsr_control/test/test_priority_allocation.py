@@ -100,3 +100,19 @@ def test_scenario_key_defaults_to_priority_and_names_itself_when_wrong():
         controller_config(load_scenario(SCENARIOS / "ex4_wrench.yaml", ["controller.allocation=prority"]))
     assert error.value.key == "controller.allocation"
     assert "must be one of clamp, priority; got 'prority'" in str(error.value)
+
+
+def test_air_mode_key_defaults_to_true_and_false_keeps_the_thrust():
+    assert controller_config(load_scenario(SCENARIOS / "ex4_wrench.yaml")).air_mode is True
+    off = controller_config(load_scenario(SCENARIOS / "ex4_wrench.yaml", ["controller.air_mode=false"]))
+    assert off.air_mode is False
+    with pytest.raises(ConfigError) as error:
+        controller_config(load_scenario(SCENARIOS / "ex4_wrench.yaml", ["controller.air_mode=maybe"]))
+    assert error.value.key == "controller.air_mode"
+    vehicle = load_vehicle("quadrotor_ex4")
+    force, torque = np.array((0.0, 0.0, -vehicle.weight)), np.array((0.0, 12.0, 0.0))
+    kept = FixedRotorActuation(vehicle, "priority", air_mode=False).allocate(0.0, force, torque)
+    raised = FixedRotorActuation(vehicle, "priority").allocate(0.0, force, torque)
+    assert kept.saturated and raised.saturated
+    assert -kept.force_body[2] == pytest.approx(vehicle.weight, rel=1e-12) and 0.0 < kept.torque_body[1] < 12.0
+    assert -raised.force_body[2] > 2.0 * vehicle.weight  # air mode: up to 2.8 x the weight for this torque

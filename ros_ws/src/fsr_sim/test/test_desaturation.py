@@ -142,3 +142,22 @@ def test_saturation_report_counts_the_axes_that_gave_way():
     assert gave_way["torque_z"] == {"steps": 2, "max_shortfall": 0.4}
     assert gave_way["force_z"] == {"steps": 1, "max_shortfall": 0.5}
     assert gave_way["torque_x"]["steps"] == 0 and 1e-15 < SHORTFALL_TOLERANCE
+
+
+@pytest.mark.parametrize("name", ["quadrotor_ex4", "octocopter"])
+def test_without_air_mode_the_thrust_is_kept_and_roll_pitch_scaled_to_fit(name):
+    """step_disturbance's case: at hover thrust a roll/pitch torque beyond reach is scaled (same direction),
+    the thrust stays exact where the air-mode step 3 raises it."""
+    vehicle, allocator, desaturation, box = fixed(name)
+    thrust, torque = vehicle.weight, (2.0, 12.0, 0.3)
+    assert allocator.rotor_speed_sq(thrust, np.array(torque)).min() < box[0]
+    u_w = desaturation.allocate_keeping_thrust(thrust, torque)
+    assert_in_box(u_w, box)
+    achieved = produced(vehicle, u_w)
+    assert achieved[0] == pytest.approx(thrust, rel=1e-12)
+    scale = achieved[2] / torque[1]
+    assert 0.0 < scale < 1.0 and achieved[1] == pytest.approx(scale * torque[0], rel=1e-9)
+    more = allocator.rotor_speed_sq(thrust, np.array((*(1.0 + 1e-6) * scale * np.array(torque[:2]), 0.0)))
+    assert more.min() < box[0] or more.max() > box[1]  # the largest scale that fits
+    assert produced(vehicle, desaturation.allocate(thrust, torque))[0] > thrust  # air mode: the thrust rises
+    assert desaturation.allocate_keeping_thrust(10.0 * 4 * vehicle.c_f * box[1], torque) is None  # thrust alone out

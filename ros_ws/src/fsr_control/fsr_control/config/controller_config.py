@@ -15,6 +15,8 @@ controller:
   angular_feedforward: consistent   # voliro only: consistent | report
   secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
   allocation: priority              # beyond the rotor limits: priority (yaw gives way first) | clamp
+  air_mode: true                    # fixed rotors, priority: the thrust may rise to make room for roll/pitch
+                                    # torque (true) | the thrust is kept and the torque scaled (false)
   compensation: none                # none | estimate: cancel the external wrench the controller's own
                                     # observer estimates (needs estimator.enabled; fsr_control.compensation)
 ```
@@ -65,6 +67,7 @@ class ControllerConfig:
     source: str = ""
     allocation: str = DEFAULT_ALLOCATION  # clamp | priority (fsr_control.allocation)
     compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none)
+    air_mode: bool = True  # fixed rotors, priority allocation: thrust may rise for roll/pitch torque
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
@@ -143,6 +146,7 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
                                        "(wrench actuation applies only u_T along -z_b and tau_b)")
     gains = _gains(controller.section("gains"), controller_type)
     allocation = controller.string("allocation", DEFAULT_ALLOCATION, choices=ALLOCATION_STRATEGIES)
+    air_mode = controller.boolean("air_mode", True)
     feedforward = "consistent"
     secondary = SecondaryObjectiveConfig()
     if controller_type == "voliro":
@@ -164,4 +168,4 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
     trajectory.reject_unknown()
     return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source,
-                            allocation, compensation)
+                            allocation, compensation, air_mode)

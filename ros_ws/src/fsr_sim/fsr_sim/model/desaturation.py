@@ -24,6 +24,10 @@ torque (the thrust direction, i.e. the attitude), then collective thrust ``u_T``
    the intersection (the closest reachable thrust: it may rise above the command to make room for the
    torque, as PX4's air mode does, or fall), and the yaw step of 2 adds back what yaw still fits.
 
+Without air mode (``controller.air_mode: false``) the thrust comes first instead: ``u_w = u_T g + r* v_rp +
+s* v_yaw`` with ``r* = max {r in [0, 1] : u_T g + r v_rp in B}`` (roll/pitch scaled, same direction), then the
+yaw step; the commanded thrust is kept exactly (steps 2-3 only if ``u_T g`` alone is outside ``B``).
+
 Step 3 needs ``g_i > 0`` (more thrust asks every rotor for more; true for every multirotor layout) and a
 uniform thrust inside ``B`` (true for ``w_min < w_max``); otherwise the command is clamped rotor by rotor.
 The result of steps 2 and 3 is inside ``B`` up to rounding (a final clamp removes that).
@@ -138,6 +142,27 @@ class FixedRotorDesaturation:
         g = self.thrust_column
         self.thrust_ok = all(v > 0.0 for v in g) and max(lo / gi for lo, gi in zip(self.low, g, strict=True)) <= min(
             hi / gi for hi, gi in zip(self.high, g, strict=True))
+
+    def allocate_keeping_thrust(self, thrust: float, torque_body: tuple[float, float, float]) -> list[float] | None:
+        """Squared rotor speeds ``u_w`` [(rad/s)^2] with the thrust ``u_T`` [N] exact and the torque [N m] (FRD)
+        scaled to fit (``controller.air_mode: false``, PX4 without air mode): thrust, then roll/pitch torque,
+        then yaw, ``u_w = u_T g + r* v_rp + s* v_yaw`` with ``r* = max {r in [0, 1] : u_T g + r v_rp in B}``
+        and ``s*`` the yaw step of :meth:`allocate`.
+
+        Returns None when the thrust alone does not fit (``u_T g`` outside the box): the caller then uses the
+        priority allocation.
+        """
+        tau_x, tau_y, tau_z = torque_body
+        g, low, high = self.thrust_column, self.low, self.high
+        base = [thrust * gi for gi in g]
+        if not all(lo <= u <= hi for u, lo, hi in zip(base, low, high, strict=True)):
+            return None
+        roll_pitch = [tau_x * a + tau_y * b for a, b in zip(self.roll_column, self.pitch_column, strict=True)]
+        r = max_scale_in_box(base, roll_pitch, low, high)
+        base = [u + r * v for u, v in zip(base, roll_pitch, strict=True)]
+        yaw = [tau_z * c for c in self.yaw_column]
+        s = max_scale_in_box(base, yaw, low, high)
+        return [u + s * y for u, y in zip(base, yaw, strict=True)]
 
     def allocate(self, thrust: float, torque_body: tuple[float, float, float]) -> list[float] | None:
         """Squared rotor speeds ``u_w`` [(rad/s)^2] inside the box for thrust ``u_T`` [N] along ``-z_b`` and body
