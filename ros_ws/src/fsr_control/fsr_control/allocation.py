@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from fsr_control.nullspace import PeakThrustObjective
 from fsr_sim.model.allocation import (
@@ -132,6 +131,8 @@ class TiltingActuation:
         self.strategy = _checked_strategy(strategy)
         self.allocation = static_tilting_allocation(vehicle)
         self.inverse = np.linalg.pinv(self.allocation)
+        import scipy.linalg  # here, not at the top: fixed-rotor controllers and fsr-fly never need it
+
         self.null_basis = scipy.linalg.null_space(self.allocation)
         self.secondary = secondary
         self.saturation = SaturationReport()
