@@ -181,7 +181,7 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
         """Subscriptions drained from one wait set into the MCAP writer."""
 
         def __init__(self) -> None:
-            super().__init__("fsr_recorder")
+            super().__init__("fsr_recorder", start_parameter_services=False)
             self.writer = writer
             self.exit_code = EXIT_OK
             self.failed = False

@@ -15,6 +15,11 @@ not in use" and their real destruction happened later, at garbage collection, af
 down (a by-hand estimator was seen spinning at 100 % CPU there for minutes). As a last resort a watchdog
 thread ends the process with ``os._exit`` (and says so on stderr) if teardown still has not finished by
 the budget's end.
+
+A node's per-step subscriptions (``hot_subscriptions``) are taken from a raw wait set and handed to their
+callbacks directly (:class:`fsr_sim.ros.wait_set.WaitSetSpinner`; ROS2_FROM_PIP.md: about half the CPU of a
+``SingleThreadedExecutor`` per message); the executor still runs every 50 ms (``EXECUTOR_PERIOD``) for everything
+else (goals, ``sim_status``, services), and drives the node alone during its ``close()``.
 """
 
 from __future__ import annotations
@@ -118,6 +123,11 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         own_loop = getattr(node, "spin_once", None)
+        hot = getattr(node, "hot_subscriptions", None)
+        if own_loop is None and hot:  # per-step inputs from a raw wait set, the executor every 50 ms
+            from fsr_sim.ros.wait_set import WaitSetSpinner
+
+            own_loop = WaitSetSpinner(node, hot).spin_once
         done = getattr(node, "done", lambda: False)
         while not stop and not done():
             if own_loop is not None:
