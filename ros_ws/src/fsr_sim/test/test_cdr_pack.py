@@ -169,3 +169,22 @@ def test_readers_match_rclpy(frame: str) -> None:
         cdr_read.odometry(serialize_message(Odometry())[:40])
     with pytest.raises(ValueError):
         cdr_read.wrench_stamped(b"\x01\x00\x00\x00" + bytes(60))
+
+
+@pytest.mark.parametrize("names", [["rotor_1", "rotor_2", "rotor_3", "rotor_4"],
+                                   [f"rotor_{i + 1}" for i in range(8)] + [f"tilt_{i + 1}" for i in range(8)],
+                                   ["rotor_10", "a", "bc"]])
+def test_joint_state_reader(names: list[str]) -> None:
+    from fsr_sim.ros import cdr_read
+
+    reader = cdr_read.JointStateReader(names)
+    n = len(names)
+    for pattern in range(len(VALUE_PATTERNS)):
+        positions, velocities = _values(pattern, n), _values((pattern + 2) % len(VALUE_PATTERNS), n)
+        packed = cdr_pack.joint_state("base_link_frd", names, n, n).pack(123_456_789_012, positions + velocities)
+        assert repr(reader.read(packed)) == repr((123_456_789_012, tuple(positions), tuple(velocities)))
+        msg = JointState(name=names, velocity=velocities)
+        msg.header.frame_id = "xyz"
+        got = reader.read(cdr_pack.joint_state("xyz", names, 0, n).pack(0, velocities))
+        assert repr(got) == repr((0, (), tuple(velocities)))
+    assert reader.read(cdr_pack.joint_state("", names[::-1] + ["x"], 0, 0).pack(0, ())) is None

@@ -47,7 +47,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from fsr_sim.config.scenario import plant_from_config
-from fsr_sim.nodes.commands import RotorCommandReader, wrench_command
+from fsr_sim.nodes.commands import RotorCommandReader, wrench_command_raw
 from fsr_sim.nodes.lockstep import (
     AHEAD,
     CURRENT,
@@ -58,6 +58,7 @@ from fsr_sim.nodes.lockstep import (
 )
 from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
 from fsr_sim.nodes.state_packets import StatePackets
+from fsr_sim.ros import cdr_read
 from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, PROGRESS_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node, signal_deadline
 from fsr_sim.ros.wait_set import SubscriptionWaitSet
@@ -98,7 +99,8 @@ class SimulatorNode(Node):
         self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS) if self.params.publish_clock else None
         self.progress_pub = self.create_publisher(Clock, "sim_progress", PROGRESS_QOS)
         self.status_pub = self.create_publisher(String, "sim_status", LATCHED_QOS)
-        self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS)
+        self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS,
+                                                    raw=True)  # commands are read from their CDR bytes
         self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
         self.phase = HANDSHAKE
@@ -339,36 +341,41 @@ class SimulatorNode(Node):
         """Wait up to ``wait`` s, take every queued command, apply the valid one answering ``expected_ns``
         (lockstep) or every valid one (free-running, ``expected_ns`` None); True if one was applied."""
         applied = False
-        for _, msg, _info in self.wait_set.take_ready(int(wait * 1e9)):
+        for _, data, _info in self.wait_set.take_ready(int(wait * 1e9)):  # CDR bytes: read in place
             if expected_ns is not None:
-                stamp = msg.header.stamp
-                verdict = classify_stamp(stamp.sec * 1_000_000_000 + stamp.nanosec, expected_ns)
-                if verdict != CURRENT:
-                    self._on_off_stamp(verdict, stamp, expected_ns)
+                try:
+                    stamp_ns = cdr_read.stamp(data)
+                except ValueError as error:
+                    self.warn_bad(f"dropped a command at {self._where()}: {error}")
                     continue
-            if self._apply(msg):
+                verdict = classify_stamp(stamp_ns, expected_ns)
+                if verdict != CURRENT:
+                    self._on_off_stamp(verdict, stamp_ns, expected_ns)
+                    continue
+            if self._apply(data):
                 applied = True
         if applied and self.watchdog is not None and self.watchdog.feed(time.monotonic()):
             self.get_logger().info(f"{self.command_topic}: commands arrive again at {self._where()}")
         return applied
 
-    def _on_off_stamp(self, verdict: str, stamp: object, expected_ns: int) -> None:
+    def _on_off_stamp(self, verdict: str, stamp_ns: int, expected_ns: int) -> None:
         if verdict == AHEAD:
+            sec, nanosec = divmod(stamp_ns, 1_000_000_000)
             self.warn_bad(
-                f"{self.command_topic} stamped {stamp.sec}.{stamp.nanosec:09d} is ahead of the state "
+                f"{self.command_topic} stamped {sec}.{nanosec:09d} is ahead of the state "
                 f"{expected_ns * 1e-9:.6f} s: ignored"
             )
         else:
             self.stale_commands += 1
 
-    def _apply(self, msg: object) -> bool:
-        """Apply one command to the plant; NaN/inf or malformed -> dropped with a warning, False."""
+    def _apply(self, data: bytes) -> bool:
+        """Apply one command (CDR bytes) to the plant; NaN/inf or malformed -> dropped with a warning, False."""
         try:
             if self.config.actuation == "wrench":
-                thrust, torque = wrench_command(msg)
+                thrust, torque = wrench_command_raw(data)
                 self.plant.set_wrench_command(thrust, torque)
                 return True
-            speeds, tilts = self.rotor_reader.read(msg)
+            speeds, tilts = self.rotor_reader.read_raw(data)
         except ValueError as error:
             self.warn_bad(f"dropped a command at {self._where()}: {error}")
             return False

@@ -61,3 +61,49 @@ def wrench_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
     except struct.error as error:
         raise ValueError(f"WrenchStamped message cut short: {error}") from None
     return stamp, values
+
+
+def stamp(data: bytes) -> int:
+    """The leading ``Header`` stamp [ns] of a message (little-endian CDR)."""
+    _check(data)
+    sec, nanosec, _ = _STAMP.unpack_from(data, _HEADER)
+    return sec * NS_PER_S + nanosec
+
+
+class JointStateReader:
+    """``sensor_msgs/JointState`` with a known list of names -> (stamp [ns], positions, velocities).
+
+    :meth:`read` returns None when the message's names are not exactly ``names`` (in that order, with zero
+    padding): the caller then decodes the message the general way."""
+
+    def __init__(self, names: list[str]) -> None:
+        block = bytearray(_UINT32.pack(len(names)))
+        for name in names:
+            block += bytes((-len(block)) % 4)
+            data = name.encode("utf-8") + b"\x00"
+            block += _UINT32.pack(len(data)) + data
+        self.names_block = bytes(block)
+
+    def read(self, data: bytes) -> tuple[int, tuple[float, ...], tuple[float, ...]] | None:
+        _check(data)
+        stamp_ns, offset = _after_header(data)
+        offset = _align(offset, 4)
+        end = offset + len(self.names_block)
+        if data[offset:end] != self.names_block:
+            return None
+        try:
+            positions, offset = _double_sequence(data, end)
+            velocities, _ = _double_sequence(data, offset)
+        except struct.error as error:
+            raise ValueError(f"JointState message cut short: {error}") from None
+        return stamp_ns, positions, velocities
+
+
+def _double_sequence(data: bytes, offset: int) -> tuple[tuple[float, ...], int]:
+    offset = _align(offset, 4)
+    (count,) = _UINT32.unpack_from(data, offset)
+    offset += 4
+    if not count:
+        return (), offset
+    offset = _align(offset, 8)
+    return struct.unpack_from(f"<{count}d", data, offset), offset + 8 * count
