@@ -87,7 +87,8 @@ def fly_graph(scenario: str, duration: float | None = None, extra: list[str] | N
             for pid in _descendants(process.pid):
                 sample = _cpu_and_name(pid)
                 if sample is not None:
-                    peak[pid] = sample
+                    name = sample[1] if sample[1] in NODE_NAMES else peak.get(pid, (0.0, sample[1]))[1]
+                    peak[pid] = (sample[0], name)
             time.sleep(0.2)
         output = process.stdout.read()
         wall = time.monotonic() - start

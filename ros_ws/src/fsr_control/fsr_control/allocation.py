@@ -26,7 +26,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from fsr_control.nullspace import PeakThrustObjective
 from fsr_sim.model.allocation import (
@@ -121,6 +120,8 @@ class TiltingActuation:
         self.strategy = _checked_strategy(strategy)
         self.allocation = static_tilting_allocation(vehicle)
         self.inverse = np.linalg.pinv(self.allocation)
+        import scipy.linalg  # lazily: only a tilting vehicle needs it (~0.3 s of imports)
+
         self.null_basis = scipy.linalg.null_space(self.allocation)
         self.secondary = secondary
         self.saturation = SaturationReport()

@@ -82,6 +82,17 @@ class StopFlag:
         signal.signal(signal.SIGTERM, handler)
 
 
+def process_age() -> float:
+    """Seconds since this process started (``/proc/self/stat``; the venv python's re-exec included)."""
+    try:
+        with open("/proc/self/stat") as stat:
+            start_ticks = int(stat.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as uptime:
+            return float(uptime.read().split()[0]) - start_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
 def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None,
              exit_process: bool = True) -> int:
     """Create the node with ``make_node(args)`` and spin it until done or signalled; returns an exit code.
@@ -120,6 +131,7 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
             return EXIT_CONFIG_ERROR
         if hasattr(node, "stop_flag"):
             node.stop_flag = stop  # lets close() keep within the signal budget
+        node.get_logger().info(f"ready {process_age():.2f} s after the process started")
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         own_loop = getattr(node, "spin_once", None)
