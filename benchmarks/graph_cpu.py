@@ -38,6 +38,15 @@ class GraphRun:
     cpu_by_node: dict[str, float] = field(default_factory=dict)  # s, per node kind (summed over namespaces)
     exit_code: int = 0
     output: str = ""
+    stepping_rate: float = float("nan")  # fsr-fly's "stepping at X x real time" (start-up excluded)
+    ready: dict[str, float] = field(default_factory=dict)  # node log name -> s from its start to ready
+    counts: dict[str, int] = field(default_factory=dict)  # recorded topic -> messages (from the recorder's log)
+
+    def incomplete_topics(self) -> list[str]:
+        """Per-step topics of the recording that do not hold every step (``/clock`` included)."""
+        steps = round(self.sim_time * 1000) + 1
+        per_step = [t for t, n in self.counts.items() if n > 2 and not t.endswith(("/goal", "/sim_status"))]
+        return [t for t in per_step if self.counts[t] != steps]
 
 
 def _descendants(pid: int) -> list[int]:
@@ -92,6 +101,14 @@ def fly_graph(scenario: str, duration: float | None = None, extra: list[str] | N
             time.sleep(0.2)
         output = process.stdout.read()
         wall = time.monotonic() - start
+        ready, counts = {}, {}
+        for log in Path(tmp, "run", "logs").glob("*.log"):
+            text = log.read_text(errors="replace")
+            found = re.search(r"ready ([0-9.]+) s after the process started", text)
+            if found:
+                ready[log.stem] = float(found.group(1))
+            if log.stem == "recorder":
+                counts = {m.group(1): int(m.group(2)) for m in re.finditer(r"^\s+(/\S+): (\d+)$", text, re.M)}
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     total = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     by_node: dict[str, float] = {}
@@ -99,8 +116,10 @@ def fly_graph(scenario: str, duration: float | None = None, extra: list[str] | N
         by_node[name] = by_node.get(name, 0.0) + cpu
     match = RTF.findall(output)
     sim = re.findall(r"simulated ([0-9.]+) s", output)
+    stepping = re.findall(r"stepping at ([0-9.]+)x real time", output)
     return GraphRun(scenario, float(sim[-1]) if sim else float("nan"), wall,
-                    float(match[-1]) if match else float("nan"), total, by_node, process.returncode, output)
+                    float(match[-1]) if match else float("nan"), total, by_node, process.returncode, output,
+                    float(stepping[-1]) if stepping else float("nan"), ready, counts)
 
 
 def main() -> None:
@@ -110,8 +129,9 @@ def main() -> None:
     args = parser.parse_args()
     run = fly_graph(args.scenario, args.duration)
     steps = run.sim_time * 1000.0
-    print(f"{run.scenario}: RTF {run.real_time_factor:.2f}, exit {run.exit_code}, CPU {run.cpu_total:.2f} s "
-          f"({1e6 * run.cpu_total / steps:.0f} us per step)")
+    print(f"{run.scenario}: RTF {run.real_time_factor:.2f} (stepping {run.stepping_rate:.2f}), exit "
+          f"{run.exit_code}, CPU {run.cpu_total:.2f} s ({1e6 * run.cpu_total / steps:.0f} us per step)")
+    print(f"  ready: {run.ready}; incomplete topics: {run.incomplete_topics() or 'none'}")
     for name, cpu in sorted(run.cpu_by_node.items(), key=lambda item: -item[1]):
         print(f"  {name:12s} {cpu:6.2f} s  {1e6 * cpu / steps:6.0f} us/step")
 
