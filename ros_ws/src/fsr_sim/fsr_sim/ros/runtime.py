@@ -139,7 +139,7 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
         if own_loop is None and hot:  # per-step inputs from a raw wait set, the executor every 50 ms
             from fsr_sim.ros.wait_set import WaitSetSpinner
 
-            own_loop = WaitSetSpinner(node, hot).spin_once
+            own_loop = WaitSetSpinner(node, hot, getattr(node, "hot_gather_s", 0.0)).spin_once
         done = getattr(node, "done", lambda: False)
         while not stop and not done():
             if own_loop is not None:
