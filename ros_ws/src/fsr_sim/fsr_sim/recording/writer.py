@@ -177,17 +177,19 @@ class _FastMessages:
         pack = _MESSAGE_HEAD.pack
         for channel_id, sequence, data, log_time, publish_time in batch:
             if statistics.message_count == 0:
+                statistics.message_start_time = statistics.message_end_time = log_time
+            elif log_time < statistics.message_start_time:
                 statistics.message_start_time = log_time
-            else:
-                statistics.message_start_time = min(log_time, statistics.message_start_time)
-            statistics.message_end_time = max(log_time, statistics.message_end_time)
+            elif log_time > statistics.message_end_time:
+                statistics.message_end_time = log_time
             statistics.message_count += 1
             channel_counts[channel_id] += 1
             if builder.num_messages == 0:
+                builder.message_start_time = builder.message_end_time = log_time
+            elif log_time < builder.message_start_time:
                 builder.message_start_time = log_time
-            else:
-                builder.message_start_time = min(builder.message_start_time, log_time)
-            builder.message_end_time = max(builder.message_end_time, log_time)
+            elif log_time > builder.message_end_time:
+                builder.message_end_time = log_time
             index = indices.get(channel_id)
             if not index:
                 index = indices[channel_id] = _message_index_class()(channel_id=channel_id, records=[])
