@@ -90,7 +90,7 @@ def graph(repeat: int, duration: float) -> None:
         runs = [fly_graph(name, duration) for _ in range(repeat)]
         for run in runs:
             if run.exit_code != 0:
-                raise SystemExit(f"fsr-fly {name} failed:\n{run.output}")
+                print(f"  WARNING: fsr-fly {name} exited {run.exit_code}:\n{run.output[-2000:]}", flush=True)
             ready += list(run.ready.values())
         vehicles = 3 if name == "three_vehicles" else 1
         add(f"graph {name}: real-time factor (fsr-fly, whole flight)", target,
