@@ -1,7 +1,8 @@
 """Every speed figure of issue 11 in one table (min and median of ``--repeat`` runs; CPU time where it applies).
 
     .venv/bin/python benchmarks/run_all.py                 # ~10 min on 2 cores
-    .venv/bin/python benchmarks/run_all.py --quick         # 1 run each, short flights
+    .venv/bin/python benchmarks/run_all.py --quick         # a smoke pass (~1 min): 1 run each, 1-3 s flights,
+                                                           # graph ex4 only
 
 Rows:
 
@@ -61,15 +62,16 @@ def in_process_loop(repeat: int, seconds: float | None) -> None:
         add(f"in-process loop + recording, {name}", target, values, "us/step CPU")
 
 
-def in_process_command(repeat: int) -> None:
+def in_process_command(repeat: int, duration: float | None = None) -> None:
     walls, cpus, startups = [], [], []
+    shorter = [] if duration is None else ["--duration", repr(duration)]  # --quick only: not the 30 s figure
     for _ in range(repeat):
         with tempfile.TemporaryDirectory() as tmp:
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             start = time.monotonic()
             done = subprocess.run([str(VENV_BIN / "fsr-fly"), "ex4_geometric", "--in-process", "--out",
-                                   f"{tmp}/ex4.mcap"], capture_output=True, text=True, env={**os.environ,
-                                                                                            "MPLBACKEND": "Agg"})
+                                   f"{tmp}/ex4.mcap", *shorter], capture_output=True, text=True,
+                                  env={**os.environ, "MPLBACKEND": "Agg"})
             walls.append(time.monotonic() - start)
             after = resource.getrusage(resource.RUSAGE_CHILDREN)
             cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
@@ -77,14 +79,18 @@ def in_process_command(repeat: int) -> None:
             if done.returncode != 0:
                 raise SystemExit(f"fsr-fly --in-process failed:\n{done.stdout}\n{done.stderr}")
             startups.append(float(found.group(1)) if found else float("nan"))
-    add("fsr-fly ex4_geometric --in-process (30 s, recorded, analysed), wall", "<= 2.5", walls, "s")
+    flown = "30 s" if duration is None else f"{duration:g} s"
+    add(f"fsr-fly ex4_geometric --in-process ({flown}, recorded, analysed), wall", "<= 2.5", walls, "s")
     add("fsr-fly ex4_geometric --in-process, CPU", "-", cpus, "s CPU")
     add("in-process start-up to the first step", "<= 0.4", startups, "s")
 
 
-def graph(repeat: int, duration: float) -> None:
-    cases = (("ex4_geometric", ">= 2.0"), ("ex5_voliro", ">= 1.5"), ("octo_ground_effect", ">= 1.5"),
-             ("three_vehicles", ">= 0.7"))
+GRAPH_CASES = {"ex4_geometric": ">= 2.0", "ex5_voliro": ">= 1.5", "octo_ground_effect": ">= 1.5",
+               "three_vehicles": ">= 0.7"}
+
+
+def graph(repeat: int, duration: float, names: list[str] | None = None) -> None:
+    cases = [(name, GRAPH_CASES[name]) for name in (names or GRAPH_CASES)]
     ready: list[float] = []
     for name, target in cases:
         runs = [fly_graph(name, duration) for _ in range(repeat)]
@@ -123,13 +129,18 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--duration", type=float, default=10.0, help="graph flights [s] (default 10)")
     parser.add_argument("--loop-seconds", type=float, help="in-process loop flights [s] (default: the scenario's)")
-    parser.add_argument("--quick", action="store_true", help="1 run each, 3 s flights")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke pass: 1 run each, 1 s graph and loop flights, a 3 s in-process command, graph "
+                             "ex4_geometric only (unless --graph-scenario)")
     parser.add_argument("--skip-graph", action="store_true")
+    parser.add_argument("--graph-scenario", action="append", choices=tuple(GRAPH_CASES),
+                        help="graph scenarios to fly (repeatable; default: all four)")
     parser.add_argument("--only", choices=("loop", "command", "graph"), action="append",
                         help="run only these groups (repeatable)")
     args = parser.parse_args()
     if args.quick:
-        args.repeat, args.duration, args.loop_seconds = 1, 3.0, 3.0
+        args.repeat, args.duration, args.loop_seconds = 1, 1.0, 1.0
+        args.graph_scenario = args.graph_scenario or ["ex4_geometric"]
     print(f"machine: {machine()}", flush=True)
     groups = set(args.only or ("loop", "command", "graph"))
     if args.skip_graph:
@@ -137,9 +148,9 @@ def main() -> None:
     if "loop" in groups:
         in_process_loop(args.repeat, args.loop_seconds)
     if "command" in groups:
-        in_process_command(args.repeat)
+        in_process_command(args.repeat, 3.0 if args.quick else None)
     if "graph" in groups:
-        graph(args.repeat, args.duration)
+        graph(args.repeat, args.duration, args.graph_scenario)
     print("\n| figure | target | min | median | unit |\n|---|---|---|---|---|")
     for name, target, low, middle, unit in ROWS:
         print(f"| {name} | {target} | {low:.3g} | {middle:.3g} | {unit} |")

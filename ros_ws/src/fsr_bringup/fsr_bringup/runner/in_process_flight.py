@@ -13,8 +13,8 @@ Per step ``k`` (``t_k = k * control_period``, stamps in integer ns as ``Plant.st
 
 The final state ``t_N`` is published and answered (the controller does not know it is the last) but not
 applied. With a recording, :class:`fsr_bringup.recording.flight_recording.FlightRecorder` writes what the
-nodes publish, with their own message functions. Ctrl-C (KeyboardInterrupt) ends the flight as
-``stopped``: the arrays and the recording hold every step flown.
+nodes publish, the payloads their own packers build (byte for byte the graph's). Ctrl-C (KeyboardInterrupt)
+ends the flight as ``stopped``: the arrays and the recording hold every step flown.
 """
 
 from __future__ import annotations
