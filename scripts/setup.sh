@@ -20,4 +20,7 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
     -e "$root/ros_ws/src/fsr_estimation" -e "$root/ros_ws/src/fsr_bringup"
   echo "$want" > "$stamp"
 fi
+# Byte-compile fsr's sources: every node and fsr-fly starts faster (an environment with
+# PYTHONDONTWRITEBYTECODE=1 would otherwise compile them at each start; a stale .pyc is simply recompiled).
+"$venv/bin/python" -m compileall -q "$root/ros_ws/src" >/dev/null || true
 echo "fsr environment ready: $venv"

@@ -1,4 +1,4 @@
-"""An in-process flight's recording holds the graph's topics, built with the nodes' own message functions."""
+"""An in-process flight's recording holds the graph's topics, with the payloads the nodes publish."""
 
 from pathlib import Path
 

@@ -109,6 +109,8 @@ def test_graph_and_in_process_runs_agree(tmp_path):
         assert len(per_step) >= 9, per_step  # rotor_cmd too in rotor actuation
         for topic in per_step:
             assert [data for _, data in g.raw(topic)] == [data for _, data in loc.raw(topic)], topic
+        # /clock (not in an in-process recording) is as deep as the streams: the recorder keeps every step.
+        assert g.count("/clock") == 501
 
 
 def test_killed_controller_is_reported_and_the_recording_is_complete(tmp_path):

@@ -139,3 +139,52 @@ def test_float64_clock_string(pattern: int) -> None:
         check_bytes(cdr_pack.clock().pack(stamp, ()), Clock(clock=_time(stamp)))
     for text in ["", "a", '{"state": "running"}', "é" * 7, "x" * 101]:
         check_bytes(cdr_pack.string(text), String(data=text))
+
+
+@pytest.mark.parametrize("frame", FRAMES)
+def test_readers_match_rclpy(frame: str) -> None:
+    """cdr_read gives the doubles and stamp of rclpy's own serialisation (padding uninitialised) bit for bit."""
+    from fsr_sim.ros import cdr_read
+
+    for stamp in STAMPS:
+        for pattern in range(len(VALUE_PATTERNS)):
+            v = _values(pattern, 13)
+            msg = Odometry()
+            msg.header.stamp, msg.header.frame_id, msg.child_frame_id = _time(stamp), frame, frame + "xy"
+            p, o = msg.pose.pose.position, msg.pose.pose.orientation
+            p.x, p.y, p.z, o.x, o.y, o.z, o.w = v[:7]
+            t = msg.twist.twist
+            t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z = v[7:]
+            msg.pose.covariance[0] = 7.0
+            got_stamp, pose, twist = cdr_read.odometry(serialize_message(msg))
+            assert got_stamp == stamp
+            assert repr(pose + twist) == repr(tuple(v))
+            w = WrenchStamped()
+            w.header.stamp, w.header.frame_id = _time(stamp), frame
+            w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = v[:3]
+            w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = v[3:6]
+            assert cdr_read.wrench_stamped(serialize_message(w)) == (stamp, tuple(v[:6])) or repr(
+                cdr_read.wrench_stamped(serialize_message(w))) == repr((stamp, tuple(v[:6])))
+    with pytest.raises(ValueError):
+        cdr_read.odometry(serialize_message(Odometry())[:40])
+    with pytest.raises(ValueError):
+        cdr_read.wrench_stamped(b"\x01\x00\x00\x00" + bytes(60))
+
+
+@pytest.mark.parametrize("names", [["rotor_1", "rotor_2", "rotor_3", "rotor_4"],
+                                   [f"rotor_{i + 1}" for i in range(8)] + [f"tilt_{i + 1}" for i in range(8)],
+                                   ["rotor_10", "a", "bc"]])
+def test_joint_state_reader(names: list[str]) -> None:
+    from fsr_sim.ros import cdr_read
+
+    reader = cdr_read.JointStateReader(names)
+    n = len(names)
+    for pattern in range(len(VALUE_PATTERNS)):
+        positions, velocities = _values(pattern, n), _values((pattern + 2) % len(VALUE_PATTERNS), n)
+        packed = cdr_pack.joint_state("base_link_frd", names, n, n).pack(123_456_789_012, positions + velocities)
+        assert repr(reader.read(packed)) == repr((123_456_789_012, tuple(positions), tuple(velocities)))
+        msg = JointState(name=names, velocity=velocities)
+        msg.header.frame_id = "xyz"
+        got = reader.read(cdr_pack.joint_state("xyz", names, 0, n).pack(0, velocities))
+        assert repr(got) == repr((0, (), tuple(velocities)))
+    assert reader.read(cdr_pack.joint_state("", names[::-1] + ["x"], 0, 0).pack(0, ())) is None

@@ -122,3 +122,35 @@ def test_packed_state_messages_equal_the_message_objects(disturbed):
         assert deserialize_message(packets.odom, Odometry) == messages.odom
         assert deserialize_message(packets.wrench, WrenchStamped) == messages.wrench
         assert deserialize_message(packets.clock, Clock) == messages.clock
+
+
+@pytest.mark.parametrize("tilting", [False, True])
+def test_commands_read_from_cdr_bytes_equal_the_message_path(tilting):
+    """read_raw / wrench_command_raw (what the simulator runs) give read / wrench_command's numbers, for packed
+    bytes and for rclpy's own serialisation (uninitialised padding: the general path), and refuse NaN."""
+    from rclpy.serialization import serialize_message
+
+    from fsr_sim.nodes.commands import wrench_command_raw
+    from fsr_sim.ros import cdr_pack
+
+    reader = RotorCommandReader(4, tilting)
+    names = [f"rotor_{i + 1}" for i in range(4)] + ([f"tilt_{i + 1}" for i in range(4)] if tilting else [])
+    packer = cdr_pack.joint_state("base_link_frd", names, len(names), len(names))
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        speeds, tilts = rng.uniform(0, 900, 4), (rng.uniform(-1, 1, 4) if tilting else None)
+        msg = rotor_command(7_000_000, speeds, tilts)
+        expected = reader.read(msg)
+        packed = packer.pack(7_000_000, [*msg.position, *msg.velocity])
+        for data in (packed, serialize_message(msg)):
+            got = reader.read_raw(data)
+            assert np.array_equal(got[0], expected[0])
+            assert (got[1] is None) == (expected[1] is None) and (got[1] is None or np.array_equal(got[1], expected[1]))
+        wrench = wrench_stamped(5, rng.normal(size=3), rng.normal(size=3))
+        thrust, torque = wrench_command_raw(serialize_message(wrench))
+        assert (thrust, torque.tolist()) == (wrench_command(wrench)[0], wrench_command(wrench)[1].tolist())
+    bad = rotor_command(0, np.array([1.0, math.nan, 1.0, 1.0]), np.zeros(4) if tilting else None)
+    with pytest.raises(ValueError):
+        reader.read_raw(serialize_message(bad))
+    with pytest.raises(ValueError):
+        wrench_command_raw(serialize_message(wrench_stamped(0, np.array((math.inf, 0, 0)), np.zeros(3))))

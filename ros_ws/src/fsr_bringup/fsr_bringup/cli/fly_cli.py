@@ -208,6 +208,9 @@ def main(argv: list[str] | None = None) -> int:
         f"in {result.wall_time:.2f} s wall (real-time factor {result.real_time_factor:.2f})",
         flush=True,
     )
+    speed = flight_speed(result)
+    if speed:
+        print(f"fsr-fly: {speed}", flush=True)
     for failure in result.failures:
         print(f"fsr-fly: ERROR: {failure}", file=sys.stderr, flush=True)
     if not recording.exists():
@@ -220,6 +223,20 @@ def main(argv: list[str] | None = None) -> int:
                               args.after)
     print(f"fsr-fly: recording {recording}", flush=True)
     return result.exit_code
+
+
+def flight_speed(result: object) -> str:
+    """One line on how fast the flight ran: the graph's stepping rate (start-up excluded), or the in-process
+    loop's cost per step and its start-up."""
+    stepping = getattr(result, "stepping_rate", float("nan"))
+    if stepping == stepping:  # not NaN: a graph run
+        return f"stepping at {stepping:.2f}x real time (node start-up and handshake excluded)"
+    startup = getattr(result, "startup_time", None)
+    steps = len(getattr(result, "time", ()))
+    if startup is None or not steps:
+        return ""
+    return (f"in-process loop {1e6 * result.wall_time / steps:.0f} us per step (recording included), "
+            f"first step {startup:.2f} s after the process started")
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ class FlightResult:
     wall_time: float = 0.0
     sim_time: float = 0.0
     interrupted: bool = False
+    stepping_rate: float = float("nan")  # simulated s per wall s while the simulator stepped (start-up excluded)
 
     @property
     def real_time_factor(self) -> float:
@@ -148,25 +149,39 @@ def child_environment(domain: DomainLease, localhost_only: bool) -> dict[str, st
 
 
 class ClockWatcher:
-    """Follows ``/clock`` in the run's domain to show simulated time and the real-time factor."""
+    """Follows a simulator's ``sim_progress`` (its simulated time every few steps) in the run's domain to show
+    simulated time and the real-time factor; cheap, unlike following every ``/clock`` message."""
 
-    def __init__(self, domain_id: int) -> None:
+    def __init__(self, domain_id: int, topic: str = "/sim_progress") -> None:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rosgraph_msgs.msg import Clock
 
-        from fsr_sim.ros.qos import CLOCK_QOS
+        from fsr_sim.ros.qos import PROGRESS_QOS
 
         self.sim_time = 0.0
+        self.first: tuple[float, float] | None = None  # (wall monotonic [s], sim time [s]) of the first progress
+        self.last: tuple[float, float] | None = None
         self.context = rclpy.context.Context()
         rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node("fsr_fly_progress", context=self.context)
-        self.node.create_subscription(Clock, "/clock", self._on_clock, CLOCK_QOS)
+        self.node = rclpy.create_node("fsr_fly_progress", context=self.context, start_parameter_services=False)
+        self.node.create_subscription(Clock, topic, self._on_clock, PROGRESS_QOS)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
 
     def _on_clock(self, msg: object) -> None:
         self.sim_time = msg.clock.sec + msg.clock.nanosec * 1e-9
+        now = time.monotonic()
+        if self.first is None:
+            self.first = (now, self.sim_time)
+        self.last = (now, self.sim_time)
+
+    @property
+    def stepping_rate(self) -> float:
+        """Simulated seconds per wall second between the first and the last progress message (NaN before two)."""
+        if self.first is None or self.last is None or self.last[0] - self.first[0] < 0.05:
+            return float("nan")
+        return (self.last[1] - self.first[1]) / (self.last[0] - self.first[0])
 
     def spin(self, timeout: float) -> None:
         self.executor.spin_once(timeout_sec=timeout)
@@ -220,6 +235,7 @@ def fly_graph(
     failures: list[str] = []
     sim_time = 0.0
     remote_end: dict[str, dict] | None = None
+    stepping_rate = float("nan")
     try:
         for name, command in commands:
             if name in local:
@@ -262,12 +278,14 @@ def fly_graph(
         group.stop_all(first=tuple(simulators))
         if watcher is not None:
             sim_time = watcher.sim_time
+            stepping_rate = watcher.stepping_rate
             watcher.close()
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     wall_time = time.monotonic() - start
     if interrupted:
-        return FlightResult(EXIT_INTERRUPTED, failures, wall_time, sim_time, interrupted=True)
+        return FlightResult(EXIT_INTERRUPTED, failures, wall_time, sim_time, interrupted=True,
+                            stepping_rate=stepping_rate)
     recorder = group.get("recorder")
     if recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
         failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
@@ -289,4 +307,4 @@ def fly_graph(
         elif code not in (0, None):
             failures.insert(0, f"{name} failed ({describe_exit(code)}); see {group.get(name).log_path}")
             exit_code = exit_code if exit_code == EXIT_DIVERGED else EXIT_NODE_FAILED
-    return FlightResult(exit_code, failures, wall_time, sim_time)
+    return FlightResult(exit_code, failures, wall_time, sim_time, stepping_rate=stepping_rate)

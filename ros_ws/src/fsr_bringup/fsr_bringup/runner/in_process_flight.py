@@ -13,8 +13,8 @@ Per step ``k`` (``t_k = k * control_period``, stamps in integer ns as ``Plant.st
 
 The final state ``t_N`` is published and answered (the controller does not know it is the last) but not
 applied. With a recording, :class:`fsr_bringup.recording.flight_recording.FlightRecorder` writes what the
-nodes publish, with their own message functions. Ctrl-C (KeyboardInterrupt) ends the flight as
-``stopped``: the arrays and the recording hold every step flown.
+nodes publish, the payloads their own packers build (byte for byte the graph's). Ctrl-C (KeyboardInterrupt)
+ends the flight as ``stopped``: the arrays and the recording hold every step flown.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from fsr_control.flight_controller import FlightController, seconds_from_ns
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
 from fsr_sim.model.odometry import odometry_values, state_from_odometry_values
 from fsr_sim.model.so3 import rotations_from_quaternions
-from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_INTERRUPTED
+from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_INTERRUPTED, process_age
 
 
 @dataclass
@@ -95,6 +95,7 @@ class FlightRun:
     failures: list[str] = field(default_factory=list)
     interrupted: bool = False
     compensation: dict[str, Any] = field(default_factory=lambda: {"mode": "none"})  # FlightController's summary
+    startup_time: float | None = None  # s from the process start to the first step (None: unknown)
 
     @property
     def sim_time(self) -> float:
@@ -196,6 +197,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     disturbed = bool(sim.disturbances)
     tilting = rotors and sim.vehicle.is_tilting
     append = {key: values.append for key, values in rows.items()}
+    startup = process_age()
     start = time.perf_counter()
     last = -1
     try:
@@ -293,5 +295,5 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         end_reason=end_reason, reason=reason, wall_time=wall, rotation_commanded=stack("rotation_commanded", (3, 3)),
         force_desired=stack("force_desired", (3,)), torque_desired=stack("torque_desired", (3,)),
         scenario=scenario, failures=failures.get(end_reason, []), interrupted=interrupted,
-        compensation=controller.compensation_summary(),
+        compensation=controller.compensation_summary(), startup_time=startup,
     )

@@ -64,10 +64,12 @@ def parse_status(data: str) -> dict:
 
 
 class RemoteWatcher(ClockWatcher):
-    """``/clock`` (progress), every vehicle's ``sim_status`` and the graph's node names, in the run's domain."""
+    """The first vehicle's ``sim_progress`` (progress), every vehicle's ``sim_status`` and the graph's node names,
+    in the run's domain."""
 
     def __init__(self, domain_id: int, namespaces: list[str]) -> None:
-        super().__init__(domain_id)
+        first = namespaces[0].strip("/") if namespaces else ""
+        super().__init__(domain_id, f"/{first}/sim_progress" if first else "/sim_progress")
         from std_msgs.msg import String
 
         from fsr_sim.ros.qos import LATCHED_QOS

@@ -10,8 +10,10 @@ Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
 axis gave way at the rotor limits, see fsr_control.allocation), ``reference``, ``attitude_cmd`` (the commanded
 attitude ``R_c``) and ``wrench_desired`` (the law's wrench before allocation), all stamped ``t_k`` (lockstep
-contract), published as packed CDR bytes (:class:`fsr_control.nodes.packets.ControllerPackets`: the bytes an
-in-process recording writes).
+contract; packed by :class:`fsr_control.nodes.packets.ControllerPackets` and published as CDR bytes, the
+values of :func:`fsr_control.nodes.messages.controller_messages`). ``odom`` is read from its CDR bytes
+(:mod:`fsr_sim.ros.cdr_read`) and taken from a wait set (``hot_subscriptions``, see
+:class:`fsr_sim.ros.runtime.WaitSetSpinner`); the node has no parameter services (parameters are read once).
 NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
 final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
 for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation
@@ -22,6 +24,7 @@ estimates) and the callback's cost.
 from __future__ import annotations
 
 import copy
+import math
 import sys
 import time
 
@@ -39,11 +42,8 @@ from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.model.allocation import WRENCH_AXES
-from fsr_sim.ros.conversions import (
-    ns_from_time,
-    odometry_is_finite,
-    state_from_odometry,
-)
+from fsr_sim.model.odometry import state_from_odometry_values
+from fsr_sim.ros import cdr_read
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
@@ -65,7 +65,7 @@ def scenario_with_parameters(scenario: Scenario, controller_type: str, gains: di
 
 class ControllerNode(Node):
     def __init__(self) -> None:
-        super().__init__("controller")
+        super().__init__("controller", start_parameter_services=False)
         name = self.declare_parameter("scenario", "").value
         controller_type = self.declare_parameter("controller_type", "").value
         exit_on_finish = exit_on_finish_parameter(self, "controller")
@@ -103,7 +103,8 @@ class ControllerNode(Node):
         }
         if self.rotors:
             self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
-        self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS)
+        odom = self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS, raw=True)
+        self.hot_subscriptions = [(odom, self.on_odom)]
         self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
         self.flight_end = FlightEnd(self, exit_on_finish)
         self.stop_flag: object = None  # run_node's StopFlag: bounds the drain after a signal
@@ -119,14 +120,20 @@ class ControllerNode(Node):
     def done(self) -> bool:
         return self.flight_end.ended()
 
-    def on_odom(self, msg: Odometry) -> None:
+    def on_odom(self, data: bytes) -> None:
+        """Answer one ``odom`` (CDR bytes) with every controller topic, stamped like it."""
         start = time.perf_counter()
         self.flight_end.activity()
-        if not odometry_is_finite(msg):
+        try:
+            stamp_ns, pose, twist = cdr_read.odometry(data)
+        except ValueError as error:
+            self.warn(f"dropped an odom that cannot be read: {error}")
+            return
+        if not odometry_values_ok(pose, twist):
             self.warn("dropped an odom with NaN/inf values")
             return
-        stamp_ns = ns_from_time(msg.header.stamp)
-        position, rotation, velocity_world, angular_velocity = state_from_odometry(msg)
+        position, rotation, velocity_world, angular_velocity = state_from_odometry_values(
+            pose[0:3], pose[3:7], twist[0:3], twist[3:6])
         try:
             output = self.controller.command(
                 seconds_from_ns(stamp_ns), position, rotation, velocity_world, angular_velocity
@@ -135,8 +142,9 @@ class ControllerNode(Node):
             self.warn(f"no command for odom at {stamp_ns * 1e-9:.3f} s: {error}")
             self.answered_ns = stamp_ns
             return
+        publishers = self.publishers_by_topic
         for topic, packet in self.packets.pack(stamp_ns, output):
-            self.publishers_by_topic[topic].publish(packet)
+            publishers[topic].publish(packet)
         self.answered_ns = stamp_ns
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1
@@ -177,6 +185,12 @@ class ControllerNode(Node):
             self.get_logger().info(
                 f"{self.callbacks} odom answered, {1e6 * self.callback_seconds / self.callbacks:.0f} us per callback"
             )
+
+
+def odometry_values_ok(pose: tuple[float, ...], twist: tuple[float, ...]) -> bool:
+    """Finite values and a non-zero quaternion (:func:`fsr_sim.ros.conversions.odometry_is_finite`)."""
+    _, _, _, qx, qy, qz, qw = pose
+    return all(map(math.isfinite, pose + twist)) and (qx * qx + qy * qy + qz * qz + qw * qw) > 1e-12
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,4 +1,5 @@
-"""Controller messages <-> numpy (the node and the in-process recorder build them the same way).
+"""Controller messages <-> numpy: the rclpy objects of what the controller publishes (the node publishes the
+same values as packed CDR, :class:`fsr_control.nodes.packets.ControllerPackets`, tested equal), and goals.
 
 * ``reference`` (trajectory_msgs/MultiDOFJointTrajectory, frame ``world_ned``, one joint ``base_link_frd``,
   one point): ``transforms[0]`` the desired pose (translation world NED [m], rotation ``R_d`` body -> world),

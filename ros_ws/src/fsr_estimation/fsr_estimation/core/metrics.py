@@ -26,7 +26,6 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.ndimage import maximum_filter1d
 
 from fsr_estimation.core.filter_design import check_filter_parameters
 from fsr_estimation.core.momentum import observer_input
@@ -93,6 +92,8 @@ def settling_time_report(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike,
     signed_error = np.asarray(estimate, dtype=float) - np.asarray(truth, dtype=float)
     size = back + ahead + 1
     # A window [k - back, k + ahead] is a centred window of `size` shifted by origin (scipy's sign).
+    from scipy.ndimage import maximum_filter1d  # lazily (scipy imports take ~0.5 s)
+
     moving_max = maximum_filter1d(signed_error, size, axis=0, mode="constant", cval=-np.inf,
                                   origin=size // 2 - ahead)
     band = tolerance * np.abs(np.broadcast_to(np.asarray(truth, dtype=float), signed_error.shape))

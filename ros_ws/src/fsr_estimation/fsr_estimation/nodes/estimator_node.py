@@ -10,11 +10,16 @@ Asked to stop after the simulator ended (its final ``sim_status``), it first est
 queued up to the simulator's last state and waits for its subscribers' acknowledgements; with
 ``exit_on_finish`` (default true) it ends by itself once ``sim_status`` reports the end of the flight
 (:mod:`fsr_sim.ros.flight_end`).
-Parameters: :mod:`fsr_estimation.nodes.estimator_params` and ``exit_on_finish``.
+Parameters: :mod:`fsr_estimation.nodes.estimator_params` and ``exit_on_finish`` (read once: no parameter
+services).
+``odom`` and ``wrench_cmd`` are read from their CDR bytes (:mod:`fsr_sim.ros.cdr_read`), taken from a wait set
+(``hot_subscriptions``, :class:`fsr_sim.ros.runtime.WaitSetSpinner`); the estimates are published as packed CDR
+(:class:`fsr_estimation.nodes.packets.EstimatePackets`).
 """
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Callable
 
@@ -29,23 +34,20 @@ from std_srvs.srv import Trigger
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
-from fsr_sim.ros.conversions import (
-    ns_from_time,
-    odometry_is_finite,
-    state_from_odometry,
-    wrench_from_msg,
-    wrench_is_finite,
-)
+from fsr_sim.model.odometry import state_from_odometry_values
+from fsr_sim.ros import cdr_read
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
+
+GATHER_S = 0.005  # s between batches of inputs (the streams are 5000 deep)
 
 
 class EstimatorNode(Node):
     """Thin adapter: messages -> numpy -> StampedEstimator -> messages."""
 
     def __init__(self) -> None:
-        super().__init__("estimator")
+        super().__init__("estimator", start_parameter_services=False)
         dynamic = ParameterDescriptor(dynamic_typing=True)
         values = {name: self.declare_parameter(name, None, dynamic).value for name in PARAMETER_NAMES}
         settings = node_settings(values)
@@ -60,8 +62,10 @@ class EstimatorNode(Node):
         self.packets = EstimatePackets()  # the bytes an in-process recording writes
         self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_estimate", STREAM_QOS)
         self.mass_pub = self.create_publisher(Float64, "mass_estimate", STREAM_QOS)
-        self.create_subscription(Odometry, "odom", self._on_odom, STREAM_QOS)
-        self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS)
+        odom = self.create_subscription(Odometry, "odom", self._on_odom, STREAM_QOS, raw=True)
+        wrench = self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS, raw=True)
+        self.hot_subscriptions = [(odom, self._on_odom), (wrench, self._on_wrench)]
+        self.hot_gather_s = GATHER_S  # nobody waits for the estimates step by step: take them in batches
         self.create_service(Trigger, "~/reset", self._on_reset)
         period = settings.control_period
         self.flight_end = FlightEnd(self, exit_on_finish)
@@ -80,20 +84,30 @@ class EstimatorNode(Node):
         if self.enabled:
             self.flight_end.drain(lambda: self.estimator.last_stamp, [self.wrench_pub, self.mass_pub])
 
-    def _on_odom(self, msg: Odometry) -> None:
-        stamp = ns_from_time(msg.header.stamp)
-        if not odometry_is_finite(msg):
+    def _on_odom(self, data: bytes) -> None:
+        try:
+            stamp, pose, twist = cdr_read.odometry(data)
+        except ValueError as error:
+            self.warn_input(f"dropped an odom that cannot be read: {error}")
+            return
+        _, _, _, qx, qy, qz, qw = pose
+        if not all(map(math.isfinite, pose + twist)) or qx * qx + qy * qy + qz * qz + qw * qw <= 1e-12:
             self.warn_input(f"odom at {stamp} ns holds NaN/inf or a zero quaternion: dropped")
             return
-        _, rotation, velocity_world, omega_body = state_from_odometry(msg)
+        _, rotation, velocity_world, omega_body = state_from_odometry_values(pose[0:3], pose[3:7], twist[0:3],
+                                                                             twist[3:6])
         self._publish(lambda: self.estimator.add_state(stamp, rotation, velocity_world, omega_body))
 
-    def _on_wrench(self, msg: WrenchStamped) -> None:
-        stamp = ns_from_time(msg.header.stamp)
-        if not wrench_is_finite(msg):
+    def _on_wrench(self, data: bytes) -> None:
+        try:
+            stamp, values = cdr_read.wrench_stamped(data)
+        except ValueError as error:
+            self.warn_input(f"dropped a wrench_cmd that cannot be read: {error}")
+            return
+        if not all(map(math.isfinite, values)):
             self.warn_input(f"wrench_cmd at {stamp} ns holds NaN/inf: dropped")
             return
-        self._publish(lambda: self.estimator.add_command(stamp, *wrench_from_msg(msg)))
+        self._publish(lambda: self.estimator.add_command(stamp, np.array(values[:3]), np.array(values[3:])))
 
     def _publish(self, add: Callable[[], Estimate | None]) -> None:
         self.flight_end.activity()

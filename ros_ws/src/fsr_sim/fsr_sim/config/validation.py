@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import difflib
 import math
 from collections.abc import Iterable, Mapping
@@ -41,7 +42,20 @@ def load_yaml_file(path: str | Path) -> dict[str, Any]:
 
 
 def parse_yaml_mapping(text: str, source: str) -> dict[str, Any]:
-    """Parse YAML text that must hold a mapping at the top level."""
+    """Parse YAML text that must hold a mapping at the top level (a text parsed before in this process is
+    not parsed again: the same scenario and vehicle files are read several times while a run is set up)."""
+    cached = _PARSED.get(text)
+    if cached is None:
+        if len(_PARSED) >= 64:
+            _PARSED.clear()
+        cached = _PARSED[text] = _parse_yaml_mapping(text, source)
+    return copy.deepcopy(cached)
+
+
+_PARSED: dict[str, dict[str, Any]] = {}
+
+
+def _parse_yaml_mapping(text: str, source: str) -> dict[str, Any]:
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as error:

@@ -6,7 +6,8 @@
   plant (SPEC §3.1) and are ignored.
 
 A command holding NaN/inf (or missing a rotor) raises ``ValueError``; the node drops it with a warning so
-it never reaches the plant.
+it never reaches the plant. The simulator reads the commands from their CDR bytes (:meth:`RotorCommandReader.
+read_raw`, :func:`wrench_command_raw`): the same numbers as from the message objects, without building them.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import math
 
 import numpy as np
 
+from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import rotor_command_arrays
 
 
@@ -26,6 +28,29 @@ class RotorCommandReader:
         names = [f"rotor_{i + 1}" for i in range(rotor_count)]
         self._plain_names = names
         self._tilt_names = names + [f"tilt_{i + 1}" for i in range(rotor_count)] if tilting else None
+        self._plain_reader = cdr_read.JointStateReader(names)
+        self._tilt_reader = cdr_read.JointStateReader(self._tilt_names) if tilting else None
+
+    def read_raw(self, data: bytes) -> tuple[np.ndarray, np.ndarray | None]:
+        """:meth:`read` of a message's CDR bytes (names in the usual order: read in place; else decoded)."""
+        n = self.rotor_count
+        speeds = tilts = None
+        plain = self._plain_reader.read(data)
+        if plain is not None and len(plain[2]) >= n:
+            speeds = np.array(plain[2][:n], dtype=float)
+        elif self._tilt_reader is not None:
+            tilted = self._tilt_reader.read(data)
+            if tilted is not None and len(tilted[2]) >= n and len(tilted[1]) >= 2 * n:
+                speeds = np.array(tilted[2][:n], dtype=float)
+                tilts = np.array(tilted[1][n : 2 * n], dtype=float)
+        if speeds is None:
+            from rclpy.serialization import deserialize_message
+            from sensor_msgs.msg import JointState
+
+            return self.read(deserialize_message(data, JointState))
+        if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
+            raise ValueError("rotor_cmd holds NaN or inf")
+        return speeds, tilts
 
     def read(self, msg: object) -> tuple[np.ndarray, np.ndarray | None]:
         n = self.rotor_count
@@ -48,3 +73,11 @@ def wrench_command(msg: object) -> tuple[float, np.ndarray]:
     if not all(math.isfinite(v) for v in (f.x, f.y, f.z, t.x, t.y, t.z)):
         raise ValueError("wrench_cmd holds NaN or inf")
     return -f.z, np.array((t.x, t.y, t.z))
+
+
+def wrench_command_raw(data: bytes) -> tuple[float, np.ndarray]:
+    """:func:`wrench_command` of a message's CDR bytes."""
+    _, (_, _, fz, tx, ty, tz) = values = cdr_read.wrench_stamped(data)
+    if not all(map(math.isfinite, values[1])):
+        raise ValueError("wrench_cmd holds NaN or inf")
+    return -fz, np.array((tx, ty, tz))

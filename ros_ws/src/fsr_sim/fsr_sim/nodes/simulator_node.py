@@ -27,6 +27,10 @@ after ``timeout`` s without one.
 
 Waiting uses :class:`fsr_sim.ros.wait_set.SubscriptionWaitSet` on the command subscription (the fastest
 measured style; the executor given by ``run_node`` is never spun, so the subscription's callback never runs).
+The state is published as packed CDR bytes (:class:`fsr_sim.nodes.state_packets.StatePackets`: the values
+of :class:`fsr_sim.nodes.state_messages.StateMessages`). Progress for a watcher (``fsr-fly``): ``sim_progress``
+(rosgraph_msgs/Clock, the simulated time) every ``PROGRESS_STEPS`` steps, so that nothing needs to follow
+every ``/clock`` message.
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ import json
 import sys
 import time
 
+import numpy as np
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.duration import Duration
 from rclpy.node import Node
@@ -42,7 +47,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from fsr_sim.config.scenario import plant_from_config
-from fsr_sim.nodes.commands import RotorCommandReader, wrench_command
+from fsr_sim.nodes.commands import RotorCommandReader, wrench_command_raw
 from fsr_sim.nodes.lockstep import (
     AHEAD,
     CURRENT,
@@ -52,14 +57,16 @@ from fsr_sim.nodes.lockstep import (
     classify_stamp,
 )
 from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
-from fsr_sim.nodes.state_messages import StateMessages
-from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, STREAM_QOS
+from fsr_sim.nodes.state_packets import StatePackets
+from fsr_sim.ros import cdr_read
+from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, PROGRESS_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node, signal_deadline
 from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
 WAIT_SLICE = 0.05  # s: longest uninterrupted wait (signals, lost publisher are checked in between)
 BATCH_WALL = 0.05  # s of stepping per spin_once call
 LONG_WAIT = 0.1  # s: a lockstep wait at least this long is logged (a pause of the flight)
+PROGRESS_STEPS = 100  # steps between two sim_progress messages (10 Hz of simulated time at 1 kHz)
 ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last messages
 ACK_SLICE = 0.05  # s per wait_for_all_acked call
 SIGNAL_ACK_LIMIT = 1.0  # s after SIGINT/SIGTERM: the same bound when stopped by a signal
@@ -77,17 +84,23 @@ class SimulatorNode(Node):
         self.params = parse_parameters(values)
         self.scenario, self.config = load_simulation(self.params)
         self.plant = plant_from_config(self.config)
-        self.messages = StateMessages(self.plant)
+        self.messages = StatePackets()
+        self.has_disturbances = bool(self.plant.disturbances)
         vehicle = self.config.plant_vehicle
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.is_tilting)
 
         self.command_topic = "wrench_cmd" if self.config.actuation == "wrench" else "rotor_cmd"
         command_type = self._command_type()
-        self.odom_pub = self.create_publisher(type(self.messages.odom), "odom", STREAM_QOS)
-        self.wrench_pub = self.create_publisher(type(self.messages.wrench), "wrench_truth", STREAM_QOS)
+        from geometry_msgs.msg import WrenchStamped
+        from nav_msgs.msg import Odometry
+
+        self.odom_pub = self.create_publisher(Odometry, "odom", STREAM_QOS)
+        self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_truth", STREAM_QOS)
         self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS) if self.params.publish_clock else None
+        self.progress_pub = self.create_publisher(Clock, "sim_progress", PROGRESS_QOS)
         self.status_pub = self.create_publisher(String, "sim_status", LATCHED_QOS)
-        self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS)
+        self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS,
+                                                    raw=True)  # commands are read from their CDR bytes
         self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
         self.phase = HANDSHAKE
@@ -300,7 +313,7 @@ class SimulatorNode(Node):
             self._warn_surface_cap()
         reason = plant.divergence()
         if reason is not None:
-            if self.messages.is_finite():
+            if bool(np.isfinite(self.plant.state_vector).all()):
                 self._publish_state()
             self.get_logger().error(f"simulation diverged at t = {self.plant.time:.4f} s: {reason}")
             self._finish("diverged", reason, EXIT_DIVERGED)
@@ -328,36 +341,41 @@ class SimulatorNode(Node):
         """Wait up to ``wait`` s, take every queued command, apply the valid one answering ``expected_ns``
         (lockstep) or every valid one (free-running, ``expected_ns`` None); True if one was applied."""
         applied = False
-        for _, msg, _info in self.wait_set.take_ready(int(wait * 1e9)):
+        for _, data, _info in self.wait_set.take_ready(int(wait * 1e9)):  # CDR bytes: read in place
             if expected_ns is not None:
-                stamp = msg.header.stamp
-                verdict = classify_stamp(stamp.sec * 1_000_000_000 + stamp.nanosec, expected_ns)
-                if verdict != CURRENT:
-                    self._on_off_stamp(verdict, stamp, expected_ns)
+                try:
+                    stamp_ns = cdr_read.stamp(data)
+                except ValueError as error:
+                    self.warn_bad(f"dropped a command at {self._where()}: {error}")
                     continue
-            if self._apply(msg):
+                verdict = classify_stamp(stamp_ns, expected_ns)
+                if verdict != CURRENT:
+                    self._on_off_stamp(verdict, stamp_ns, expected_ns)
+                    continue
+            if self._apply(data):
                 applied = True
         if applied and self.watchdog is not None and self.watchdog.feed(time.monotonic()):
             self.get_logger().info(f"{self.command_topic}: commands arrive again at {self._where()}")
         return applied
 
-    def _on_off_stamp(self, verdict: str, stamp: object, expected_ns: int) -> None:
+    def _on_off_stamp(self, verdict: str, stamp_ns: int, expected_ns: int) -> None:
         if verdict == AHEAD:
+            sec, nanosec = divmod(stamp_ns, 1_000_000_000)
             self.warn_bad(
-                f"{self.command_topic} stamped {stamp.sec}.{stamp.nanosec:09d} is ahead of the state "
+                f"{self.command_topic} stamped {sec}.{nanosec:09d} is ahead of the state "
                 f"{expected_ns * 1e-9:.6f} s: ignored"
             )
         else:
             self.stale_commands += 1
 
-    def _apply(self, msg: object) -> bool:
-        """Apply one command to the plant; NaN/inf or malformed -> dropped with a warning, False."""
+    def _apply(self, data: bytes) -> bool:
+        """Apply one command (CDR bytes) to the plant; NaN/inf or malformed -> dropped with a warning, False."""
         try:
             if self.config.actuation == "wrench":
-                thrust, torque = wrench_command(msg)
+                thrust, torque = wrench_command_raw(data)
                 self.plant.set_wrench_command(thrust, torque)
                 return True
-            speeds, tilts = self.rotor_reader.read(msg)
+            speeds, tilts = self.rotor_reader.read_raw(data)
         except ValueError as error:
             self.warn_bad(f"dropped a command at {self._where()}: {error}")
             return False
@@ -367,12 +385,15 @@ class SimulatorNode(Node):
 
     # ----- output -----------------------------------------------------------------------------------
     def _publish_state(self) -> None:
-        messages = self.messages
-        messages.fill()
+        messages, plant = self.messages, self.plant
+        messages.fill_from(plant.stamp_ns, plant.state_vector, plant.external_wrench() if self.has_disturbances
+                           else None)
         self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
         self.wrench_pub.publish(messages.wrench)
         if self.clock_pub is not None:
             self.clock_pub.publish(messages.clock)
+        if plant.step_index % PROGRESS_STEPS == 0 or plant.step_index >= self.config.step_count:
+            self.progress_pub.publish(messages.clock)
 
     def _publish_status(self, state: str, reason: str) -> None:
         status = {"state": state, "reason": reason, "sim_time": self.plant.time, "steps": self.plant.step_index,

@@ -1,4 +1,5 @@
-"""The simulator's outgoing messages, allocated once and refilled from the plant at every step.
+"""The simulator's outgoing messages as rclpy objects, allocated once and refilled from the plant at every step
+(the reference for :class:`fsr_sim.nodes.state_packets.StatePackets`, whose packed CDR bytes the node publishes).
 
 * ``odom`` (nav_msgs/Odometry): pose in ``world_ned``, twist in ``base_link_frd`` (linear ``R^T v_world``
   [m/s], angular ``omega_b`` [rad/s]); orientation is the plant's unit quaternion ``[x, y, z, w]`` with

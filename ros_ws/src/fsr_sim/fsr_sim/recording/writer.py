@@ -85,27 +85,32 @@ class RecordingWriter:
         )
 
     def write_batch(self, messages: Sequence[tuple[str, bytes]], log_time_ns: int) -> None:
-        """Append CDR messages of registered topics that share ``log_time_ns`` (publish time = log time).
+        """Append CDR messages of registered topics that share ``log_time_ns`` (publish time = log time)."""
+        log_time = int(log_time_ns)
+        self.write_records([(topic, data, log_time, log_time) for topic, data in messages])
+
+    def write_records(self, records: Sequence[tuple[str, bytes, int, int]]) -> None:
+        """Append ``(topic, CDR bytes, log_time_ns, publish_time_ns)`` records of registered topics, in order.
 
         The file is the one :meth:`write` would produce message by message (tested byte for byte); with the
         pinned ``mcap`` writer the records go straight into its current chunk (~2 us per message instead of
         ~15 us through ``Writer.add_message``)."""
         fast = self._fast
         if fast is None:
-            for topic, data in messages:
-                self.write(topic, data, log_time_ns)
+            for topic, data, log_time, publish_time in records:
+                self.write(topic, data, log_time, publish_time)
             return
         channels, sequences, counts = self._channels, self._sequence, self.message_counts
         batch = []
-        for topic, data in messages:
+        for topic, data, log_time, publish_time in records:
             channel_id = channels.get(topic)
             if channel_id is None:
                 raise KeyError(f"topic '{topic}' was not registered with add_topic()")
             sequence = sequences[topic]
             sequences[topic] = sequence + 1
             counts[topic] += 1
-            batch.append((channel_id, sequence, data))
-        fast.add(batch, int(log_time_ns))
+            batch.append((channel_id, sequence, data, int(log_time), int(publish_time)))
+        fast.add(batch)
 
     def write_message(self, topic: str, msg: Any, log_time_ns: int) -> None:
         """Serialise an rclpy message instance and append it (registering the topic if new)."""
@@ -163,31 +168,35 @@ class _FastMessages:
             return None
         return fast if ok else None
 
-    def add(self, batch: list[tuple[int, int, bytes]], log_time: int) -> None:
+    def add(self, batch: list[tuple[int, int, bytes, int, int]]) -> None:
+        """Append (channel id, sequence, data, log time, publish time) records."""
         statistics, builder, chunk_size = self.statistics, self.builder, self.chunk_size
-        if statistics.message_count == 0:
-            statistics.message_start_time = log_time
-        else:
-            statistics.message_start_time = min(log_time, statistics.message_start_time)
-        statistics.message_end_time = max(log_time, statistics.message_end_time)
-        statistics.message_count += len(batch)
         channel_counts = statistics.channel_message_counts
         indices = builder.message_indices
         buffer = builder.record_writer._buffer  # noqa: SLF001
         pack = _MESSAGE_HEAD.pack
-        for channel_id, sequence, data in batch:
+        for channel_id, sequence, data, log_time, publish_time in batch:
+            if statistics.message_count == 0:
+                statistics.message_start_time = statistics.message_end_time = log_time
+            elif log_time < statistics.message_start_time:
+                statistics.message_start_time = log_time
+            elif log_time > statistics.message_end_time:
+                statistics.message_end_time = log_time
+            statistics.message_count += 1
             channel_counts[channel_id] += 1
             if builder.num_messages == 0:
+                builder.message_start_time = builder.message_end_time = log_time
+            elif log_time < builder.message_start_time:
                 builder.message_start_time = log_time
-            else:
-                builder.message_start_time = min(builder.message_start_time, log_time)
-            builder.message_end_time = max(builder.message_end_time, log_time)
+            elif log_time > builder.message_end_time:
+                builder.message_end_time = log_time
             index = indices.get(channel_id)
             if not index:
                 index = indices[channel_id] = _message_index_class()(channel_id=channel_id, records=[])
             index.records.append((log_time, buffer.tell()))
             builder.num_messages += 1
-            buffer.write(pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel_id, sequence, log_time, log_time))
+            buffer.write(pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel_id, sequence, log_time,
+                              publish_time))
             buffer.write(data)
             if buffer.tell() > chunk_size:  # what add_message does after each message
                 self.maybe_finalize()

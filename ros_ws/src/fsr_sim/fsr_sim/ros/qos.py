@@ -28,11 +28,22 @@ GOAL_QOS = QoSProfile(
     depth=10,
 )
 
+# /clock: reliable and as deep as the streams, so that the recorder keeps every step even when it falls a few
+# hundred messages behind (with depth 10 it lost ~5 %); volatile, so rclpy's own best-effort clock
+# subscription (use_sim_time) still matches.
 CLOCK_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
     history=HistoryPolicy.KEEP_LAST,
-    depth=10,
+    depth=STREAM_DEPTH,
+)
+
+# sim_progress: a watcher wants the latest value only.
+PROGRESS_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
 )
 
 # One-off messages (goals, status) that a late subscriber should still receive.

@@ -15,6 +15,11 @@ not in use" and their real destruction happened later, at garbage collection, af
 down (a by-hand estimator was seen spinning at 100 % CPU there for minutes). As a last resort a watchdog
 thread ends the process with ``os._exit`` (and says so on stderr) if teardown still has not finished by
 the budget's end.
+
+A node's per-step subscriptions (``hot_subscriptions``) are taken from a raw wait set and handed to their
+callbacks directly (:class:`fsr_sim.ros.wait_set.WaitSetSpinner`; ROS2_FROM_PIP.md: about half the CPU of a
+``SingleThreadedExecutor`` per message); the executor still runs every 50 ms (``EXECUTOR_PERIOD``) for everything
+else (goals, ``sim_status``, services), and drives the node alone during its ``close()``.
 """
 
 from __future__ import annotations
@@ -77,6 +82,17 @@ class StopFlag:
         signal.signal(signal.SIGTERM, handler)
 
 
+def process_age() -> float:
+    """Seconds since this process started (``/proc/self/stat``; the venv python's re-exec included)."""
+    try:
+        with open("/proc/self/stat") as stat:
+            start_ticks = int(stat.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as uptime:
+            return float(uptime.read().split()[0]) - start_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
 def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None,
              exit_process: bool = True) -> int:
     """Create the node with ``make_node(args)`` and spin it until done or signalled; returns an exit code.
@@ -115,9 +131,15 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
             return EXIT_CONFIG_ERROR
         if hasattr(node, "stop_flag"):
             node.stop_flag = stop  # lets close() keep within the signal budget
+        node.get_logger().info(f"ready {process_age():.2f} s after the process started")
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         own_loop = getattr(node, "spin_once", None)
+        hot = getattr(node, "hot_subscriptions", None)
+        if own_loop is None and hot:  # per-step inputs from a raw wait set, the executor every 50 ms
+            from fsr_sim.ros.wait_set import WaitSetSpinner
+
+            own_loop = WaitSetSpinner(node, hot, getattr(node, "hot_gather_s", 0.0)).spin_once
         done = getattr(node, "done", lambda: False)
         while not stop and not done():
             if own_loop is not None:

@@ -1,13 +1,16 @@
 """Taking messages without an executor: a raw rcl wait set over a fixed list of subscriptions.
 
 rclpy's executors dispatch one callback per message; at 1 kHz (thousands of messages per second) that
-dispatch dominates. The simulator (its command topic) and the recorder (every topic) instead wait on the
+dispatch dominates. The simulator (its command topic), the recorder (every topic) and, through
+:class:`WaitSetSpinner`, the controller and estimator (their per-step inputs) instead wait on the
 subscriptions' handles and take everything queued in one go (ROS2_FROM_PIP.md: the fastest measured style).
 This uses rclpy's private ``rclpy_implementation.WaitSet``; this module is the only place that does.
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from contextlib import ExitStack
 from typing import Any
 
@@ -52,3 +55,41 @@ class SubscriptionWaitSet:
                         break
                     taken.append((index, message[0], message[1]))
         return taken
+
+
+EXECUTOR_PERIOD = 0.05  # s: how often a WaitSetSpinner lets the executor run the node's other entities
+WAIT_TIMEOUT_NS = 50_000_000  # longest single wait: signals and the executor's turn are noticed within it
+
+
+class WaitSetSpinner:
+    """Drives a node's per-step subscriptions without the executor (``run_node`` uses it for a node with
+    ``hot_subscriptions``, a list of (subscription, callback) pairs).
+
+    Each turn takes every queued message of those subscriptions and calls their callbacks (a ``raw=True``
+    subscription's callback gets the CDR bytes, as from the executor); every ``EXECUTOR_PERIOD`` s the
+    executor gets one turn for the node's other entities (goals, ``sim_status``, services). The executor
+    still knows the hot subscriptions, so it can drain them alone (a node's ``close()``). ``gather`` > 0: after
+    a batch, sleep that long so that the next one is larger (one wake-up per batch instead of one per message;
+    for a node whose answers nobody waits for step by step, e.g. the estimator, whose queues are deep).
+    """
+
+    def __init__(self, node: Any, subscriptions: list[tuple[Any, Callable[[Any], None]]],
+                 gather: float = 0.0) -> None:
+        self.callbacks = [callback for _subscription, callback in subscriptions]
+        self.gather = gather
+        self.wait_set = SubscriptionWaitSet(node, [subscription for subscription, _callback in subscriptions])
+        self.next_executor = time.monotonic() + EXECUTOR_PERIOD
+
+    def spin_once(self, executor: Any, _stop: object = None) -> None:
+        """One turn: dispatch what is queued (waiting at most ``WAIT_TIMEOUT_NS`` for it); then the executor's
+        turn when it is due."""
+        callbacks = self.callbacks
+        taken = self.wait_set.take_ready(WAIT_TIMEOUT_NS)
+        for index, message, _info in taken:
+            callbacks[index](message)
+        if taken and self.gather:
+            time.sleep(self.gather)  # let the next batch gather (a node off the lockstep's critical path)
+        now = time.monotonic()
+        if now >= self.next_executor:
+            self.next_executor = now + EXECUTOR_PERIOD
+            executor.spin_once(timeout_sec=0.0)
