@@ -35,6 +35,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, thrust_ratio_series
+from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
 from fsr_bringup.analysis.load import Flight
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_sim.model.so3 import euler_zyx_from_rotation
@@ -42,7 +43,6 @@ from fsr_sim.model.so3 import euler_zyx_from_rotation
 ONE_COLUMN_IN = 3.5  # in, one journal column
 TWO_COLUMN_IN = 7.16  # in, full page width (two columns)
 PNG_DPI = 300
-FORMATS = ("png", "pdf", "svg")
 FONT_PT = 8.0
 PLOT_BUCKETS = 1500  # longer series are drawn as per-bucket min and max (same picture, far fewer points)
 AXES = ("x", "y", "z")
@@ -84,15 +84,6 @@ class Run:
     @classmethod
     def of(cls, flight: Flight, label: str | None = None) -> Run:
         return cls(label or flight.scenario_name, flight, effective_wrench(flight))
-
-
-@dataclass
-class FigureOptions:
-    """Formats to write, width override (``auto`` = each figure's own), titles inside figures."""
-
-    formats: tuple[str, ...] = ("png",)
-    width: str = "auto"  # auto | one | two
-    titles: bool = False
 
 
 @dataclass

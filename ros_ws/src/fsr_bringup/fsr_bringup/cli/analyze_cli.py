@@ -37,8 +37,8 @@ def add_figure_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def figure_options(args: argparse.Namespace) -> object:
-    """The :class:`fsr_bringup.analysis.figures.FigureOptions` of the parsed arguments (ValueError if bad)."""
-    from fsr_bringup.analysis.figures import FORMATS, FigureOptions
+    """The :class:`fsr_bringup.analysis.figure_options.FigureOptions` of the parsed arguments (ValueError if bad)."""
+    from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
 
     formats = tuple(dict.fromkeys(f.strip().lower() for f in args.format.split(",") if f.strip()))
     bad = [f for f in formats if f not in FORMATS]
