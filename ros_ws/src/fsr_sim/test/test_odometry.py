@@ -1,9 +1,11 @@
 """The odometry arithmetic shared by the simulator, the nodes and the in-process loop."""
 
+import math
+
 import numpy as np
 
 from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
-from fsr_sim.model.odometry import odometry_values, state_from_odometry_values
+from fsr_sim.model.odometry import odometry_values, odometry_values_ok, state_from_odometry_values
 from fsr_sim.nodes.state_messages import StateMessages
 from fsr_sim.ros.conversions import state_from_odometry
 
@@ -21,3 +23,12 @@ def test_in_process_round_trip_equals_the_graph_message_path():
         for mine, theirs in zip(ours, expected, strict=True):
             np.testing.assert_array_equal(mine, theirs)  # bit-identical
         assert odometry_values(plant.state_vector)[1][3] >= 0.0  # published with w >= 0
+
+
+def test_odometry_values_ok_refuses_non_finite_values_and_a_zero_quaternion():
+    pose, twist = (1.0, -2.0, -3.0, 0.0, 0.0, 0.0, 1.0), (0.5, 0.0, 0.0, 0.0, 0.0, 0.1)
+    assert odometry_values_ok(pose, twist)
+    assert not odometry_values_ok(pose, twist[:5] + (math.nan,))
+    assert not odometry_values_ok((math.inf,) + pose[1:], twist)
+    assert not odometry_values_ok(pose[:3] + (0.0, 0.0, 0.0, 0.0), twist)
+    assert not odometry_values_ok(pose[:3] + (1e-7, 0.0, 0.0, 0.0), twist)  # |q|^2 = 1e-14 <= 1e-12

@@ -24,7 +24,6 @@ estimates) and the callback's cost.
 from __future__ import annotations
 
 import copy
-import math
 import sys
 import time
 
@@ -42,7 +41,7 @@ from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.model.allocation import WRENCH_AXES
-from fsr_sim.model.odometry import state_from_odometry_values
+from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
@@ -185,12 +184,6 @@ class ControllerNode(Node):
             self.get_logger().info(
                 f"{self.callbacks} odom answered, {1e6 * self.callback_seconds / self.callbacks:.0f} us per callback"
             )
-
-
-def odometry_values_ok(pose: tuple[float, ...], twist: tuple[float, ...]) -> bool:
-    """Finite values and a non-zero quaternion (:func:`fsr_sim.ros.conversions.odometry_is_finite`)."""
-    _, _, _, qx, qy, qz, qw = pose
-    return all(map(math.isfinite, pose + twist)) and (qx * qx + qy * qy + qz * qz + qw * qw) > 1e-12
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -34,7 +34,7 @@ from std_srvs.srv import Trigger
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
-from fsr_sim.model.odometry import state_from_odometry_values
+from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_QOS
@@ -90,8 +90,7 @@ class EstimatorNode(Node):
         except ValueError as error:
             self.warn_input(f"dropped an odom that cannot be read: {error}")
             return
-        _, _, _, qx, qy, qz, qw = pose
-        if not all(map(math.isfinite, pose + twist)) or qx * qx + qy * qy + qz * qz + qw * qw <= 1e-12:
+        if not odometry_values_ok(pose, twist):
             self.warn_input(f"odom at {stamp} ns holds NaN/inf or a zero quaternion: dropped")
             return
         _, rotation, velocity_world, omega_body = state_from_odometry_values(pose[0:3], pose[3:7], twist[0:3],

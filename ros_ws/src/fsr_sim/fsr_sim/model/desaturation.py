@@ -152,16 +152,23 @@ class FixedRotorDesaturation:
         Returns None when the thrust alone does not fit (``u_T g`` outside the box): the caller then uses the
         priority allocation.
         """
-        tau_x, tau_y, tau_z = torque_body
-        g, low, high = self.thrust_column, self.low, self.high
-        base = [thrust * gi for gi in g]
+        low, high = self.low, self.high
+        base = [thrust * gi for gi in self.thrust_column]
         if not all(lo <= u <= hi for u, lo, hi in zip(base, low, high, strict=True)):
             return None
-        roll_pitch = [tau_x * a + tau_y * b for a, b in zip(self.roll_column, self.pitch_column, strict=True)]
+        roll_pitch = self._roll_pitch_direction(torque_body)
         r = max_scale_in_box(base, roll_pitch, low, high)
-        base = [u + r * v for u, v in zip(base, roll_pitch, strict=True)]
+        return self._with_yaw([u + r * v for u, v in zip(base, roll_pitch, strict=True)], torque_body[2])
+
+    def _roll_pitch_direction(self, torque_body: tuple[float, float, float]) -> list[float]:
+        """``v_rp = tau_x a + tau_y b``: the squared speeds of the roll/pitch torque alone."""
+        tau_x, tau_y = torque_body[0], torque_body[1]
+        return [tau_x * a + tau_y * b for a, b in zip(self.roll_column, self.pitch_column, strict=True)]
+
+    def _with_yaw(self, base: list[float], tau_z: float) -> list[float]:
+        """The yaw step: ``base + s* v_yaw`` with the largest ``s* in [0, 1]`` that stays in the box."""
         yaw = [tau_z * c for c in self.yaw_column]
-        s = max_scale_in_box(base, yaw, low, high)
+        s = max_scale_in_box(base, yaw, self.low, self.high)
         return [u + s * y for u, y in zip(base, yaw, strict=True)]
 
     def allocate(self, thrust: float, torque_body: tuple[float, float, float]) -> list[float] | None:
@@ -171,10 +178,8 @@ class FixedRotorDesaturation:
         Returns None when step 3 does not apply (see ``thrust_ok``) and step 2 did not succeed: the caller
         then clamps rotor by rotor.
         """
-        tau_x, tau_y, tau_z = torque_body
         g, low, high = self.thrust_column, self.low, self.high
-        roll_pitch = [tau_x * a + tau_y * b for a, b in zip(self.roll_column, self.pitch_column, strict=True)]
-        yaw = [tau_z * c for c in self.yaw_column]
+        roll_pitch = self._roll_pitch_direction(torque_body)
         base = [thrust * gi + v for gi, v in zip(g, roll_pitch, strict=True)]
         if not all(lo <= u <= hi for u, lo, hi in zip(base, low, high, strict=True)):
             if not self.thrust_ok:
@@ -195,8 +200,7 @@ class FixedRotorDesaturation:
             highest = min(b_i - scale * k_i for b_i, k_i in zip(b, k, strict=True))
             thrust = min(max(thrust, lowest), highest)
             base = [thrust * gi + scale * v for gi, v in zip(g, roll_pitch, strict=True)]
-        s = max_scale_in_box(base, yaw, low, high)
-        return [u + s * y for u, y in zip(base, yaw, strict=True)]
+        return self._with_yaw(base, torque_body[2])
 
 
 class TiltingDesaturation:

@@ -1,8 +1,9 @@
 """The state as the simulator publishes it (``nav_msgs/Odometry`` values) and as the nodes read it back.
 
 One definition of the arithmetic on both sides of ``odom``, shared by the simulator node, the controller
-and estimator nodes (through :mod:`fsr_sim.ros.conversions`) and the in-process loop, so that a flight in
-one process and the node graph see bit-identical numbers:
+and estimator nodes (on the values :mod:`fsr_sim.ros.cdr_read` takes from the bytes; message objects through
+:mod:`fsr_sim.ros.conversions`) and the in-process loop, so that a flight in one process and the node graph
+see bit-identical numbers; :func:`odometry_values_ok` is the one check the nodes apply before using them:
 
 * published: position world NED [m]; orientation the unit quaternion ``[x, y, z, w]`` body -> world with the
   sign fixed to ``w >= 0`` (the same rotation as ``-q``; consecutive messages stay comparable); twist in the
@@ -11,6 +12,8 @@ one process and the node graph see bit-identical numbers:
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -38,3 +41,10 @@ def state_from_odometry_values(
     rotation = rotation_from_quaternion(quaternion)
     velocity_world = rotation @ np.array(velocity_body, dtype=float)
     return np.array(position, dtype=float), rotation, velocity_world, np.array(angular_velocity_body, dtype=float)
+
+
+def odometry_values_ok(pose: tuple[float, ...], twist: tuple[float, ...]) -> bool:
+    """Whether read-back values can be used: ``pose`` (x y z qx qy qz qw) and ``twist`` (linear xyz, angular
+    xyz) all finite and the quaternion non-zero (``|q|^2 > 1e-12``)."""
+    _, _, _, qx, qy, qz, qw = pose
+    return all(map(math.isfinite, pose + twist)) and (qx * qx + qy * qy + qz * qz + qw * qw) > 1e-12

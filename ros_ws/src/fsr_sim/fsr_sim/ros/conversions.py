@@ -11,8 +11,6 @@ Stamps are integer nanoseconds of simulated time so that the lockstep can match 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
@@ -28,10 +26,6 @@ BODY_FRAME = "base_link_frd"
 
 def time_from_ns(stamp_ns: int) -> Time:
     return Time(sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000))
-
-
-def ns_from_time(stamp: Time) -> int:
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
 def odometry_from_state(
@@ -69,13 +63,6 @@ def state_from_odometry(msg: Odometry) -> tuple[np.ndarray, np.ndarray, np.ndarr
                                       (ang.x, ang.y, ang.z))
 
 
-def odometry_is_finite(msg: Odometry) -> bool:
-    p, o = msg.pose.pose.position, msg.pose.pose.orientation
-    lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
-    values = (p.x, p.y, p.z, o.x, o.y, o.z, o.w, lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
-    return all(math.isfinite(v) for v in values) and (o.x * o.x + o.y * o.y + o.z * o.z + o.w * o.w) > 1e-12
-
-
 def wrench_stamped(
     stamp_ns: int, force: np.ndarray, torque: np.ndarray, frame_id: str = BODY_FRAME
 ) -> WrenchStamped:
@@ -90,11 +77,6 @@ def wrench_stamped(
 def wrench_from_msg(msg: WrenchStamped) -> tuple[np.ndarray, np.ndarray]:
     f, t = msg.wrench.force, msg.wrench.torque
     return np.array((f.x, f.y, f.z)), np.array((t.x, t.y, t.z))
-
-
-def wrench_is_finite(msg: WrenchStamped) -> bool:
-    f, t = msg.wrench.force, msg.wrench.torque
-    return all(math.isfinite(v) for v in (f.x, f.y, f.z, t.x, t.y, t.z))
 
 
 def rotor_command(stamp_ns: int, speeds: np.ndarray, tilts: np.ndarray | None = None) -> JointState:
