@@ -48,9 +48,7 @@ class RotorCommandReader:
             from sensor_msgs.msg import JointState
 
             return self.read(deserialize_message(data, JointState))
-        if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
-            raise ValueError("rotor_cmd holds NaN or inf")
-        return speeds, tilts
+        return _finite(speeds, tilts)
 
     def read(self, msg: object) -> tuple[np.ndarray, np.ndarray | None]:
         n = self.rotor_count
@@ -62,9 +60,14 @@ class RotorCommandReader:
             tilts = np.array(msg.position[n : 2 * n], dtype=float)
         else:
             return rotor_command_arrays(msg, n)  # any order; raises ValueError naming what is missing
-        if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
-            raise ValueError("rotor_cmd holds NaN or inf")
-        return speeds, tilts
+        return _finite(speeds, tilts)
+
+
+def _finite(speeds: np.ndarray, tilts: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(speeds, tilts)`` as they are; ValueError if any value is NaN or inf."""
+    if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
+        raise ValueError("rotor_cmd holds NaN or inf")
+    return speeds, tilts
 
 
 def wrench_command(msg: object) -> tuple[float, np.ndarray]:
