@@ -162,7 +162,7 @@ class WrenchCompensator:
             self._history.clear()
             return None
         self.report.compensated_steps += 1
-        fx, fy, fz, ex, ey, ez = self.observer.estimate.tolist()  # [f_e (world); tau_e (eta coordinates)]
+        fx, fy, fz, ex, ey, ez = self.observer.estimate_values  # [f_e (world); tau_e (eta coordinates)]
         history = self._history
         history.append((fx, fy, fz))
         if len(history) > 3:

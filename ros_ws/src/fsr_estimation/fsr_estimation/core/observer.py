@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from fsr_estimation.core.filter_design import cascade_sections, check_filter_parameters, gain_chain
-from fsr_estimation.core.momentum import E3, GRAVITY, observer_input
+from fsr_estimation.core.momentum import GRAVITY, observer_input
 from fsr_sim.model.checks import symmetric_positive_definite
 from fsr_sim.model.so3 import (
     euler_rate_derivative_rows,
@@ -76,15 +76,14 @@ class MomentumObserver:
         self.sample_time = float(sample_time)
         self.gravity = float(gravity)
         self.gains = gain_chain(c0, r)
-        self._gravity_force = self.mass * self.gravity * E3
-        self._weight = float(self._gravity_force[2])
+        self._gains = [float(gain) for gain in self.gains]
+        self._weight = self.mass * self.gravity  # the z entry of m g e_3 (NED)
         self._inertia_rows = self.inertia.tolist()  # symmetric: I^T = I
-        self._gamma = np.zeros((self.r, 6))
-        self._estimate = np.zeros(6)
-        self._momentum = np.zeros(6)
-        self._previous_momentum = np.zeros(6)
-        self._previous_rate = np.zeros(6)  # b_{k-1}
-        self._residual = np.zeros(6)
+        # Plain float lists, not small arrays: one update per 1 kHz step, where numpy's per-call cost dominates.
+        self._gamma = [[0.0] * 6 for _ in range(self.r)]
+        self._estimate = [0.0] * 6
+        self._previous_momentum = [0.0] * 6
+        self._previous_rate = [0.0] * 6  # b_{k-1}
         identity = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         self._mass_rows = ((0.0,) * 3,) * 3  # M(eta[k-1]), rows
         self._rotation_rows = identity  # R_b of the latest sample, rows
@@ -94,8 +93,9 @@ class MomentumObserver:
 
     def reset(self) -> None:
         """Forget all history: the next :meth:`update` is sample k = 0 again (estimate zero)."""
-        self._gamma.fill(0.0)
-        self._estimate.fill(0.0)
+        for gamma in self._gamma:
+            gamma[:] = [0.0] * 6
+        self._estimate[:] = [0.0] * 6
         self.samples = 0
 
     def update(self, velocity_world: ArrayLike, euler_zyx: ArrayLike, euler_rates: ArrayLike,
@@ -104,34 +104,36 @@ class MomentumObserver:
 
         velocity_world (3,) [m/s] NED; euler_zyx (3,) [rad]; euler_rates (3,) [rad/s]; force_body,
         torque_body (3,) [N, N m] body FRD: the actuator wrench at sample k (used from the next sample on).
-        The returned array is the observer's own buffer: copy it to keep it past the next update.
         """
-        eta = np.asarray(euler_zyx, dtype=float).tolist()
-        eta_dot = np.asarray(euler_rates, dtype=float).tolist()
-        q = self._momentum
-        np.multiply(self.mass, velocity_world, out=q[:3])
+        eta = _floats(euler_zyx)
+        eta_dot = _floats(euler_rates)
+        mass = self.mass
+        vx, vy, vz = _floats(velocity_world)
+        linear = [mass * vx, mass * vy, mass * vz]
         if self.samples == 0:
             self._store_sample_terms(eta, eta_dot, force_body, torque_body)  # q[0] uses M(eta[0])
-            q[3:] = mat_vec3(self._mass_rows, eta_dot)
+            momentum = linear + list(mat_vec3(self._mass_rows, eta_dot))
         else:
-            q[3:] = mat_vec3(self._mass_rows, eta_dot)  # M(eta[k-1]) eta_dot[k]
-            self._step()
+            momentum = linear + list(mat_vec3(self._mass_rows, eta_dot))  # M(eta[k-1]) eta_dot[k]
+            self._step(momentum)
             self._store_sample_terms(eta, eta_dot, force_body, torque_body)
-        self._previous_momentum[:] = q
+        self._previous_momentum = momentum
         self.samples += 1
-        return self._estimate
+        return np.array(self._estimate)
 
-    def _step(self) -> None:
+    def _step(self, momentum: list[float]) -> None:
         """One step of the gamma chain from w_hat[k-1] to w_hat[k] (states updated last to first so
         that each uses its predecessor's previous value)."""
-        ts, gains, gamma, previous = self.sample_time, self.gains, self._gamma, self._estimate
-        u = self._residual
-        np.subtract(self._momentum, self._previous_momentum, out=u)
-        u -= ts * (previous + self._previous_rate)
+        ts, gains, gamma, previous = self.sample_time, self._gains, self._gamma, self._estimate
+        residual = [(q - q_old) - ts * (w + b) for q, q_old, w, b in
+                    zip(momentum, self._previous_momentum, previous, self._previous_rate, strict=True)]
         for j in range(self.r - 1, 0, -1):
-            gamma[j] += gains[j] * ts * (gamma[j - 1] - previous)
-        gamma[0] += gains[0] * u
-        previous[:] = gamma[self.r - 1]
+            gain = gains[j] * ts
+            gamma[j] = [g + gain * (g_before - w) for g, g_before, w in zip(gamma[j], gamma[j - 1], previous,
+                                                                             strict=True)]
+        gain = gains[0]
+        gamma[0] = [g + gain * u for g, u in zip(gamma[0], residual, strict=True)]
+        self._estimate = list(gamma[self.r - 1])
 
     def _store_sample_terms(self, eta: list[float], eta_dot: list[float], force_body: ArrayLike,
                             torque_body: ArrayLike) -> None:
@@ -148,28 +150,39 @@ class MomentumObserver:
         rate_dot = euler_rate_derivative_rows(phi, theta, eta_dot[0], eta_dot[1])
         inertia = self._inertia_rows
         inertia_omega = mat_vec3(inertia, mat_vec3(rate, eta_dot))  # I_b omega
-        fx, fy, fz = mat_vec3(rotation, np.asarray(force_body, dtype=float).tolist())
+        fx, fy, fz = mat_vec3(rotation, _floats(force_body))
         cx, cy, cz = mat_t_vec3(rate_dot, inertia_omega)  # C^T eta_dot
-        tx, ty, tz = mat_t_vec3(rate, np.asarray(torque_body, dtype=float).tolist())  # Q^T tau_b
-        self._previous_rate[:] = (fx, fy, fz + self._weight, cx + tx, cy + ty, cz + tz)
+        tx, ty, tz = mat_t_vec3(rate, _floats(torque_body))  # Q^T tau_b
+        self._previous_rate = [fx, fy, fz + self._weight, cx + tx, cy + ty, cz + tz]
         self._mass_rows = mat_t_mat3(rate, mat_t_mat3(inertia, rate))  # Q^T (I_b Q), I_b symmetric
         self._rotation_rows, self._rate_rows, self._eta = rotation, rate, (phi, theta)
 
     @property
     def estimate(self) -> np.ndarray:
-        """The latest ``w_hat`` (copy), shape (6,)."""
-        return self._estimate.copy()
+        """The latest ``w_hat`` (a new array), shape (6,)."""
+        return np.array(self._estimate)
+
+    @property
+    def estimate_values(self) -> tuple[float, ...]:
+        """The latest ``w_hat`` as six floats (no array: for per-step callers)."""
+        return tuple(self._estimate)
 
     def wrench_body(self) -> tuple[np.ndarray, np.ndarray]:
         """Latest estimate in body FRD: (force ``R_b^T f_e`` [N], torque ``Q^-T tau_e`` [N m]), as ``wrench_truth``."""
-        force = np.array(mat_t_vec3(self._rotation_rows, self._estimate[:3].tolist()))
-        torque = np.array(euler_rate_transpose_solve3(*self._eta[:2], self._estimate[3:].tolist()))
+        estimate = self._estimate
+        force = np.array(mat_t_vec3(self._rotation_rows, estimate[:3]))
+        torque = np.array(euler_rate_transpose_solve3(*self._eta[:2], estimate[3:]))
         return force, torque
 
     @property
     def mass_estimate(self) -> float:
         """``m_model + f_e,z / g`` [kg]."""
-        return self.mass + float(self._estimate[2]) / self.gravity
+        return self.mass + self._estimate[2] / self.gravity
+
+
+def _floats(values: ArrayLike) -> list[float]:
+    """A 3-vector (array, list or tuple) as a list of Python floats."""
+    return values.tolist() if isinstance(values, np.ndarray) else [float(v) for v in values]
 
 
 def filter_observer_input(u: ArrayLike, c0: float, r: int, sample_time: float) -> np.ndarray:
