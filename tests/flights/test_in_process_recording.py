@@ -63,3 +63,16 @@ def test_two_in_process_runs_write_identical_message_data(tmp_path):
     assert first.topics == second.topics
     for topic in first.topics:
         assert first.raw(topic) == second.raw(topic), topic
+
+
+def test_recording_does_not_depend_on_the_block_size(tmp_path, monkeypatch):
+    """The in-process recording packs and writes a block of steps at once: blocks of 7 steps (so blocks end
+    mid-flight, and the last is partial) give the file of the default block, byte for byte."""
+    from fsr_bringup.recording import flight_recording
+
+    scenario = load_scenario("octo_ground_effect", ["duration=0.1"])
+    fly_in_process(scenario, tmp_path / "default.mcap")
+    monkeypatch.setattr(flight_recording, "BLOCK_STEPS", 7)
+    fly_in_process(scenario, tmp_path / "small.mcap")
+    assert (tmp_path / "default.mcap").read_bytes() == (tmp_path / "small.mcap").read_bytes()
+    assert open_recording(tmp_path / "small.mcap").count("rotor_cmd") == 101

@@ -188,3 +188,21 @@ def test_joint_state_reader(names: list[str]) -> None:
         got = reader.read(cdr_pack.joint_state("xyz", names, 0, n).pack(0, velocities))
         assert repr(got) == repr((0, (), tuple(velocities)))
     assert reader.read(cdr_pack.joint_state("", names[::-1] + ["x"], 0, 0).pack(0, ())) is None
+
+
+@pytest.mark.parametrize("packer", [
+    cdr_pack.odometry("world_ned", "base_link_frd"), cdr_pack.wrench_stamped("ab"), cdr_pack.quaternion_stamped(""),
+    cdr_pack.float64(), cdr_pack.clock(), cdr_pack.trajectory_point("world_ned", "base_link_frd"),
+    cdr_pack.joint_state("base_link_frd", ["rotor_1", "rotor_2", "tilt_1", "tilt_2"], 4, 4),
+    cdr_pack.joint_state("a", ["rotor_1"], 0, 1)], ids=lambda packer: f"{packer.value_count}_values")
+def test_pack_rows_is_pack_for_each_row(packer: cdr_pack.StampedDoubles) -> None:
+    """A block packed at once (the in-process recording) holds, row by row, the bytes of ``pack``."""
+    import numpy as np
+
+    stamps = np.array(STAMPS * len(VALUE_PATTERNS), dtype=np.int64)
+    values = np.array([_values(pattern, packer.value_count) for pattern in range(len(VALUE_PATTERNS))
+                       for _ in STAMPS]).reshape(len(stamps), packer.value_count)
+    rows = packer.pack_rows(stamps, values)
+    assert rows.dtype == np.uint8 and rows.shape == (len(stamps), packer.size)
+    for k, stamp in enumerate(stamps.tolist()):
+        assert rows[k].tobytes() == packer.pack(stamp, values[k].tolist())

@@ -120,3 +120,66 @@ def test_batched_writes_give_the_same_file(tmp_path, chunk_size):
     assert files[0] == files[1]
     recording = open_recording(tmp_path / "run_True.mcap")
     assert recording.count("/odom") == 300
+
+
+@pytest.mark.parametrize("chunk_size", [700, 4096, 1 << 20])
+@pytest.mark.parametrize("fast", [True, False])
+def test_block_writes_give_the_same_file(tmp_path, chunk_size, fast):
+    """write_block (a whole block of steps packed with numpy, some topics not in every step) writes the file
+    write_batch writes step by step, byte for byte; also without the fast path (any other mcap version)."""
+    import numpy as np
+
+    from fsr_sim.ros import cdr_pack
+
+    odom, wrench, mass = (cdr_pack.odometry("world_ned", "base_link_frd"), cdr_pack.wrench_stamped("base_link_frd"),
+                          cdr_pack.float64())
+    rng = np.random.default_rng(7)
+    steps = 900
+    stamps = np.arange(steps, dtype=np.int64) * 1_000_000 + 5
+    odom_values, wrench_values, mass_values = (rng.normal(size=(steps, n)) for n in (13, 6, 1))
+    some = np.flatnonzero(rng.random(steps) < 0.3)  # wrench only in ~30 % of the steps
+    files = []
+    for block in (False, True):
+        path = tmp_path / f"run_{block}.mcap"
+        writer = RecordingWriter(path, {"fsr_scenario": {"yaml": "name: test\n"}}, chunk_size=chunk_size)
+        if not fast:
+            writer._fast = None
+        for topic, type_name in (("/odom", "nav_msgs/msg/Odometry"), ("/wrench", "geometry_msgs/msg/WrenchStamped"),
+                                 ("/mass", "std_msgs/msg/Float64")):
+            writer.add_topic(topic, type_name)
+        if block:
+            for low, high in ((0, 400), (400, 401), (401, steps)):  # blocks of any length, one of one step
+                mine = some[(some >= low) & (some < high)]
+                window = slice(low, high)
+                writer.write_block(stamps[window], [
+                    ("/odom", None, odom.pack_rows(stamps[window], odom_values[window])),
+                    ("/wrench", mine - low, wrench.pack_rows(stamps[mine], wrench_values[mine])),
+                    ("/mass", None, mass.pack_rows(stamps[window], mass_values[window]))])
+        else:
+            for k in range(steps):
+                stamp = int(stamps[k])
+                batch = [("/odom", odom.pack(stamp, odom_values[k].tolist()))]
+                if k in set(some.tolist()):
+                    batch.append(("/wrench", wrench.pack(stamp, wrench_values[k].tolist())))
+                batch.append(("/mass", mass.pack(0, mass_values[k].tolist())))
+                writer.write_batch(batch, stamp)
+        writer.close()
+        files.append(path.read_bytes())
+    assert files[0] == files[1]
+    recording = open_recording(tmp_path / "run_True.mcap")
+    assert (recording.count("/odom"), recording.count("/wrench"), recording.count("/mass")) == (steps, len(some), steps)
+
+
+def test_block_with_an_unknown_topic_or_mismatched_steps_is_refused(tmp_path):
+    import numpy as np
+
+    from fsr_sim.ros import cdr_pack
+
+    wrench = cdr_pack.wrench_stamped("base_link_frd")
+    stamps = np.arange(3, dtype=np.int64)
+    with RecordingWriter(tmp_path / "refused.mcap") as writer:
+        with pytest.raises(KeyError, match="/wrench"):
+            writer.write_block(stamps, [("/wrench", None, wrench.pack_rows(stamps, np.zeros((3, 6))))])
+        writer.add_topic("/wrench", "geometry_msgs/msg/WrenchStamped")
+        with pytest.raises(ValueError, match="2 steps but 3 payloads"):
+            writer.write_block(stamps, [("/wrench", [0, 1], wrench.pack_rows(stamps, np.zeros((3, 6))))])

@@ -10,6 +10,7 @@ one), ``reference``, ``attitude_cmd``, ``wrench_desired``, all stamped with the 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from fsr_control.flight_controller import ControlOutput
 from fsr_sim.ros import cdr_pack
@@ -36,33 +37,40 @@ class ControllerPackets:
         self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
         self._reference = cdr_pack.trajectory_point(WORLD_FRAME, BODY_FRAME)
         self._attitude = cdr_pack.quaternion_stamped(WORLD_FRAME)
+        self.templates: dict[str, cdr_pack.StampedDoubles] = {  # topic (relative) -> its payload's template
+            "wrench_cmd": self._wrench, "wrench_shortfall": self._wrench, "reference": self._reference,
+            "attitude_cmd": self._attitude, "wrench_desired": self._wrench}
+        if self._rotor is not None:
+            self.templates["rotor_cmd"] = self._rotor
 
     def pack(self, stamp_ns: int, output: ControlOutput) -> list[tuple[str, bytes]]:
         """Everything the controller publishes for the state stamped ``stamp_ns`` [ns], in publication order."""
-        wrench = self._wrench.pack
-        packets: list[tuple[str, bytes]] = []
+        templates = self.templates
+        return [(topic, templates[topic].pack(stamp_ns, values)) for topic, values in self.values(output)]
+
+    def values(self, output: ControlOutput) -> list[tuple[str, Sequence[float]]]:
+        """``(topic, numbers in field order)`` of everything published for ``output``, in publication order."""
+        published: list[tuple[str, Sequence[float]]] = []
         if self.rotors:
             speeds = output.rotor_speeds.tolist()
             if output.tilt_angles is not None:
                 values = [*self._zeros, *output.tilt_angles.tolist(), *speeds, *self._zeros]
             else:
                 values = [*self._zeros, *speeds]
-            packets.append(("rotor_cmd", self._rotor.pack(stamp_ns, values)))
-        packets.append(("wrench_cmd", wrench(stamp_ns, (*output.force_body.tolist(), *output.torque_body.tolist()))))
+            published.append(("rotor_cmd", values))
+        published.append(("wrench_cmd", (*output.force_body.tolist(), *output.torque_body.tolist())))
         if output.shortfall is not None:
-            packets.append(("wrench_shortfall", wrench(stamp_ns, output.shortfall.tolist())))
+            published.append(("wrench_shortfall", output.shortfall.tolist()))
         reference = output.reference
         rows = reference.rotation.tolist()
-        packets.append(("reference", self._reference.pack(stamp_ns, (
+        published.append(("reference", (
             *reference.position.tolist(), *quaternion_of_rows(rows),
             *reference.velocity.tolist(), *_mat_vec(rows, reference.angular_velocity.tolist()),
             *reference.acceleration.tolist(), *_mat_vec(rows, reference.angular_acceleration.tolist()),
-        ))))
-        packets.append(("attitude_cmd", self._attitude.pack(stamp_ns, quaternion_of_rows(
-            output.rotation_cmd.tolist()))))
-        packets.append(("wrench_desired", wrench(stamp_ns, (*output.force_desired.tolist(),
-                                                            *output.torque_desired.tolist()))))
-        return packets
+        )))
+        published.append(("attitude_cmd", quaternion_of_rows(output.rotation_cmd.tolist())))
+        published.append(("wrench_desired", (*output.force_desired.tolist(), *output.torque_desired.tolist())))
+        return published
 
 
 def quaternion_of_rows(r: list[list[float]]) -> tuple[float, float, float, float]:

@@ -16,7 +16,13 @@ class EstimatePackets:
     def __init__(self) -> None:
         self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
         self._mass = cdr_pack.float64()
+        self.templates = {"wrench_estimate": self._wrench, "mass_estimate": self._mass}  # topic -> template
 
     def pack(self, estimate: Estimate) -> tuple[bytes, bytes]:
-        wrench = self._wrench.pack(estimate.stamp_ns, (*estimate.force_body.tolist(), *estimate.torque_body.tolist()))
-        return wrench, self._mass.pack(0, (float(estimate.mass),))
+        wrench, mass = self.values(estimate)
+        return self._wrench.pack(estimate.stamp_ns, wrench), self._mass.pack(0, mass)
+
+    @staticmethod
+    def values(estimate: Estimate) -> tuple[tuple[float, ...], tuple[float]]:
+        """The numbers of ``wrench_estimate`` (force, torque body) and ``mass_estimate`` [kg]."""
+        return (*estimate.force_body.tolist(), *estimate.torque_body.tolist()), (float(estimate.mass),)

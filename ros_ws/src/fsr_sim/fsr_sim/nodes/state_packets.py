@@ -27,6 +27,7 @@ class StatePackets:
         self._odom = cdr_pack.odometry(WORLD_FRAME, BODY_FRAME)
         self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
         self._clock = cdr_pack.clock()
+        self.templates = {"odom": self._odom, "wrench_truth": self._wrench}  # topic (relative) -> template
         self.odom = self.wrench = self.clock = b""
         self.stamp_ns = -1
 
@@ -39,14 +40,20 @@ class StatePackets:
     def fill_from_values(self, stamp_ns: int, published: tuple, external: tuple[np.ndarray, np.ndarray] | None
                          ) -> None:
         """:meth:`fill_from` with the state's :func:`~fsr_sim.model.odometry.odometry_values` already at hand."""
-        position, quaternion, velocity_body, angular_velocity = published
-        self.odom = self._odom.pack(stamp_ns, (*position, *quaternion, *velocity_body, *angular_velocity))
-        if external is None:
-            wrench = _ZERO_WRENCH
-        else:
-            force_world, torque_body = external
-            rotation = rotation_from_quaternion(quaternion)
-            wrench = (*(rotation.T @ force_world).tolist(), *np.asarray(torque_body, dtype=float).tolist())
+        odom, wrench = self.values(published, external)
+        self.odom = self._odom.pack(stamp_ns, odom)
         self.wrench = self._wrench.pack(stamp_ns, wrench)
         self.clock = self._clock.pack(stamp_ns, ())
         self.stamp_ns = stamp_ns
+
+    @staticmethod
+    def values(published: tuple, external: tuple[np.ndarray, np.ndarray] | None) -> tuple[tuple, tuple]:
+        """The numbers of ``odom`` (position, orientation x y z w, body velocity, angular velocity) and of
+        ``wrench_truth`` (``R^T f_ext,world``, torque body; zero without a disturbance), in field order."""
+        position, quaternion, velocity_body, angular_velocity = published
+        odom = (*position, *quaternion, *velocity_body, *angular_velocity)
+        if external is None:
+            return odom, _ZERO_WRENCH
+        force_world, torque_body = external
+        rotation = rotation_from_quaternion(quaternion)
+        return odom, (*(rotation.T @ force_world).tolist(), *np.asarray(torque_body, dtype=float).tolist())

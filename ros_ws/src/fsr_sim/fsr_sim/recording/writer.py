@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import IO, Any
 
+import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from fsr_sim.ros.message_schema import message_class, message_definition
@@ -25,6 +26,8 @@ DEFAULT_CHUNK_SIZE = 256 * 1024
 _MESSAGE_OPCODE = 0x05
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")  # opcode, record length, channel, sequence, log time, publish time
 _MESSAGE_FIELDS = 2 + 4 + 8 + 8
+_MESSAGE_HEAD_DTYPE = np.dtype([("opcode", "u1"), ("length", "<u8"), ("channel", "<u2"), ("sequence", "<u4"),
+                                ("log_time", "<u8"), ("publish_time", "<u8")])  # packed: _MESSAGE_HEAD's bytes
 
 
 class RecordingWriter:
@@ -111,6 +114,72 @@ class RecordingWriter:
             counts[topic] += 1
             batch.append((channel_id, sequence, data, int(log_time), int(publish_time)))
         fast.add(batch)
+
+    def write_block(self, stamps_ns: np.ndarray, messages: Sequence[tuple[str, np.ndarray | None, np.ndarray]]
+                    ) -> None:
+        """Append a block of steps at once (an in-process flight's log, a thousand steps at a time).
+
+        ``messages`` holds one entry per topic: ``(topic, steps, payloads)`` with ``steps`` the indices into
+        ``stamps_ns`` [ns] of the steps that have a message on it (increasing; None: every step) and
+        ``payloads`` their CDR bytes as uint8 rows (count, size) (:meth:`fsr_sim.ros.cdr_pack.StampedDoubles.
+        pack_rows`). The file is the one :meth:`write_batch` would produce step by step, each step's messages in
+        the order of ``messages`` with log time = publish time = its stamp (tested byte for byte): the record
+        headers, their order and the chunk boundaries are computed with numpy for the whole block.
+        """
+        stamps = np.asarray(stamps_ns, dtype=np.int64)
+        entries = []
+        for topic, steps, payloads in messages:
+            if topic not in self._channels:
+                raise KeyError(f"topic '{topic}' was not registered with add_topic()")
+            steps = np.arange(len(stamps)) if steps is None else np.asarray(steps, dtype=np.int64)
+            if len(steps) != len(payloads):
+                raise ValueError(f"topic '{topic}': {len(steps)} steps but {len(payloads)} payloads")
+            if len(steps):
+                entries.append((topic, steps, np.asarray(payloads, dtype=np.uint8)))
+        if self._fast is None:
+            order = sorted((int(step), place, row) for place, (_, steps, _) in enumerate(entries)
+                           for row, step in enumerate(steps.tolist()))
+            for step, place, row in order:
+                topic, _, payloads = entries[place]
+                self.write(topic, payloads[row].tobytes(), int(stamps[step]))
+            return
+        records, step_keys, place_keys, channels = [], [], [], []
+        for place, (topic, steps, payloads) in enumerate(entries):
+            count = len(steps)
+            head = np.empty(count, dtype=_MESSAGE_HEAD_DTYPE)
+            head["opcode"] = _MESSAGE_OPCODE
+            head["length"] = _MESSAGE_FIELDS + payloads.shape[1]
+            head["channel"] = self._channels[topic]
+            head["sequence"] = self._sequence[topic] + np.arange(count)
+            head["log_time"] = head["publish_time"] = stamps[steps]
+            self._sequence[topic] += count
+            self.message_counts[topic] += count
+            records.append(np.concatenate((head.view(np.uint8).reshape(count, -1), payloads), axis=1))
+            step_keys.append(steps)
+            place_keys.append(np.full(count, place))
+            channels.append(np.full(count, self._channels[topic], dtype=np.int64))
+        if not records:
+            return
+        if all(len(rows) == len(stamps) for rows in records):  # every topic in every step: rows side by side
+            block = np.concatenate(records, axis=1).reshape(-1)
+            ends = np.cumsum(np.tile([rows.shape[1] for rows in records], len(stamps)))
+            channel_order = np.stack(channels, axis=1).reshape(-1)
+            times = np.repeat(stamps, len(records))
+        else:
+            sizes = np.concatenate([np.full(len(r), r.shape[1], dtype=np.int64) for r in records])
+            order = np.lexsort((np.concatenate(place_keys), np.concatenate(step_keys)))  # step, then topic order
+            ends = np.cumsum(sizes[order])
+            starts = np.empty_like(sizes)
+            starts[order] = ends - sizes[order]  # each record's place in the block
+            block = np.empty(int(ends[-1]), dtype=np.uint8)
+            first = 0
+            for rows in records:
+                count, size = rows.shape
+                block[starts[first:first + count, None] + np.arange(size)] = rows
+                first += count
+            channel_order = np.concatenate(channels)[order]
+            times = stamps[np.concatenate(step_keys)][order]
+        self._fast.add_block(block, ends, channel_order, times)
 
     def write_message(self, topic: str, msg: Any, log_time_ns: int) -> None:
         """Serialise an rclpy message instance and append it (registering the topic if new)."""
@@ -201,6 +270,51 @@ class _FastMessages:
             if buffer.tell() > chunk_size:  # what add_message does after each message
                 self.maybe_finalize()
                 buffer = builder.record_writer._buffer  # noqa: SLF001 - a new one after the chunk
+
+
+    def add_block(self, block: np.ndarray, ends: np.ndarray, channels: np.ndarray, log_times: np.ndarray) -> None:
+        """Append whole message records: ``block`` (uint8) holds them back to back, ``ends`` (int) the end of
+        each in ``block``, ``channels`` and ``log_times`` (int) theirs. Same chunks, message indices and
+        statistics as :meth:`add` record by record: a chunk is closed right after the record that takes its
+        buffer past the chunk size."""
+        statistics, builder, chunk_size = self.statistics, self.builder, self.chunk_size
+        start = 0  # index of the next record
+        while start < len(ends):
+            base = int(ends[start - 1]) if start else 0  # its position in the block
+            position = builder.record_writer._buffer.tell()  # noqa: SLF001
+            # The first record (from start on) whose end passes the chunk size closes the chunk.
+            stop = int(np.searchsorted(ends[start:], chunk_size - position + base, side="right")) + start + 1
+            stop = min(stop, len(ends))
+            buffer = builder.record_writer._buffer  # noqa: SLF001
+            offsets = position + np.concatenate(([base], ends[start:stop - 1])) - base
+            times = log_times[start:stop]
+            piece_channels = channels[start:stop]
+            low, high = int(times.min()), int(times.max())
+            if statistics.message_count == 0:
+                statistics.message_start_time, statistics.message_end_time = low, high
+            else:
+                statistics.message_start_time = min(statistics.message_start_time, low)
+                statistics.message_end_time = max(statistics.message_end_time, high)
+            if builder.num_messages == 0:
+                builder.message_start_time, builder.message_end_time = low, high
+            else:
+                builder.message_start_time = min(builder.message_start_time, low)
+                builder.message_end_time = max(builder.message_end_time, high)
+            count = stop - start
+            statistics.message_count += count
+            builder.num_messages += count
+            present, first = np.unique(piece_channels, return_index=True)
+            for channel_id in present[np.argsort(first)].tolist():  # in order of appearance, as add() meets them
+                mine = piece_channels == channel_id
+                statistics.channel_message_counts[channel_id] += int(mine.sum())
+                index = builder.message_indices.get(channel_id)
+                if not index:
+                    index = builder.message_indices[channel_id] = _message_index_class()(channel_id=channel_id,
+                                                                                          records=[])
+                index.records.extend(zip(times[mine].tolist(), offsets[mine].tolist(), strict=True))
+            buffer.write(block[base:int(ends[stop - 1])].data)
+            self.maybe_finalize()
+            start = stop
 
 
 def _message_index_class() -> type:

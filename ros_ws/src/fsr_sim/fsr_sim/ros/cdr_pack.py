@@ -22,6 +22,8 @@ from __future__ import annotations
 import struct
 from collections.abc import Sequence
 
+import numpy as np
+
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR_LE, options 0
 NS_PER_S = 1_000_000_000
 _STAMP = struct.Struct("<iI")
@@ -95,6 +97,7 @@ class StampedDoubles:
         self.size = len(self.template)
         self.stamp_offset = stamp_offset
         self.value_count = sum(count for _, count in runs)
+        self.runs = list(runs)
         segments: list[tuple[int, str, int]] = []  # (offset, format, value count)
         end = -1
         for offset, count in runs:
@@ -121,6 +124,26 @@ class StampedDoubles:
                 packer.pack_into(buffer, offset, *values[start:start + count])
                 start += count
         return bytes(buffer)
+
+    def pack_rows(self, stamps_ns: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Many messages at once (a whole block of a log): row ``k`` of the result (uint8, shape (N, size)) is
+        ``pack(stamps_ns[k], values[k])`` byte for byte. ``stamps_ns`` (N,) int [ns]; ``values`` (N,
+        value_count) float, in field order (the template's padding and constant fields are copied as they are).
+        """
+        stamps = np.asarray(stamps_ns, dtype=np.int64)
+        values = np.asarray(values, dtype="<f8").reshape(len(stamps), self.value_count)
+        rows = np.tile(np.frombuffer(self.template, dtype=np.uint8), (len(stamps), 1))
+        if self.stamp_offset is not None:
+            seconds, nanoseconds = np.divmod(stamps, NS_PER_S)
+            stamp = np.empty((len(stamps), 2), dtype="<u4")
+            stamp[:, 0] = seconds.astype("<i4").view("<u4")
+            stamp[:, 1] = nanoseconds
+            rows[:, self.stamp_offset:self.stamp_offset + 8] = stamp.view(np.uint8)
+        start = 0
+        for offset, count in self.runs:
+            rows[:, offset:offset + 8 * count] = np.ascontiguousarray(values[:, start:start + count]).view(np.uint8)
+            start += count
+        return rows
 
 
 def odometry(frame_id: str, child_frame_id: str) -> StampedDoubles:
