@@ -183,3 +183,25 @@ def test_block_with_an_unknown_topic_or_mismatched_steps_is_refused(tmp_path):
         writer.add_topic("/wrench", "geometry_msgs/msg/WrenchStamped")
         with pytest.raises(ValueError, match="2 steps but 3 payloads"):
             writer.write_block(stamps, [("/wrench", [0, 1], wrench.pack_rows(stamps, np.zeros((3, 6))))])
+
+
+def test_unchunked_file_from_another_writer_is_read(tmp_path):
+    """Messages outside chunks (an MCAP writer with chunking off) are read like chunked ones."""
+    from mcap.writer import Writer
+
+    from fsr_sim.ros.message_schema import message_class, message_definition
+
+    path = tmp_path / "unchunked.mcap"
+    with open(path, "wb") as stream:
+        writer = Writer(stream, use_chunking=False)
+        writer.start(profile="ros2", library="other")
+        schema = writer.register_schema("nav_msgs/msg/Odometry", "ros2msg",
+                                        message_definition(message_class("nav_msgs/msg/Odometry")).encode())
+        channel = writer.register_channel("/odom", "cdr", schema)
+        for k in range(5):
+            writer.add_message(channel, k * 1_000_000, serialize_message(odometry(k)), k * 1_000_000)
+        writer.finish()
+    recording = open_recording(path)
+    assert not recording.truncated and recording.topics == {"/odom": "nav_msgs/msg/Odometry"}
+    assert [stamp for stamp, _ in recording.messages("odom")] == [k * 1_000_000 for k in range(5)]
+    assert recording.messages("odom")[3][1].pose.pose.position.x == pytest.approx(0.003)

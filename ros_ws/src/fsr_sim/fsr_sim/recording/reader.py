@@ -1,9 +1,12 @@
 """Reading ROS 2 MCAP recordings, including ones whose writer was killed before it closed the file.
 
-The file is read sequentially (``mcap.stream_reader.StreamReader``, chunks handed over whole and their
-message records split with ``struct``: ~1 us per message instead of ~30 us), keeping each channel's raw CDR
-messages; they are decoded with ``mcap_ros2``'s dynamic decoder only when a topic is asked for. A file
-without its footer (writer killed) is read up to its last complete chunk and flagged ``truncated``.
+The file is read sequentially, record by record with ``struct`` (opcode and length), and only the records
+that carry data are parsed (``mcap.records``): chunks are decompressed whole and their message records split
+with ``struct`` (~1 us per message instead of ~30 us); message indexes and the summary's chunk indexes are
+skipped (``mcap.stream_reader.StreamReader`` parsed them entry by entry: most of the time of reading a
+recording: 0.37 s -> 0.19 s for a 30 s flight). Each channel's raw CDR messages are kept; they are decoded
+with ``mcap_ros2``'s dynamic decoder only when a topic is asked for. A file without its footer (writer
+killed) is read up to its last complete chunk and flagged ``truncated``.
 """
 
 from __future__ import annotations
@@ -15,8 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from mcap.data_stream import ReadDataStream
-from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader, get_chunk_data_stream
+from mcap.records import Channel, Chunk, Message, Metadata, Schema
+from mcap.stream_reader import get_chunk_data_stream
 from mcap_ros2.decoder import DecoderFactory
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -24,6 +27,7 @@ SCENARIO_METADATA = "fsr_scenario"
 _RECORD_HEAD = struct.Struct("<BQ")  # opcode, length
 _MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
 _MESSAGE_OPCODE, _SCHEMA_OPCODE, _CHANNEL_OPCODE = 0x05, 0x03, 0x04
+_FOOTER_OPCODE, _CHUNK_OPCODE, _METADATA_OPCODE, _DATA_END_OPCODE = 0x02, 0x06, 0x0C, 0x0F
 
 
 class RecordingError(ValueError):
@@ -104,34 +108,50 @@ def open_recording(path: str | Path) -> Recording:
         if stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
             raise RecordingError(f"{path}: not an MCAP file (bad magic bytes)")
         stream.seek(0)
-        schemas: dict[int, Schema] = {}
-        by_id: dict[int, _ChannelData] = {}
-        metadata: dict[str, dict[str, str]] = {}
-        complete = False
-        try:
-            for record in StreamReader(stream, record_size_limit=1 << 30, emit_chunks=True).records:
-                if isinstance(record, Chunk):
-                    _read_chunk(record, by_id, schemas)
-                elif isinstance(record, Message):
-                    channel = by_id.get(record.channel_id)
-                    if channel is not None:
-                        channel.times.append(record.log_time)
-                        channel.payloads.append(record.data)
-                elif isinstance(record, Schema):
-                    schemas[record.id] = record
-                elif isinstance(record, Channel) and record.id not in by_id:
-                    by_id[record.id] = _ChannelData(
-                        record.topic, schemas.get(record.schema_id), record.message_encoding
-                    )
-                elif isinstance(record, Metadata):
-                    metadata[record.name] = dict(record.metadata)
-                elif isinstance(record, DataEnd | Footer):
-                    complete = True
-        except Exception:  # noqa: BLE001 - any decoding failure past the last good record means a cut file
-            pass
+        data = stream.read()
+    schemas: dict[int, Schema] = {}
+    by_id: dict[int, _ChannelData] = {}
+    metadata: dict[str, dict[str, str]] = {}
+    complete = False
+    position, size = len(MCAP_MAGIC), len(data)
+    head = _RECORD_HEAD.unpack_from
+    try:
+        while position + 9 <= size and not complete:
+            opcode, length = head(data, position)
+            start, position = position + 9, position + 9 + length
+            if position > size:
+                break  # a record cut by the end of the file: the writer was killed
+            if opcode == _CHUNK_OPCODE:
+                _read_chunk(Chunk.read(_record_stream(data, start, position)), by_id, schemas)
+            elif opcode == _MESSAGE_OPCODE:  # a message outside any chunk (unchunked writers)
+                record = Message.read(_record_stream(data, start, position), length)
+                channel = by_id.get(record.channel_id)
+                if channel is not None:
+                    channel.times.append(record.log_time)
+                    channel.payloads.append(record.data)
+            elif opcode == _SCHEMA_OPCODE:
+                schema = Schema.read(_record_stream(data, start, position))
+                schemas[schema.id] = schema
+            elif opcode == _CHANNEL_OPCODE:
+                record = Channel.read(_record_stream(data, start, position))
+                if record.id not in by_id:
+                    by_id[record.id] = _ChannelData(record.topic, schemas.get(record.schema_id),
+                                                    record.message_encoding)
+            elif opcode == _METADATA_OPCODE:
+                record = Metadata.read(_record_stream(data, start, position))
+                metadata[record.name] = dict(record.metadata)
+            elif opcode in (_DATA_END_OPCODE, _FOOTER_OPCODE):
+                complete = True  # the summary that follows repeats schemas and channels, and indexes
+    except Exception:  # noqa: BLE001 - any decoding failure past the last good record means a cut file
+        pass
     channels = {c.topic: c for c in by_id.values()}
     topics = {c.topic: c.schema.name if c.schema else "" for c in by_id.values()}
     return Recording(path, topics, metadata, truncated=not complete, _channels=channels)
+
+
+def _record_stream(data: bytes, start: int, end: int) -> ReadDataStream:
+    """A record's body (``data[start:end]``) for the ``mcap.records`` readers."""
+    return ReadDataStream(BytesIO(data[start:end]))
 
 
 def _read_chunk(chunk: Chunk, by_id: dict[int, _ChannelData], schemas: dict[int, Schema]) -> None:
@@ -152,9 +172,9 @@ def _read_chunk(chunk: Chunk, by_id: dict[int, _ChannelData], schemas: dict[int,
                 channel.times.append(log_time)
                 channel.payloads.append(data[start + 22:position])
         elif opcode == _SCHEMA_OPCODE:
-            schema = Schema.read(ReadDataStream(BytesIO(data[start:position])))
+            schema = Schema.read(_record_stream(data, start, position))
             schemas[schema.id] = schema
         elif opcode == _CHANNEL_OPCODE:
-            record = Channel.read(ReadDataStream(BytesIO(data[start:position])))
+            record = Channel.read(_record_stream(data, start, position))
             if record.id not in by_id:
                 by_id[record.id] = _ChannelData(record.topic, schemas.get(record.schema_id), record.message_encoding)
