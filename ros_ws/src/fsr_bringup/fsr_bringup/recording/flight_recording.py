@@ -13,7 +13,7 @@ carries nothing the odometry stamps do not). Per step only the numbers are kept 
 every ``BLOCK_STEPS`` steps, at a ``sim_status`` and at :meth:`FlightRecorder.close` they are packed and
 written for the whole block with numpy (:meth:`fsr_sim.ros.cdr_pack.StampedDoubles.pack_rows`,
 :meth:`fsr_sim.recording.writer.RecordingWriter.write_block`): the same payloads and the same file as
-packing and writing each step's batch (tested byte for byte), ~4x cheaper per step. A flight stopped by
+packing and writing each step's batch (tested byte for byte), 2-3x cheaper per step. A flight stopped by
 Ctrl-C still gets every step it took: ``close()`` writes the pending block first.
 """
 

@@ -93,9 +93,8 @@ class MomentumObserver:
 
     def reset(self) -> None:
         """Forget all history: the next :meth:`update` is sample k = 0 again (estimate zero)."""
-        for gamma in self._gamma:
-            gamma[:] = [0.0] * 6
-        self._estimate[:] = [0.0] * 6
+        self._gamma = [[0.0] * 6 for _ in range(self.r)]
+        self._estimate = [0.0] * 6
         self.samples = 0
 
     def update(self, velocity_world: ArrayLike, euler_zyx: ArrayLike, euler_rates: ArrayLike,

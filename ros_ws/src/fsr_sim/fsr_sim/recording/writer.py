@@ -271,7 +271,6 @@ class _FastMessages:
                 self.maybe_finalize()
                 buffer = builder.record_writer._buffer  # noqa: SLF001 - a new one after the chunk
 
-
     def add_block(self, block: np.ndarray, ends: np.ndarray, channels: np.ndarray, log_times: np.ndarray) -> None:
         """Append whole message records: ``block`` (uint8) holds them back to back, ``ends`` (int) the end of
         each in ``block``, ``channels`` and ``log_times`` (int) theirs. Same chunks, message indices and
@@ -281,11 +280,11 @@ class _FastMessages:
         start = 0  # index of the next record
         while start < len(ends):
             base = int(ends[start - 1]) if start else 0  # its position in the block
-            position = builder.record_writer._buffer.tell()  # noqa: SLF001
+            buffer = builder.record_writer._buffer  # noqa: SLF001 - a new one after each chunk
+            position = buffer.tell()
             # The first record (from start on) whose end passes the chunk size closes the chunk.
             stop = int(np.searchsorted(ends[start:], chunk_size - position + base, side="right")) + start + 1
             stop = min(stop, len(ends))
-            buffer = builder.record_writer._buffer  # noqa: SLF001
             offsets = position + np.concatenate(([base], ends[start:stop - 1])) - base
             times = log_times[start:stop]
             piece_channels = channels[start:stop]
