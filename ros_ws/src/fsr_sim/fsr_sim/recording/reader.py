@@ -1,10 +1,11 @@
 """Reading ROS 2 MCAP recordings, including ones whose writer was killed before it closed the file.
 
-The file is read sequentially, record by record with ``struct`` (opcode and length), and only the records
-that carry data are parsed (``mcap.records``): chunks are decompressed whole and their message records split
-with ``struct`` (~1 us per message instead of ~30 us); message indexes and the summary's chunk indexes are
-skipped (``mcap.stream_reader.StreamReader`` parsed them entry by entry: most of the time of reading a
-recording: 0.37 s -> 0.19 s for a 30 s flight). Each channel's raw CDR messages are kept; they are decoded
+The file is read sequentially, record by record with ``struct`` (opcode and length; a decompressed chunk's
+records by the same loop), and only the records that carry data are parsed: message records are split with
+``struct`` (~1 us per message instead of ~30 us), schemas, channels, chunk headers and metadata read with
+``mcap.records``. Message indexes and the summary's chunk indexes are skipped (``mcap.stream_reader.
+StreamReader`` parsed them entry by entry: most of the time of reading a recording; 0.37 s -> 0.19 s for a
+30 s flight). Each channel's raw CDR messages are kept; they are decoded
 with ``mcap_ros2``'s dynamic decoder only when a topic is asked for. A file without its footer (writer
 killed) is read up to its last complete chunk and flagged ``truncated``.
 """
@@ -18,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from mcap.data_stream import ReadDataStream
-from mcap.records import Channel, Chunk, Message, Metadata, Schema
+from mcap.records import Channel, Chunk, Metadata, Schema
 from mcap.stream_reader import get_chunk_data_stream
 from mcap_ros2.decoder import DecoderFactory
 
@@ -112,38 +113,10 @@ def open_recording(path: str | Path) -> Recording:
     schemas: dict[int, Schema] = {}
     by_id: dict[int, _ChannelData] = {}
     metadata: dict[str, dict[str, str]] = {}
-    complete = False
-    position, size = len(MCAP_MAGIC), len(data)
-    head = _RECORD_HEAD.unpack_from
     try:
-        while position + 9 <= size and not complete:
-            opcode, length = head(data, position)
-            start, position = position + 9, position + 9 + length
-            if position > size:
-                break  # a record cut by the end of the file: the writer was killed
-            if opcode == _CHUNK_OPCODE:
-                _read_chunk(Chunk.read(_record_stream(data, start, position)), by_id, schemas)
-            elif opcode == _MESSAGE_OPCODE:  # a message outside any chunk (unchunked writers)
-                record = Message.read(_record_stream(data, start, position), length)
-                channel = by_id.get(record.channel_id)
-                if channel is not None:
-                    channel.times.append(record.log_time)
-                    channel.payloads.append(record.data)
-            elif opcode == _SCHEMA_OPCODE:
-                schema = Schema.read(_record_stream(data, start, position))
-                schemas[schema.id] = schema
-            elif opcode == _CHANNEL_OPCODE:
-                record = Channel.read(_record_stream(data, start, position))
-                if record.id not in by_id:
-                    by_id[record.id] = _ChannelData(record.topic, schemas.get(record.schema_id),
-                                                    record.message_encoding)
-            elif opcode == _METADATA_OPCODE:
-                record = Metadata.read(_record_stream(data, start, position))
-                metadata[record.name] = dict(record.metadata)
-            elif opcode in (_DATA_END_OPCODE, _FOOTER_OPCODE):
-                complete = True  # the summary that follows repeats schemas and channels, and indexes
+        complete = _read_records(data, len(MCAP_MAGIC), by_id, schemas, metadata)
     except Exception:  # noqa: BLE001 - any decoding failure past the last good record means a cut file
-        pass
+        complete = False
     channels = {c.topic: c for c in by_id.values()}
     topics = {c.topic: c.schema.name if c.schema else "" for c in by_id.values()}
     return Recording(path, topics, metadata, truncated=not complete, _channels=channels)
@@ -154,23 +127,28 @@ def _record_stream(data: bytes, start: int, end: int) -> ReadDataStream:
     return ReadDataStream(BytesIO(data[start:end]))
 
 
-def _read_chunk(chunk: Chunk, by_id: dict[int, _ChannelData], schemas: dict[int, Schema]) -> None:
-    """Register the chunk's schemas and channels and append its messages to their channels, in file order."""
-    stream, size = get_chunk_data_stream(chunk)
-    data = stream.read(size)
-    position = 0
+def _read_records(data: bytes, position: int, by_id: dict[int, _ChannelData], schemas: dict[int, Schema],
+                  metadata: dict[str, dict[str, str]]) -> bool:
+    """Read the records of ``data`` from ``position`` on, the file's or a decompressed chunk's (its records
+    then, recursively): schemas and channels are registered, messages appended to their channels in file
+    order, metadata kept. Returns True at the data end (or footer): the summary that follows only repeats
+    schemas and channels and holds indexes. ValueError for a record cut by the end of ``data``."""
+    size = len(data)
     head, message_head = _RECORD_HEAD.unpack_from, _MESSAGE_HEAD.unpack_from
     while position + 9 <= size:
         opcode, length = head(data, position)
         start, position = position + 9, position + 9 + length
         if position > size:
-            raise ValueError("chunk record runs past the end of the chunk")
+            raise ValueError("record runs past the end of the data (writer killed, or a damaged chunk)")
         if opcode == _MESSAGE_OPCODE:
             channel_id, _, log_time, _ = message_head(data, start)
             channel = by_id.get(channel_id)
             if channel is not None:
                 channel.times.append(log_time)
                 channel.payloads.append(data[start + 22:position])
+        elif opcode == _CHUNK_OPCODE:
+            stream, chunk_size = get_chunk_data_stream(Chunk.read(_record_stream(data, start, position)))
+            _read_records(stream.read(chunk_size), 0, by_id, schemas, metadata)
         elif opcode == _SCHEMA_OPCODE:
             schema = Schema.read(_record_stream(data, start, position))
             schemas[schema.id] = schema
@@ -178,3 +156,9 @@ def _read_chunk(chunk: Chunk, by_id: dict[int, _ChannelData], schemas: dict[int,
             record = Channel.read(_record_stream(data, start, position))
             if record.id not in by_id:
                 by_id[record.id] = _ChannelData(record.topic, schemas.get(record.schema_id), record.message_encoding)
+        elif opcode == _METADATA_OPCODE:
+            record = Metadata.read(_record_stream(data, start, position))
+            metadata[record.name] = dict(record.metadata)
+        elif opcode in (_DATA_END_OPCODE, _FOOTER_OPCODE):
+            return True
+    return False
