@@ -41,8 +41,7 @@ from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.model.allocation import WRENCH_AXES
-from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
-from fsr_sim.ros import cdr_read
+from fsr_sim.ros.conversions import state_from_odometry_bytes
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
@@ -124,15 +123,10 @@ class ControllerNode(Node):
         start = time.perf_counter()
         self.flight_end.activity()
         try:
-            stamp_ns, pose, twist = cdr_read.odometry(data)
+            stamp_ns, position, rotation, velocity_world, angular_velocity = state_from_odometry_bytes(data)
         except ValueError as error:
-            self.warn(f"dropped an odom that cannot be read: {error}")
+            self.warn(f"dropped an odom: {error}")
             return
-        if not odometry_values_ok(pose, twist):
-            self.warn("dropped an odom with NaN/inf values")
-            return
-        position, rotation, velocity_world, angular_velocity = state_from_odometry_values(
-            pose[0:3], pose[3:7], twist[0:3], twist[3:6])
         try:
             output = self.controller.command(
                 seconds_from_ns(stamp_ns), position, rotation, velocity_world, angular_velocity

@@ -34,8 +34,8 @@ from std_srvs.srv import Trigger
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
-from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
 from fsr_sim.ros import cdr_read
+from fsr_sim.ros.conversions import state_from_odometry_bytes
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
@@ -86,15 +86,10 @@ class EstimatorNode(Node):
 
     def _on_odom(self, data: bytes) -> None:
         try:
-            stamp, pose, twist = cdr_read.odometry(data)
+            stamp, _, rotation, velocity_world, omega_body = state_from_odometry_bytes(data)
         except ValueError as error:
-            self.warn_input(f"dropped an odom that cannot be read: {error}")
+            self.warn_input(f"dropped an odom: {error}")
             return
-        if not odometry_values_ok(pose, twist):
-            self.warn_input(f"odom at {stamp} ns holds NaN/inf or a zero quaternion: dropped")
-            return
-        _, rotation, velocity_world, omega_body = state_from_odometry_values(pose[0:3], pose[3:7], twist[0:3],
-                                                                             twist[3:6])
         self._publish(lambda: self.estimator.add_state(stamp, rotation, velocity_world, omega_body))
 
     def _on_wrench(self, data: bytes) -> None:

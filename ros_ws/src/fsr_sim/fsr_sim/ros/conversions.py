@@ -17,8 +17,9 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
-from fsr_sim.model.odometry import state_from_odometry_values
+from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
 from fsr_sim.model.so3 import quaternion_from_rotation
+from fsr_sim.ros import cdr_read
 
 WORLD_FRAME = "world_ned"
 BODY_FRAME = "base_link_frd"
@@ -61,6 +62,20 @@ def state_from_odometry(msg: Odometry) -> tuple[np.ndarray, np.ndarray, np.ndarr
     ang = msg.twist.twist.angular
     return state_from_odometry_values((p.x, p.y, p.z), (o.x, o.y, o.z, o.w), (lin.x, lin.y, lin.z),
                                       (ang.x, ang.y, ang.z))
+
+
+def state_from_odometry_bytes(data: bytes) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`state_from_odometry` of an ``odom`` payload (CDR bytes of a ``raw=True`` subscription), with its
+    stamp [ns] first: what the controller and estimator nodes use. ValueError, naming the problem, for bytes
+    that cannot be read or values :func:`fsr_sim.model.odometry.odometry_values_ok` refuses (NaN/inf, a zero
+    quaternion)."""
+    try:
+        stamp_ns, pose, twist = cdr_read.odometry(data)
+    except ValueError as error:
+        raise ValueError(f"cannot be read: {error}") from error
+    if not odometry_values_ok(pose, twist):
+        raise ValueError(f"odom at {stamp_ns} ns holds NaN/inf or a zero quaternion")
+    return stamp_ns, *state_from_odometry_values(pose[0:3], pose[3:7], twist[0:3], twist[3:6])
 
 
 def wrench_stamped(
