@@ -289,16 +289,8 @@ class _FastMessages:
             times = log_times[start:stop]
             piece_channels = channels[start:stop]
             low, high = int(times.min()), int(times.max())
-            if statistics.message_count == 0:
-                statistics.message_start_time, statistics.message_end_time = low, high
-            else:
-                statistics.message_start_time = min(statistics.message_start_time, low)
-                statistics.message_end_time = max(statistics.message_end_time, high)
-            if builder.num_messages == 0:
-                builder.message_start_time, builder.message_end_time = low, high
-            else:
-                builder.message_start_time = min(builder.message_start_time, low)
-                builder.message_end_time = max(builder.message_end_time, high)
+            _cover_times(statistics, statistics.message_count == 0, low, high)
+            _cover_times(builder, builder.num_messages == 0, low, high)
             count = stop - start
             statistics.message_count += count
             builder.num_messages += count
@@ -314,6 +306,17 @@ class _FastMessages:
             buffer.write(block[base:int(ends[stop - 1])].data)
             self.maybe_finalize()
             start = stop
+
+
+def _cover_times(record: Any, empty: bool, low: int, high: int) -> None:
+    """Widen ``record``'s ``message_start_time``/``message_end_time`` (file statistics, a chunk) to take log
+    times ``low..high`` [ns]; set them when it holds no message yet. :meth:`_FastMessages.add` does the same
+    per message inline (the recorder node's hot path)."""
+    if empty:
+        record.message_start_time, record.message_end_time = low, high
+    else:
+        record.message_start_time = min(record.message_start_time, low)
+        record.message_end_time = max(record.message_end_time, high)
 
 
 def _message_index_class() -> type:
