@@ -73,14 +73,16 @@ def _finite(speeds: np.ndarray, tilts: np.ndarray | None) -> tuple[np.ndarray, n
 def wrench_command(msg: object) -> tuple[float, np.ndarray]:
     """``WrenchStamped`` (body FRD) -> (thrust ``u_T = -f_z`` [N], torque body [N m]); ValueError if not finite."""
     f, t = msg.wrench.force, msg.wrench.torque
-    if not all(math.isfinite(v) for v in (f.x, f.y, f.z, t.x, t.y, t.z)):
-        raise ValueError("wrench_cmd holds NaN or inf")
-    return -f.z, np.array((t.x, t.y, t.z))
+    return _thrust_and_torque((f.x, f.y, f.z, t.x, t.y, t.z))
 
 
 def wrench_command_raw(data: bytes) -> tuple[float, np.ndarray]:
     """:func:`wrench_command` of a message's CDR bytes."""
-    _, (_, _, fz, tx, ty, tz) = values = cdr_read.wrench_stamped(data)
-    if not all(map(math.isfinite, values[1])):
+    return _thrust_and_torque(cdr_read.wrench_stamped(data)[1])
+
+
+def _thrust_and_torque(wrench: tuple[float, ...]) -> tuple[float, np.ndarray]:
+    """(``-f_z``, torque) of (force xyz, torque xyz); ValueError if any value is NaN or inf."""
+    if not all(map(math.isfinite, wrench)):
         raise ValueError("wrench_cmd holds NaN or inf")
-    return -fz, np.array((tx, ty, tz))
+    return -wrench[2], np.array(wrench[3:6])

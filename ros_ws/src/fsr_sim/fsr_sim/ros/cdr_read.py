@@ -16,8 +16,7 @@ _HEADER = 4
 _STAMP = struct.Struct("<iIi")  # sec, nanosec, frame_id length
 _UINT32 = struct.Struct("<I")
 _POSE = struct.Struct("<7d")
-_TWIST = struct.Struct("<6d")
-_SIX = struct.Struct("<6d")
+_SIX = struct.Struct("<6d")  # a twist, a wrench
 _COVARIANCE_BYTES = 36 * 8
 NS_PER_S = 1_000_000_000
 
@@ -46,7 +45,7 @@ def odometry(data: bytes) -> tuple[int, tuple[float, ...], tuple[float, ...]]:
         (length,) = _UINT32.unpack_from(data, offset)
         offset = _align(offset + 4 + length, 8)
         pose = _POSE.unpack_from(data, offset)
-        twist = _TWIST.unpack_from(data, offset + 56 + _COVARIANCE_BYTES)
+        twist = _SIX.unpack_from(data, offset + 56 + _COVARIANCE_BYTES)
     except struct.error as error:
         raise ValueError(f"Odometry message cut short: {error}") from None
     return stamp, pose, twist
@@ -66,8 +65,7 @@ def wrench_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
 def stamp(data: bytes) -> int:
     """The leading ``Header`` stamp [ns] of a message (little-endian CDR)."""
     _check(data)
-    sec, nanosec, _ = _STAMP.unpack_from(data, _HEADER)
-    return sec * NS_PER_S + nanosec
+    return _after_header(data)[0]
 
 
 class JointStateReader:
