@@ -13,7 +13,7 @@ attitude ``R_c``) and ``wrench_desired`` (the law's wrench before allocation), a
 contract; packed by :class:`fsr_control.nodes.packets.ControllerPackets` and published as CDR bytes, the
 values of :func:`fsr_control.nodes.messages.controller_messages`). ``odom`` is read from its CDR bytes
 (:mod:`fsr_sim.ros.cdr_read`) and taken from a wait set (``hot_subscriptions``, see
-:class:`fsr_sim.ros.runtime.WaitSetSpinner`); the node has no parameter services (parameters are read once).
+:class:`fsr_sim.ros.wait_set.WaitSetSpinner`); the node has no parameter services (parameters are read once).
 NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
 final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
 for its subscribers' acknowledgements (:mod:`fsr_sim.ros.flight_end`). At exit it logs the saturation

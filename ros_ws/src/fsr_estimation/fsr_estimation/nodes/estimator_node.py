@@ -13,7 +13,7 @@ queued up to the simulator's last state and waits for its subscribers' acknowled
 Parameters: :mod:`fsr_estimation.nodes.estimator_params` and ``exit_on_finish`` (read once: no parameter
 services).
 ``odom`` and ``wrench_cmd`` are read from their CDR bytes (:mod:`fsr_sim.ros.cdr_read`), taken from a wait set
-(``hot_subscriptions``, :class:`fsr_sim.ros.runtime.WaitSetSpinner`); the estimates are published as packed CDR
+(``hot_subscriptions``, :class:`fsr_sim.ros.wait_set.WaitSetSpinner`); the estimates are published as packed CDR
 (:class:`fsr_estimation.nodes.packets.EstimatePackets`).
 """
 
