@@ -24,6 +24,7 @@ VENV_BIN = Path(sys.executable).parent
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 RTF = re.compile(r"real-time factor ([0-9.]+)")
 NODE_NAMES = ("simulator", "controller", "estimator", "fsr-record", "fsr-fly")
+WATCHER_MODULE = "fsr_bringup.runner.watcher_node"  # fsr-fly's watcher process: python -m WATCHER_MODULE
 
 
 @dataclass
@@ -77,7 +78,9 @@ def _cpu_and_name(pid: int) -> tuple[float, str] | None:
     except OSError:
         return None
     cpu = (int(fields[11]) + int(fields[12])) / CLOCK_TICKS  # utime + stime
-    words = [Path(a.decode(errors="replace")).name for a in argv[:2]]
+    words = [Path(a.decode(errors="replace")).name for a in argv[:3]]
+    if WATCHER_MODULE in words:
+        return cpu, "watcher"
     name = next((n for n in NODE_NAMES for w in words if w == n), words[0] if words else "?")
     return cpu, name
 

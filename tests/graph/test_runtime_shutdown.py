@@ -110,3 +110,20 @@ def test_watchdog_ends_a_hung_teardown_within_the_signal_budget():
     assert len(lines) == 1 and lines[0].endswith("(node teardown hung): exiting now"), result.stderr
     seconds = float(lines[0].split("within ")[1].split(" s")[0])
     assert 1.0 <= seconds <= 2.0  # cut at SIGNAL_TEARDOWN_LIMIT (1.8 s) after the signal
+
+
+GIL_HELD_TEARDOWN = HUNG_TEARDOWN.replace(
+    "time.sleep(60.0)  # a teardown that never ends",
+    "ctypes.PyDLL(None).sleep(60)  # never ends and keeps the GIL, as a deadlocked Fast DDS participant deletion",
+).replace("import os\n", "import ctypes\nimport os\n", 1)
+
+
+def test_a_hung_teardown_that_holds_the_gil_is_ended_too():
+    """The watchdog thread cannot run while rcl/DDS holds the GIL; faulthandler's C thread still ends the
+    process, with the stack of the hang on stderr."""
+    assert "PyDLL" in GIL_HELD_TEARDOWN and "import ctypes" in GIL_HELD_TEARDOWN
+    result, elapsed = run_child(GIL_HELD_TEARDOWN, timeout=60.0)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "Timeout" in result.stderr and "destroy_node" in result.stderr, result.stderr
+    assert "shutdown did not finish" not in result.stderr  # the thread never got the GIL
+    assert elapsed < 20.0

@@ -11,6 +11,9 @@ are fine.
 
 A node that dies (non-zero exit) during the flight is reported by name; the flight goes on (the simulator applies the
 scenario's failsafe when the controller is gone) and the run's exit code is non-zero.
+
+``fsr-fly`` has no DDS participant of its own: the flight's progress, each ``sim_status`` and the node list
+come from its watcher process (``runner/watcher_node.py``, which says why), stopped with the simulators.
 """
 
 from __future__ import annotations
@@ -148,52 +151,6 @@ def child_environment(domain: DomainLease, localhost_only: bool) -> dict[str, st
     return env
 
 
-class ClockWatcher:
-    """Follows a simulator's ``sim_progress`` (its simulated time every few steps) in the run's domain to show
-    simulated time and the real-time factor; cheap, unlike following every ``/clock`` message."""
-
-    def __init__(self, domain_id: int, topic: str = "/sim_progress") -> None:
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-        from rosgraph_msgs.msg import Clock
-
-        from fsr_sim.ros.qos import PROGRESS_QOS
-
-        self.sim_time = 0.0
-        self.first: tuple[float, float] | None = None  # (wall monotonic [s], sim time [s]) of the first progress
-        self.last: tuple[float, float] | None = None
-        self.context = rclpy.context.Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node("fsr_fly_progress", context=self.context, start_parameter_services=False)
-        self.node.create_subscription(Clock, topic, self._on_clock, PROGRESS_QOS)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-
-    def _on_clock(self, msg: object) -> None:
-        self.sim_time = msg.clock.sec + msg.clock.nanosec * 1e-9
-        now = time.monotonic()
-        if self.first is None:
-            self.first = (now, self.sim_time)
-        self.last = (now, self.sim_time)
-
-    @property
-    def stepping_rate(self) -> float:
-        """Simulated seconds per wall second between the first and the last progress message (NaN before two)."""
-        if self.first is None or self.last is None or self.last[0] - self.first[0] < 0.05:
-            return float("nan")
-        return (self.last[1] - self.first[1]) / (self.last[0] - self.first[0])
-
-    def spin(self, timeout: float) -> None:
-        self.executor.spin_once(timeout_sec=timeout)
-
-    def close(self) -> None:
-        self.executor.shutdown()
-        self.node.destroy_node()
-        import rclpy
-
-        rclpy.try_shutdown(context=self.context)
-
-
 def fly_graph(
     members: list[FlightMember],
     recording: Path,
@@ -212,12 +169,11 @@ def fly_graph(
     of the same domain (``runner/remote.py``). Without a local simulator the flight ends when every
     vehicle's ``sim_status`` reports a final state.
     """
-    from fsr_bringup.runner.remote import RemoteWatcher, expected_node_paths
+    from fsr_bringup.runner.remote import expected_node_paths
+    from fsr_bringup.runner.watcher import WATCHER_PROCESS, FlightWatcher, watcher_command
 
     log_dir.mkdir(parents=True, exist_ok=True)
     env = child_environment(domain, localhost_only)
-    for key in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "FASTRTPS_DEFAULT_PROFILES_FILE"):  # the watcher's own context
-        os.environ[key] = env[key]
     group = ProcessGroup(env, log_dir, console.echo)
     interrupted: list[str] = []
 
@@ -230,28 +186,27 @@ def fly_graph(
     local = set(all_names) if nodes is None else set(nodes)
     simulators = [m.process_name("simulator") for m in members if m.process_name("simulator") in local]
     expected = expected_node_paths([name for name in all_names if name not in local])  # on other hosts
-    watcher = None
+    namespaces = [m.namespace for m in members]
+    watcher = FlightWatcher(namespaces)
     start = time.monotonic()
     failures: list[str] = []
-    sim_time = 0.0
     remote_end: dict[str, dict] | None = None
-    stepping_rate = float("nan")
     try:
         for name, command in commands:
             if name in local:
                 group.start(name, command)
-        watcher = RemoteWatcher(domain.domain_id, [m.namespace for m in members])
+        group.start(WATCHER_PROCESS, watcher_command(namespaces), events=watcher.feed)
         reported: set[str] = set()
         last_progress = 0.0
         next_missing_report = start + MISSING_REPORT_AFTER
         while not interrupted:
-            watcher.spin(0.05)
+            watcher.wait(0.05)
             for node in group.nodes:
                 code = node.returncode
                 if code is None or node.name in reported or node.name in simulators:
                     continue
                 reported.add(node.name)
-                if code == 0:
+                if code == 0 and node.name != WATCHER_PROCESS:
                     continue  # ended by itself at the end of the flight (exit_on_finish), or stopped on purpose
                 failures.append(f"{node.name} died during the flight ({describe_exit(code)})")
                 console.echo("fsr-fly", f"ERROR: {failures[-1]}; see {node.log_path}")
@@ -259,8 +214,8 @@ def fly_graph(
                 break
             if not simulators:
                 remote_end = watcher.final_statuses()
-                if remote_end is not None:
-                    break
+                if remote_end is not None or WATCHER_PROCESS in reported:
+                    break  # without the watcher this host would never learn that the flight ended
             now = time.monotonic()
             if nodes is not None and now >= next_missing_report and not watcher.started():
                 next_missing_report = now + MISSING_REPORT_EVERY
@@ -275,11 +230,11 @@ def fly_graph(
                 console.progress(f"t = {watcher.sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
     finally:
         console.end_progress()
-        group.stop_all(first=tuple(simulators))
-        if watcher is not None:
-            sim_time = watcher.sim_time
-            stepping_rate = watcher.stepping_rate
-            watcher.close()
+        # The watcher goes with the first wave: it is not needed any more, and if its DDS teardown hangs
+        # (watcher_node.py) the wave's SIGTERM/SIGKILL ends it while nothing waits for its exit code.
+        group.stop_all(first=(*simulators, WATCHER_PROCESS))
+        sim_time = watcher.sim_time
+        stepping_rate = watcher.stepping_rate
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     wall_time = time.monotonic() - start

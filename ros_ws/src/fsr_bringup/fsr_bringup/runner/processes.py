@@ -62,6 +62,7 @@ class NodeProcess:
     reader: threading.Thread
     stopping: bool = False
     tail: list[str] = field(default_factory=list)
+    events: Callable[[str], bool] | None = None  # takes the lines of a process that reports events
 
     @property
     def returncode(self) -> int | None:
@@ -84,7 +85,10 @@ class ProcessGroup:
         self.echo = echo
         self.nodes: list[NodeProcess] = []
 
-    def start(self, name: str, command: list[str]) -> NodeProcess:
+    def start(self, name: str, command: list[str], events: Callable[[str], bool] | None = None) -> NodeProcess:
+        """Start ``command`` as the process ``name``. ``events``: a process that reports to the runner (the flight
+        watcher): each output line goes to ``events(line)`` first; lines it takes are neither logged nor echoed,
+        and the others are logged but not echoed."""
         log_path = self.log_dir / f"{name}.log"  # a fleet's "uav1/simulator" logs in a folder per vehicle
         log_path.parent.mkdir(parents=True, exist_ok=True)
         process = subprocess.Popen(
@@ -98,7 +102,7 @@ class ProcessGroup:
             text=True,
             bufsize=1,
         )
-        node = NodeProcess(name, command, process, log_path, threading.Thread(daemon=True))
+        node = NodeProcess(name, command, process, log_path, threading.Thread(daemon=True), events=events)
         node.reader = threading.Thread(target=self._stream, args=(node,), name=f"log-{name}", daemon=True)
         node.reader.start()
         self.nodes.append(node)
@@ -108,10 +112,13 @@ class ProcessGroup:
         with open(node.log_path, "w", encoding="utf-8") as log:
             for line in node.process.stdout:
                 line = line.rstrip("\n")
+                if node.events is not None and node.events(line):
+                    continue
                 log.write(line + "\n")
                 log.flush()
                 node.tail = (node.tail + [line])[-20:]
-                self.echo(node.name, line)
+                if node.events is None:
+                    self.echo(node.name, line)
 
     def get(self, name: str) -> NodeProcess | None:
         return next((n for n in self.nodes if n.name == name), None)

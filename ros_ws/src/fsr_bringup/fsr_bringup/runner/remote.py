@@ -7,17 +7,15 @@ peers), the simulator's handshake waits for its odom subscribers and its command
 * :func:`parse_node_selection` turns ``--nodes`` into the set of process names this host starts: a role
   (``simulator``, ``controller``, ``estimator``, ``recorder``) selects that node of every vehicle, a
   process name (``uav2/controller``) one vehicle's node.
-* :class:`RemoteWatcher` follows each vehicle's latched ``sim_status`` (a host without the simulator ends
-  its nodes when the flight's final status arrives) and the graph's node names (which expected nodes have
-  not been discovered yet).
+* the flight watcher (:mod:`fsr_bringup.runner.watcher`) follows each vehicle's latched ``sim_status`` (a
+  host without the simulator ends its nodes when the flight's final status arrives) and the graph's node
+  names (:func:`expected_node_paths`: which nodes of other hosts have not been discovered yet).
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Iterable
-
-from fsr_bringup.runner.flight import ClockWatcher
 
 ROLES = ("simulator", "controller", "estimator", "recorder")
 RECORDER_NODE = "fsr_recorder"  # the recorder's ROS node name (its process is called "recorder")
@@ -61,41 +59,3 @@ def parse_status(data: str) -> dict:
     except ValueError:
         return {}
     return status if isinstance(status, dict) else {}
-
-
-class RemoteWatcher(ClockWatcher):
-    """The first vehicle's ``sim_progress`` (progress), every vehicle's ``sim_status`` and the graph's node names,
-    in the run's domain."""
-
-    def __init__(self, domain_id: int, namespaces: list[str]) -> None:
-        first = namespaces[0].strip("/") if namespaces else ""
-        super().__init__(domain_id, f"/{first}/sim_progress" if first else "/sim_progress")
-        from std_msgs.msg import String
-
-        from fsr_sim.ros.qos import LATCHED_QOS
-
-        self.statuses: dict[str, dict] = {}
-        for namespace in namespaces:
-            topic = f"{namespace.rstrip('/')}/sim_status" if namespace else "/sim_status"
-            self.node.create_subscription(
-                String, topic, lambda msg, ns=namespace: self._on_status(ns, msg.data), LATCHED_QOS
-            )
-        self.namespaces = namespaces
-
-    def _on_status(self, namespace: str, data: str) -> None:
-        self.statuses[namespace] = parse_status(data)
-
-    def final_statuses(self) -> dict[str, dict] | None:
-        """Every vehicle's final ``sim_status`` once all of them ended, else None."""
-        if all(self.statuses.get(ns, {}).get("state") in FINAL_STATES for ns in self.namespaces):
-            return {ns: self.statuses[ns] for ns in self.namespaces}
-        return None
-
-    def started(self) -> bool:
-        """True once every simulator reported ``running`` (or ended)."""
-        return all(ns in self.statuses for ns in self.namespaces)
-
-    def missing(self, expected: dict[str, str]) -> list[str]:
-        """Process names of the expected nodes (``{node path: process name}``) not discovered yet."""
-        present = {f"{ns.rstrip('/')}/{name}" for name, ns in self.node.get_node_names_and_namespaces()}
-        return [process for path, process in expected.items() if path not in present]

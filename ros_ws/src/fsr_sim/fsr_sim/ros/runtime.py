@@ -14,7 +14,8 @@ executor is shut down *before* the node is destroyed: its cached wait generator 
 not in use" and their real destruction happened later, at garbage collection, after the context was shut
 down (a by-hand estimator was seen spinning at 100 % CPU there for minutes). As a last resort a watchdog
 thread ends the process with ``os._exit`` (and says so on stderr) if teardown still has not finished by
-the budget's end.
+the budget's end, and ``faulthandler`` does so shortly after for a hang that holds the GIL
+(:class:`TeardownWatchdog`).
 
 A node's per-step subscriptions (``hot_subscriptions``) are taken from a raw wait set and handed to their
 callbacks directly (:class:`fsr_sim.ros.wait_set.WaitSetSpinner`; ROS2_FROM_PIP.md: about half the CPU of a
@@ -24,6 +25,7 @@ else (goals, ``sim_status``, services), and drives the node alone during its ``c
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import signal
 import sys
@@ -43,6 +45,7 @@ SIGNAL_EXIT_BUDGET = 2.0  # s from SIGINT/SIGTERM to process exit, in any phase
 SIGNAL_TEARDOWN_LIMIT = 1.8  # s after the signal: the watchdog ends the process if teardown still runs
 FINISH_TEARDOWN_LIMIT = 6.0  # s of teardown after the node ended by itself (acks, closing files)
 RCL_TEARDOWN_MIN = 0.5  # s: the rcl/DDS teardown always gets at least this long
+HARD_MARGIN = 0.5  # s: faulthandler's bound on teardown lies this far past the watchdog thread's
 ACK_WAIT_AFTER_FINISH = 1.0  # s: after the flight ended, wait this long at most for subscribers' acks
 
 
@@ -122,7 +125,7 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     node = None
     executor = None
     code = EXIT_OK
-    watchdog = TeardownWatchdog(stop)
+    watchdog = TeardownWatchdog(stop, hard=exit_process)
     try:
         try:
             node = make_node(rclpy.utilities.remove_ros_args(argv)[1:])
@@ -215,10 +218,16 @@ class TeardownWatchdog:
     """Ends the process with ``os._exit`` if teardown outlives its bound (a hang in rcl/DDS must never
     keep a node alive): :data:`SIGNAL_TEARDOWN_LIMIT` s after the signal (at least :data:`RCL_TEARDOWN_MIN`
     s of teardown), else :data:`FINISH_TEARDOWN_LIMIT` s after teardown began. Started after the node's
-    ``close()``, so files are always finished."""
+    ``close()``, so files are always finished.
 
-    def __init__(self, stop: StopFlag) -> None:
+    The watching thread needs the GIL, and a Fast DDS participant deletion that deadlocks holds it
+    (``fsr_bringup/runner/watcher_node.py`` says when). With ``hard`` (a process that exits after teardown)
+    ``faulthandler``'s own C thread is armed too, :data:`HARD_MARGIN` s past the bound known at the start: it
+    prints the stack and exits with code 1 whatever holds the GIL."""
+
+    def __init__(self, stop: StopFlag, hard: bool = False) -> None:
         self.stop = stop
+        self.hard = hard
         self.finished = threading.Event()
         self.thread: threading.Thread | None = None
         self.began = time.monotonic()
@@ -227,6 +236,8 @@ class TeardownWatchdog:
         self.began = time.monotonic()
         self.thread = threading.Thread(target=self._watch, name="fsr-teardown-watchdog", daemon=True)
         self.thread.start()
+        if self.hard:
+            faulthandler.dump_traceback_later(self.deadline() - self.began + HARD_MARGIN, exit=True)
 
     def deadline(self) -> float:
         """Monotonic time at which teardown is cut short (moves earlier if a signal arrives meanwhile)."""
@@ -243,6 +254,8 @@ class TeardownWatchdog:
 
     def cancel(self) -> None:
         self.finished.set()
+        if self.hard:
+            faulthandler.cancel_dump_traceback_later()
 
 
 class RateLimitedWarning:

@@ -1,0 +1,89 @@
+"""The flight watcher: the one DDS participant of ``fsr-fly``, in a child process that it reads line by line.
+
+``python -m fsr_bringup.runner.watcher_node [--namespace NS ...]`` (one ``--namespace`` per vehicle, ``''``
+for a single vehicle) follows the first vehicle's ``sim_progress`` and every vehicle's latched
+``sim_status``, and lists the graph's nodes every ``NODE_LIST_PERIOD`` s. Each event is one JSON line on
+stdout (:mod:`fsr_bringup.runner.watcher` reads them):
+
+* ``{"progress": <simulated time [s]>, "at": <time.monotonic() [s] when it arrived>}``
+* ``{"status": <namespace>, "value": <the sim_status JSON object>}``
+* ``{"nodes": [<node path>, ...]}``
+
+Why a process of its own: deleting a Fast DDS 2.14 participant can deadlock when remote endpoints are being
+removed at that moment (``DomainParticipant::set_listener(nullptr)`` spins waiting for a discovery callback
+that waits for a mutex it holds), that is when the other nodes leave at the end of a flight. The call holds
+the GIL, so nothing in that process can end it; this was seen once in CI (a remote host's ``fsr-fly`` hung
+after its flight) and reproduced about once in 130 teardowns by hand. ``fsr-fly`` supervises flights and must
+never hang there: a watcher stuck in its teardown is stopped like any node (SIGINT, SIGTERM, SIGKILL) and its
+teardown is bounded by :class:`fsr_sim.ros.runtime.TeardownWatchdog` anyway.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from fsr_bringup.runner.remote import parse_status
+
+NODE_NAME = "fsr_fly_watcher"
+NODE_LIST_PERIOD = 1.0  # s between two lists of the graph's nodes
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="fsr_bringup.runner.watcher_node", description=__doc__.split("\n")[0])
+    parser.add_argument("--namespace", action="append", default=[],
+                        help="a vehicle's namespace ('' for a single vehicle); repeat for a fleet")
+    args = parser.parse_args(argv)
+    if not args.namespace:
+        args.namespace = [""]
+    return args
+
+
+def emit(event: dict) -> None:
+    """One event as one JSON line on stdout."""
+    sys.stdout.write(json.dumps(event, separators=(",", ":")) + "\n")
+    sys.stdout.flush()
+
+
+def make_watcher(namespaces: list[str]) -> object:
+    """The watcher node (rclpy is imported only here, after run_node configured the environment)."""
+    from rclpy.node import Node
+    from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import String
+
+    from fsr_sim.ros.qos import LATCHED_QOS, PROGRESS_QOS
+
+    class FlightWatcherNode(Node):
+        def __init__(self) -> None:
+            super().__init__(NODE_NAME, start_parameter_services=False)
+            first = namespaces[0].strip("/")
+            self.create_subscription(Clock, f"/{first}/sim_progress" if first else "/sim_progress",
+                                     self._on_progress, PROGRESS_QOS)
+            for namespace in namespaces:
+                topic = f"{namespace.rstrip('/')}/sim_status" if namespace else "/sim_status"
+                self.create_subscription(String, topic, lambda msg, ns=namespace: self._on_status(ns, msg.data),
+                                         LATCHED_QOS)
+            self.create_timer(NODE_LIST_PERIOD, self._list_nodes)
+
+        def _on_progress(self, msg: Clock) -> None:
+            emit({"progress": msg.clock.sec + msg.clock.nanosec * 1e-9, "at": time.monotonic()})
+
+        def _on_status(self, namespace: str, data: str) -> None:
+            emit({"status": namespace, "value": parse_status(data)})
+
+        def _list_nodes(self) -> None:
+            emit({"nodes": [f"{ns.rstrip('/')}/{name}" for name, ns in self.get_node_names_and_namespaces()]})
+
+    return FlightWatcherNode()
+
+
+def main(argv: list[str] | None = None) -> None:
+    from fsr_sim.ros.runtime import run_node
+
+    sys.exit(run_node(lambda args: make_watcher(parse_args(args).namespace), argv))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,94 @@
+"""fsr-fly's view of a flight from its watcher process (fsr_bringup.runner.watcher): events parsed line by line,
+and a watcher stuck in its teardown cannot hold the run (it is stopped like a node, its exit code ignored)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+from fsr_bringup.runner import watcher as watcher_module
+from fsr_bringup.runner.domains import fixed_domain
+from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
+from fsr_bringup.runner.watcher import FlightWatcher, watcher_command
+
+
+def event(**fields: object) -> str:
+    return json.dumps(fields)
+
+
+def test_progress_gives_simulated_time_and_stepping_rate():
+    watcher = FlightWatcher([""])
+    assert watcher.stepping_rate != watcher.stepping_rate  # NaN before two progress messages
+    assert watcher.feed(event(progress=0.1, at=100.0))
+    assert watcher.feed(event(progress=0.5, at=100.2))
+    assert watcher.sim_time == 0.5
+    assert abs(watcher.stepping_rate - 2.0) < 1e-12
+
+
+def test_final_statuses_need_every_vehicle():
+    watcher = FlightWatcher(["/uav1", "/uav2"])
+    assert not watcher.started() and watcher.final_statuses() is None
+    watcher.feed(event(status="/uav1", value={"state": "finished", "sim_time": 2.0}))
+    watcher.feed(event(status="/uav2", value={"state": "running"}))
+    assert watcher.started() and watcher.final_statuses() is None
+    watcher.feed(event(status="/uav2", value={"state": "diverged", "reason": "crash"}))
+    assert watcher.final_statuses() == {"/uav1": {"state": "finished", "sim_time": 2.0},
+                                        "/uav2": {"state": "diverged", "reason": "crash"}}
+
+
+def test_missing_nodes_unknown_until_the_first_list():
+    watcher = FlightWatcher([""])
+    expected = {"/controller": "controller", "/fsr_recorder": "recorder"}
+    assert watcher.missing(expected) is None
+    watcher.feed(event(nodes=["/fsr_fly_watcher", "/fsr_recorder"]))
+    assert watcher.missing(expected) == ["controller"]
+
+
+def test_log_lines_and_malformed_events_are_not_taken():
+    watcher = FlightWatcher([""])
+    for line in ["[INFO] ready 0.4 s after the process started", "{not json", "[1, 2]", event(other=1),
+                 event(progress="x", at=1.0), event(progress=1.0)]:
+        assert not watcher.feed(line), line
+    assert watcher.sim_time == 0.0 and watcher.first is None
+
+
+def test_wait_returns_when_an_event_arrives():
+    watcher = FlightWatcher([""])
+    watcher.feed(event(progress=0.1, at=1.0))
+    start = time.monotonic()
+    watcher.wait(5.0)  # the event is already there
+    assert time.monotonic() - start < 1.0
+
+
+def test_watcher_command_runs_the_watcher_module():
+    command = watcher_command(["", "/uav2"])
+    assert command[:3] == [sys.executable, "-m", "fsr_bringup.runner.watcher_node"]
+    assert command[3:] == ["--namespace", "", "--namespace", "/uav2"]
+
+
+HUNG_WATCHER = textwrap.dedent('''
+    import json, signal, time
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # as stuck as a deadlocked DDS teardown
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    print(json.dumps({"progress": 0.9, "at": time.monotonic()}), flush=True)
+    print(json.dumps({"status": "", "value": {"state": "finished", "sim_time": 1.0, "steps": 1000}}), flush=True)
+    time.sleep(600)
+''')
+
+
+def test_a_watcher_stuck_at_exit_does_not_hold_the_run(tmp_path, monkeypatch):
+    """Every node runs elsewhere (``--nodes`` selected none here): the flight ends with the watcher's final
+    status; the watcher ignores SIGINT and SIGTERM and is killed; the run's result stands."""
+    monkeypatch.setattr(watcher_module, "watcher_command", lambda namespaces: [sys.executable, "-c", HUNG_WATCHER])
+    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    start = time.monotonic()
+    result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
+                       fixed_domain(0), 1.0, Console(quiet=True), nodes=set())
+    elapsed = time.monotonic() - start
+    assert result.exit_code == 0 and result.failures == [] and not result.interrupted
+    assert result.sim_time == 1.0
+    assert elapsed < 30.0  # SIGINT, SIGTERM, SIGKILL waves: about 9 s
+    assert Path(tmp_path / "logs" / "flight_watcher.log").exists()
