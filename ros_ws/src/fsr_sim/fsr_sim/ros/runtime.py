@@ -116,8 +116,6 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    from fsr_sim.config.validation import ConfigError
-
     argv = sys.argv if argv is None else argv
     stop = StopFlag()
     stop.install()
@@ -129,7 +127,7 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     try:
         try:
             node = make_node(rclpy.utilities.remove_ros_args(argv)[1:])
-        except (ConfigError, ValueError) as error:
+        except ValueError as error:  # fsr_sim.config.validation.ConfigError is one
             print(f"[fsr] error: {error}", file=sys.stderr, flush=True)
             return EXIT_CONFIG_ERROR
         if hasattr(node, "stop_flag"):
