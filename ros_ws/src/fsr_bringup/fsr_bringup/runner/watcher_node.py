@@ -9,13 +9,17 @@ stdout (:mod:`fsr_bringup.runner.watcher` reads them):
 * ``{"status": <namespace>, "value": <the sim_status JSON object>}``
 * ``{"nodes": [<node path>, ...]}``
 
-Why a process of its own: deleting a Fast DDS 2.14 participant can deadlock when remote endpoints are being
-removed at that moment (``DomainParticipant::set_listener(nullptr)`` spins waiting for a discovery callback
-that waits for a mutex it holds), that is when the other nodes leave at the end of a flight. The call holds
-the GIL, so nothing in that process can end it; this was seen once in CI (a remote host's ``fsr-fly`` hung
-after its flight) and reproduced about once in 130 teardowns by hand. ``fsr-fly`` supervises flights and must
-never hang there: a watcher stuck in its teardown is stopped like any node (SIGINT, SIGTERM, SIGKILL) and its
-teardown is bounded by :class:`fsr_sim.ros.runtime.TeardownWatchdog` anyway.
+Why a process of its own: deleting a Fast DDS 2.14 participant can deadlock when a discovery callback is
+running at that moment, e.g. while the endpoints of nodes that just left are removed, as at the end of a
+flight. ``rmw_fastrtps`` deletes it with ``DomainParticipant::set_listener(nullptr)``, which waits for running
+callbacks with ``condition_variable::wait_until(steady_clock::time_point::max())``; the wheels' libstdc++
+converts that deadline through ``system_clock``, it overflows into the past, and the wait spins
+(``system_clock::now()`` in the stack) holding the mutex that the running callback needs to finish (gdb on a
+hung process: the main thread in ``set_listener``, a receive thread in ``onWriterDiscovery`` waiting for the
+mutex). The call holds the GIL, so nothing in that process can end it. Seen once in CI (a remote host's
+``fsr-fly`` hung after its flight), reproduced about once in 130 teardowns by hand. ``fsr-fly`` supervises
+flights and must never hang there: a watcher stuck in its teardown is stopped like any node (SIGINT,
+SIGTERM, SIGKILL), and :class:`fsr_sim.ros.runtime.TeardownWatchdog` bounds its teardown anyway.
 """
 
 from __future__ import annotations
