@@ -108,7 +108,7 @@ def fly_graph(scenario: str, duration: float | None = None, extra: list[str] | N
         for log in Path(tmp, "run", "logs").glob("*.log"):
             text = log.read_text(errors="replace")
             found = re.search(r"ready ([0-9.]+) s after the process started", text)
-            if found:
+            if found and log.stem != "flight_watcher":  # the nodes' figure; the watcher is fsr-fly's own
                 ready[log.stem] = float(found.group(1))
             if log.stem == "recorder":
                 counts = {m.group(1): int(m.group(2)) for m in re.finditer(r"^\s+(/\S+): (\d+)$", text, re.M)}
