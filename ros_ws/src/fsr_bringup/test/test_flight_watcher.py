@@ -1,5 +1,6 @@
 """fsr-fly's view of a flight from its watcher process (fsr_bringup.runner.watcher): events parsed line by line,
-and a watcher stuck in its teardown cannot hold the run (it is stopped like a node, its exit code ignored)."""
+a watcher stuck in its teardown cannot hold the run (it is stopped like a node, its exit code ignored), and a
+node ended by its teardown watchdog after its work was done is a warning, not a failure."""
 
 from __future__ import annotations
 
@@ -9,6 +10,9 @@ import textwrap
 import time
 from pathlib import Path
 
+import pytest
+
+from fsr_bringup.runner import flight as flight_module
 from fsr_bringup.runner import watcher as watcher_module
 from fsr_bringup.runner.domains import fixed_domain
 from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
@@ -92,3 +96,44 @@ def test_a_watcher_stuck_at_exit_does_not_hold_the_run(tmp_path, monkeypatch):
     assert result.sim_time == 1.0
     assert elapsed < 30.0  # SIGINT, SIGTERM, SIGKILL waves: about 9 s
     assert Path(tmp_path / "logs" / "flight_watcher.log").exists()
+
+
+FINAL_STATUS_WATCHER = textwrap.dedent('''
+    import json, sys, time
+    print(json.dumps({"status": "", "value": {"state": sys.argv[1], "sim_time": 1.0}}), flush=True)
+    time.sleep(600)
+''')
+
+SIMULATOR_TEARDOWN_HUNG = "import os, signal, time; time.sleep(0.5); os.kill(os.getpid(), signal.SIGALRM)"
+
+
+@pytest.mark.parametrize("state, code", [("finished", 0), ("diverged", 3)])
+def test_a_simulator_ended_by_its_teardown_watchdog_keeps_the_flight_result(tmp_path, monkeypatch, state, code):
+    """Killed by TEARDOWN_HUNG_SIGNAL after its final status: a warning, and the result from that status."""
+    monkeypatch.setattr(watcher_module, "watcher_command",
+                        lambda namespaces: [sys.executable, "-c", FINAL_STATUS_WATCHER, state])
+    monkeypatch.setattr(flight_module, "node_commands",
+                        lambda *args: [("simulator", [sys.executable, "-c", SIMULATOR_TEARDOWN_HUNG])])
+    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
+                       fixed_domain(0), 1.0, Console(quiet=True), nodes={"simulator"})
+    assert result.exit_code == code
+    assert len(result.notes) == 1 and result.notes[0].startswith("simulator: its rcl/DDS teardown hung")
+    assert result.failures == ([] if state == "finished" else [result.failures[0]])
+    if state == "diverged":
+        assert "the flight diverged" in result.failures[0]
+
+
+def test_a_controller_ended_by_its_teardown_watchdog_is_a_warning(tmp_path, monkeypatch):
+    """It had ended by itself with the flight (exit_on_finish), then its teardown hung: not 'died'."""
+    monkeypatch.setattr(watcher_module, "watcher_command",
+                        lambda namespaces: [sys.executable, "-c", FINAL_STATUS_WATCHER, "finished"])
+    simulator = "import time; time.sleep(2.0)"  # exits 0 once the controller is gone
+    controller = SIMULATOR_TEARDOWN_HUNG  # the same hang, in the controller
+    monkeypatch.setattr(flight_module, "node_commands", lambda *args: [
+        ("controller", [sys.executable, "-c", controller]), ("simulator", [sys.executable, "-c", simulator])])
+    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
+                       fixed_domain(0), 1.0, Console(quiet=True))
+    assert result.exit_code == 0 and result.failures == []
+    assert len(result.notes) == 1 and result.notes[0].startswith("controller: its rcl/DDS teardown hung")

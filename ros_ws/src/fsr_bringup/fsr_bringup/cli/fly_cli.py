@@ -196,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
                 Console(quiet=args.quiet), localhost_only=not args.network, nodes=nodes,
                 startup_timeout=startup_timeout,
             )
+        for note in result.notes:
+            print(f"fsr-fly: WARNING: {note}", file=sys.stderr, flush=True)
         if nodes is not None and "recorder" not in nodes:  # the recording is written on another host
             for failure in result.failures:
                 print(f"fsr-fly: ERROR: {failure}", file=sys.stderr, flush=True)

@@ -27,10 +27,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fsr_bringup.runner.domains import DomainLease
-from fsr_bringup.runner.processes import ProcessGroup, describe_exit, executable
-from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_INTERRUPTED, configure_environment
+from fsr_bringup.runner.processes import NodeProcess, ProcessGroup, describe_exit, executable
+from fsr_sim.ros.runtime import (
+    EXIT_DIVERGED,
+    EXIT_FAILURE,
+    EXIT_INTERRUPTED,
+    TEARDOWN_HUNG_SIGNAL,
+    configure_environment,
+)
 
 EXIT_NODE_FAILED = EXIT_FAILURE
+TEARDOWN_HUNG = -TEARDOWN_HUNG_SIGNAL  # returncode of a node that its watchdog ended after its work was done
 MISSING_REPORT_AFTER = 3.0  # s: first warning naming the nodes not discovered yet (--nodes)
 MISSING_REPORT_EVERY = 5.0  # s: then again this often until the flight starts
 
@@ -43,6 +50,7 @@ class FlightResult:
     sim_time: float = 0.0
     interrupted: bool = False
     stepping_rate: float = float("nan")  # simulated s per wall s while the simulator stepped (start-up excluded)
+    notes: list[str] = field(default_factory=list)  # warnings that do not fail the run
 
     @property
     def real_time_factor(self) -> float:
@@ -184,12 +192,13 @@ def fly_graph(
     commands = node_commands(members, recording, scenario_path, startup_timeout)
     all_names = [name for name, _command in commands]
     local = set(all_names) if nodes is None else set(nodes)
-    simulators = [m.process_name("simulator") for m in members if m.process_name("simulator") in local]
+    simulators = {m.process_name("simulator"): m.namespace for m in members if m.process_name("simulator") in local}
     expected = expected_node_paths([name for name in all_names if name not in local])  # on other hosts
     namespaces = [m.namespace for m in members]
     watcher = FlightWatcher(namespaces)
     start = time.monotonic()
     failures: list[str] = []
+    notes: list[str] = []
     remote_end: dict[str, dict] | None = None
     try:
         for name, command in commands:
@@ -208,6 +217,9 @@ def fly_graph(
                 reported.add(node.name)
                 if code == 0 and node.name != WATCHER_PROCESS:
                     continue  # ended by itself at the end of the flight (exit_on_finish), or stopped on purpose
+                if code == TEARDOWN_HUNG:
+                    notes.append(teardown_hung_note(node))  # it had ended by itself, its work done
+                    continue
                 failures.append(f"{node.name} died during the flight ({describe_exit(code)})")
                 console.echo("fsr-fly", f"ERROR: {failures[-1]}; see {node.log_path}")
             if simulators and all(group.get(name).returncode is not None for name in simulators):
@@ -240,9 +252,11 @@ def fly_graph(
     wall_time = time.monotonic() - start
     if interrupted:
         return FlightResult(EXIT_INTERRUPTED, failures, wall_time, sim_time, interrupted=True,
-                            stepping_rate=stepping_rate)
+                            stepping_rate=stepping_rate, notes=notes)
     recorder = group.get("recorder")
-    if recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
+    if recorder is not None and "recorder" not in reported and recorder.returncode == TEARDOWN_HUNG:
+        notes.append(teardown_hung_note(recorder))  # the file was closed before the teardown
+    elif recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
         failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
     exit_code = EXIT_NODE_FAILED if failures else 0
     for namespace, status in (remote_end or {}).items():  # the simulators ran on another host
@@ -254,12 +268,21 @@ def fly_graph(
         elif status.get("state") == "stopped":
             failures.append(f"{where} (remote) stopped: {status.get('reason', '')}")
             exit_code = exit_code if exit_code == EXIT_DIVERGED else EXIT_NODE_FAILED
-    for name in simulators:
+    for name, namespace in simulators.items():
         code = group.get(name).returncode
+        state = watcher.state(namespace)
+        if code == TEARDOWN_HUNG and state in ("finished", "diverged"):  # its final status was published
+            notes.append(teardown_hung_note(group.get(name)))
+            code = EXIT_DIVERGED if state == "diverged" else 0
         if code == EXIT_DIVERGED:
             failures.append(f"{name}: the flight diverged (see {group.get(name).log_path} for the reason)")
             exit_code = EXIT_DIVERGED
         elif code not in (0, None):
             failures.insert(0, f"{name} failed ({describe_exit(code)}); see {group.get(name).log_path}")
             exit_code = exit_code if exit_code == EXIT_DIVERGED else EXIT_NODE_FAILED
-    return FlightResult(exit_code, failures, wall_time, sim_time, stepping_rate=stepping_rate)
+    return FlightResult(exit_code, failures, wall_time, sim_time, stepping_rate=stepping_rate, notes=notes)
+
+
+def teardown_hung_note(node: NodeProcess) -> str:
+    return (f"{node.name}: its rcl/DDS teardown hung after its work was done (a Fast DDS deadlock, see "
+            f"fsr_bringup/runner/watcher_node.py) and its watchdog ended it; see {node.log_path}")

@@ -88,6 +88,11 @@ class FlightWatcher:
                 return {ns: self.statuses[ns] for ns in self.namespaces}
             return None
 
+    def state(self, namespace: str) -> str | None:
+        """The ``state`` of the vehicle's last ``sim_status`` (None before the first)."""
+        with self.lock:
+            return self.statuses.get(namespace, {}).get("state")
+
     def started(self) -> bool:
         """True once every simulator reported a status (``running`` or a final one)."""
         with self.lock:

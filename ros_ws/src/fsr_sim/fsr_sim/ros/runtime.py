@@ -14,8 +14,8 @@ executor is shut down *before* the node is destroyed: its cached wait generator 
 not in use" and their real destruction happened later, at garbage collection, after the context was shut
 down (a by-hand estimator was seen spinning at 100 % CPU there for minutes). As a last resort a watchdog
 thread ends the process with ``os._exit`` (and says so on stderr) if teardown still has not finished by
-the budget's end, and ``faulthandler`` does so shortly after for a hang that holds the GIL
-(:class:`TeardownWatchdog`).
+the budget's end, and a kernel timer does so shortly after for a hang that holds the GIL; such a node ends
+killed by ``SIGALRM`` (:data:`TEARDOWN_HUNG_SIGNAL`, :class:`TeardownWatchdog`).
 
 A node's per-step subscriptions (``hot_subscriptions``) are taken from a raw wait set and handed to their
 callbacks directly (:class:`fsr_sim.ros.wait_set.WaitSetSpinner`; ROS2_FROM_PIP.md: about half the CPU of a
@@ -40,12 +40,16 @@ EXIT_FAILURE = 1  # a node failed (or a file could not be written)
 EXIT_CONFIG_ERROR = 2  # invalid scenario, parameter or argument; nothing was started
 EXIT_DIVERGED = 3  # the flight diverged (NaN state, beyond physical bounds, crash)
 EXIT_INTERRUPTED = 130  # fsr-fly stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention)
+# A node whose rcl/DDS teardown hung after its work was done (files closed, acks waited for) is ended by this
+# signal from its own watchdog (TeardownWatchdog): the runner tells it from a failure by the exit status.
+TEARDOWN_HUNG_SIGNAL = signal.SIGALRM
 
 SIGNAL_EXIT_BUDGET = 2.0  # s from SIGINT/SIGTERM to process exit, in any phase
 SIGNAL_TEARDOWN_LIMIT = 1.8  # s after the signal: the watchdog ends the process if teardown still runs
 FINISH_TEARDOWN_LIMIT = 6.0  # s of teardown after the node ended by itself (acks, closing files)
 RCL_TEARDOWN_MIN = 0.5  # s: the rcl/DDS teardown always gets at least this long
-HARD_MARGIN = 0.5  # s: faulthandler's bound on teardown lies this far past the watchdog thread's
+HARD_MARGIN = 0.5  # s: the kernel timer's bound on teardown lies this far past the watchdog thread's
+STACK_DUMP_S = 0.2  # s between faulthandler's stack dump and the timer's signal
 ACK_WAIT_AFTER_FINISH = 1.0  # s: after the flight ended, wait this long at most for subscribers' acks
 
 
@@ -218,10 +222,12 @@ class TeardownWatchdog:
     s of teardown), else :data:`FINISH_TEARDOWN_LIMIT` s after teardown began. Started after the node's
     ``close()``, so files are always finished.
 
-    The watching thread needs the GIL, and a Fast DDS participant deletion that deadlocks holds it
-    (``fsr_bringup/runner/watcher_node.py`` says when). With ``hard`` (a process that exits after teardown)
-    ``faulthandler``'s own C thread is armed too, :data:`HARD_MARGIN` s past the bound known at the start: it
-    prints the stack and exits with code 1 whatever holds the GIL."""
+    With ``hard`` (a process that exits after teardown) the process ends killed by
+    :data:`TEARDOWN_HUNG_SIGNAL`, which tells the runner that only the teardown hung. The watching thread needs
+    the GIL, and a Fast DDS participant deletion that deadlocks holds it (``fsr_bringup/runner/watcher_node.py``
+    says when), so a kernel timer (``setitimer``, the signal's default action) ends the process anyway
+    :data:`HARD_MARGIN` s past the bound known at the start, after ``faulthandler`` (its own C thread) printed
+    the stack of the hang. Without ``hard`` (a caller's process) the thread ends it with ``os._exit(1)``."""
 
     def __init__(self, stop: StopFlag, hard: bool = False) -> None:
         self.stop = stop
@@ -235,7 +241,10 @@ class TeardownWatchdog:
         self.thread = threading.Thread(target=self._watch, name="fsr-teardown-watchdog", daemon=True)
         self.thread.start()
         if self.hard:
-            faulthandler.dump_traceback_later(self.deadline() - self.began + HARD_MARGIN, exit=True)
+            bound = self.deadline() - self.began + HARD_MARGIN
+            signal.signal(TEARDOWN_HUNG_SIGNAL, signal.SIG_DFL)  # its default action: terminate
+            faulthandler.dump_traceback_later(bound, exit=False)
+            signal.setitimer(signal.ITIMER_REAL, bound + STACK_DUMP_S)
 
     def deadline(self) -> float:
         """Monotonic time at which teardown is cut short (moves earlier if a signal arrives meanwhile)."""
@@ -248,11 +257,14 @@ class TeardownWatchdog:
             if time.monotonic() >= self.deadline():
                 print(f"[fsr] error: shutdown did not finish within {time.monotonic() - self.began:.1f} s "
                       "(node teardown hung): exiting now", file=sys.stderr, flush=True)
+                if self.hard:
+                    os.kill(os.getpid(), TEARDOWN_HUNG_SIGNAL)
                 os._exit(EXIT_FAILURE)
 
     def cancel(self) -> None:
         self.finished.set()
         if self.hard:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
             faulthandler.cancel_dump_traceback_later()
 
 
