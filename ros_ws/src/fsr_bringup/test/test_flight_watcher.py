@@ -137,3 +137,23 @@ def test_a_controller_ended_by_its_teardown_watchdog_is_a_warning(tmp_path, monk
                        fixed_domain(0), 1.0, Console(quiet=True))
     assert result.exit_code == 0 and result.failures == []
     assert len(result.notes) == 1 and result.notes[0].startswith("controller: its rcl/DDS teardown hung")
+
+
+RECORDER_TEARDOWN_HUNG = textwrap.dedent('''
+    import os, signal, time
+    signal.signal(signal.SIGINT, lambda *_: os.kill(os.getpid(), signal.SIGALRM))  # stopped: file closed, then hung
+    time.sleep(600)
+''')
+
+
+def test_a_recorder_ended_by_its_teardown_watchdog_after_the_flight_is_a_warning(tmp_path, monkeypatch):
+    monkeypatch.setattr(watcher_module, "watcher_command",
+                        lambda namespaces: [sys.executable, "-c", FINAL_STATUS_WATCHER, "finished"])
+    monkeypatch.setattr(flight_module, "node_commands", lambda *args: [
+        ("recorder", [sys.executable, "-c", RECORDER_TEARDOWN_HUNG]),
+        ("simulator", [sys.executable, "-c", "import time; time.sleep(1.0)"])])
+    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
+                       fixed_domain(0), 1.0, Console(quiet=True))
+    assert result.exit_code == 0 and result.failures == []
+    assert len(result.notes) == 1 and result.notes[0].startswith("recorder: its rcl/DDS teardown hung")

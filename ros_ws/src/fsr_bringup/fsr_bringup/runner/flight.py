@@ -254,10 +254,11 @@ def fly_graph(
         return FlightResult(EXIT_INTERRUPTED, failures, wall_time, sim_time, interrupted=True,
                             stepping_rate=stepping_rate, notes=notes)
     recorder = group.get("recorder")
-    if recorder is not None and "recorder" not in reported and recorder.returncode == TEARDOWN_HUNG:
-        notes.append(teardown_hung_note(recorder))  # the file was closed before the teardown
-    elif recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
-        failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
+    if recorder is not None and "recorder" not in reported and recorder.returncode not in (0, None):
+        if recorder.returncode == TEARDOWN_HUNG:
+            notes.append(teardown_hung_note(recorder))  # the file was closed before the teardown
+        else:
+            failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
     exit_code = EXIT_NODE_FAILED if failures else 0
     for namespace, status in (remote_end or {}).items():  # the simulators ran on another host
         where = f"{namespace}/simulator" if namespace else "simulator"
