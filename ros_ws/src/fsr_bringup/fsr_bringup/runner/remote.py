@@ -19,7 +19,6 @@ from collections.abc import Iterable
 
 ROLES = ("simulator", "controller", "estimator", "recorder")
 RECORDER_NODE = "fsr_recorder"  # the recorder's ROS node name (its process is called "recorder")
-FINAL_STATES = ("finished", "diverged", "stopped")
 
 
 def parse_node_selection(text: str, process_names: Iterable[str]) -> set[str]:

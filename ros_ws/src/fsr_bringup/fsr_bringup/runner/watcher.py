@@ -12,7 +12,7 @@ import json
 import sys
 import threading
 
-from fsr_bringup.runner.remote import FINAL_STATES
+from fsr_sim.ros.flight_end import FINAL_STATES
 
 WATCHER_PROCESS = "flight_watcher"  # its name among the run's processes (log: <logs>/flight_watcher.log)
 

@@ -34,6 +34,7 @@ import yaml
 
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
 from fsr_bringup.runner.processes import _die_with_parent
+from fsr_sim.ros.flight_end import FINAL_STATES
 from fsr_sim.ros.runtime import configure_environment
 
 # A small scenario to start from: the exercise-4 quadrotor hovering 10 m up, no ground, 0.5 s.
@@ -46,8 +47,6 @@ BASE_SCENARIO: dict[str, Any] = {
     "environment": {"ground": {"enabled": False}},
     "lockstep": {"timeout": 2.0},
 }
-
-FINAL_STATES = ("finished", "diverged", "stopped")
 
 
 def merged(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
