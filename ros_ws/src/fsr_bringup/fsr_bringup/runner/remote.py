@@ -14,7 +14,6 @@ peers), the simulator's handshake waits for its odom subscribers and its command
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable
 
 ROLES = ("simulator", "controller", "estimator", "recorder")
@@ -49,12 +48,3 @@ def expected_node_paths(process_names: Iterable[str]) -> dict[str, str]:
         else:
             paths["/" + name] = name
     return paths
-
-
-def parse_status(data: str) -> dict:
-    """The ``sim_status`` JSON as a dict (``{}`` if it is not JSON)."""
-    try:
-        status = json.loads(data)
-    except ValueError:
-        return {}
-    return status if isinstance(status, dict) else {}

@@ -29,7 +29,7 @@ import json
 import sys
 import time
 
-from fsr_bringup.runner.remote import parse_status
+from fsr_sim.ros.flight_end import parse_status
 
 NODE_NAME = "fsr_fly_watcher"
 NODE_LIST_PERIOD = 1.0  # s between two lists of the graph's nodes

@@ -46,12 +46,18 @@ SIGNAL_DRAIN_S = 1.2  # s after a signal: the drain ends then at the latest
 STAMP_TOLERANCE_NS = 1000  # sim_time is a float of seconds; steps are >= 1 us apart
 
 
-def _final_status(text: str) -> dict | None:
+def parse_status(text: str) -> dict:
+    """A ``sim_status`` JSON text as a dict (``{}`` if it is not a JSON object)."""
     try:
         status = json.loads(text)
     except ValueError:
-        return None
-    return status if isinstance(status, dict) and status.get("state") in FINAL_STATES else None
+        return {}
+    return status if isinstance(status, dict) else {}
+
+
+def _final_status(text: str) -> dict | None:
+    status = parse_status(text)
+    return status if status.get("state") in FINAL_STATES else None
 
 
 def final_state(text: str) -> str | None:
