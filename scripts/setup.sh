@@ -23,4 +23,7 @@ fi
 # Byte-compile fsr's sources: every node and fsr-fly starts faster (an environment with
 # PYTHONDONTWRITEBYTECODE=1 would otherwise compile them at each start; a stale .pyc is simply recompiled).
 "$venv/bin/python" -m compileall -q "$root/ros_ws/src" >/dev/null || true
+# Compile the flight core once into numba's on-disk cache (a minute the first time, a second once cached),
+# so that no flight and no node compiles anything.
+"$venv/bin/fsr-compile"
 echo "fsr environment ready: $venv"

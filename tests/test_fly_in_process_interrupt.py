@@ -21,12 +21,14 @@ FLY = str(Path(sys.executable).parent / "fsr-fly")
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_in_process_flight_exits_130_with_a_closed_recording_and_its_analysis(tmp_path, signum):
     out = tmp_path / "run.mcap"
-    process = subprocess.Popen([FLY, "ex4_geometric", "--in-process", "--out", str(out)], cwd=tmp_path,
+    # A long flight (the compiled loop flies 30 s in well under a second): the signal arrives mid-flight.
+    process = subprocess.Popen([FLY, "ex4_geometric", "--in-process", "--duration", "300", "--out", str(out)],
+                               cwd=tmp_path,
                                env={**os.environ, "MPLBACKEND": "Agg"}, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         deadline = time.monotonic() + 60.0
-        while not (out.is_file() and out.stat().st_size > 0):  # the recorder opened the file: flying
+        while not (out.is_file() and out.stat().st_size > 1_000_000):  # recorded steps reach the file: flying
             assert process.poll() is None, process.communicate()
             assert time.monotonic() < deadline, "the flight did not start"
             time.sleep(0.05)
@@ -40,7 +42,7 @@ def test_interrupted_in_process_flight_exits_130_with_a_closed_recording_and_its
     recording = open_recording(out)
     assert not recording.truncated
     status = json.loads(recording.messages("sim_status")[-1][1].data)
-    assert status["state"] == "stopped" and 0 < status["steps"] < 30000
+    assert status["state"] == "stopped" and 0 < status["steps"] < 300_000
     assert recording.count("odom") == status["steps"] + 1 == recording.count("wrench_cmd")
     summary = (tmp_path / "run" / "summary.md").read_text()
     assert f"interrupted at t = {status['sim_time']:.3f} s" in summary

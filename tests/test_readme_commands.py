@@ -28,6 +28,8 @@ from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.recording.reader import open_recording
 
+pytestmark = pytest.mark.slow  # every command of the README, many flights
+
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
 LINKED = (".venv", "scripts", "requirements.txt", "ros_ws", "examples", "benchmarks")

@@ -27,6 +27,7 @@ setup(
             "fsr-fly = fsr_bringup.cli.fly_cli:main",
             "fsr-record = fsr_bringup.recording.recorder_node:main",
             "fsr-analyze = fsr_bringup.cli.analyze_cli:main",
+            "fsr-compile = fsr_bringup.cli.compile_cli:main",
         ],
     },
 )

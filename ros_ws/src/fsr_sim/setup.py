@@ -13,7 +13,8 @@ setup(
     ],
     # runtime Python dependencies (the ROS message packages and rclpy are <exec_depend>s in package.xml,
     # installed from pip by requirements.txt); mcap, mcap-ros2-support, ros-rosidl-parser: fsr_sim.recording
-    install_requires=["setuptools", "numpy", "scipy", "PyYAML", "mcap", "mcap-ros2-support", "ros-rosidl-parser"],
+    install_requires=["setuptools", "numpy", "scipy", "numba", "PyYAML", "mcap", "mcap-ros2-support",
+                      "ros-rosidl-parser"],
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",

@@ -1,11 +1,13 @@
 """One object that turns a state into an actuator command: planner + control law + allocation.
 
-``FlightController.command(t, p, R, v_world, w_body)`` evaluates the reference at ``t`` [s], runs the
-configured law (:class:`fsr_control.controllers.common.ControlLaw`: geometric or Voliro, both returning a
-body wrench) on the nominal vehicle model (with ``controller.compensation: estimate``, cancelling the wrench its
-own observer estimated at the previous stamp, :mod:`fsr_control.compensation`), and allocates the wrench to
-rotor speeds (and tilts) or passes it through in wrench actuation. The controller node and the in-process loop
-both call exactly this, once per lockstep step (1 kHz), so it does no allocation beyond small arrays.
+``FlightController.command(t, p, R, v_world, w_body)`` runs the compiled core's tick
+(:func:`fsr_control.core.controller.controller_tick`: the reference at ``t`` [s], the configured law --
+geometric or Voliro, both returning a body wrench -- on the nominal vehicle model, with
+``controller.compensation: estimate`` cancelling the wrench its own observer estimated at the previous stamp
+(:mod:`fsr_control.compensation`), and the allocation to rotor speeds and tilts, or the wrench passed
+through in wrench actuation). The controller node and the in-process loop run exactly this tick, once per
+lockstep step; :meth:`FlightController.command_row` is its allocation-free form (the output row of
+:mod:`fsr_control.core.controller`), :meth:`FlightController.command` the same as Python objects.
 
 Frames: position world NED [m], ``R`` body FRD -> world, velocity world [m/s], angular velocity body
 [rad/s]. Outputs: body wrench [N, N m], rotor speeds [rad/s], tilt angles [rad].
@@ -18,13 +20,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_control.allocation import FixedRotorActuation, TiltingActuation, WrenchActuation
-from fsr_control.compensation import WrenchCompensator
+from fsr_control.allocation import make_actuation
+from fsr_control.compensation import WrenchCompensator, pack_compensation
 from fsr_control.config.controller_config import ControllerConfig
 from fsr_control.controllers.common import ControlLaw, WrenchCommand
 from fsr_control.controllers.geometric import GeometricController
 from fsr_control.controllers.voliro import VoliroController
+from fsr_control.core import controller as core
+from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
+from fsr_control.core.reference import CHANNELS, DERIVATIVES
 from fsr_control.planning.trajectory import Reference, Trajectory
+from fsr_sim.core.so3 import Mat3, Vec3, matrix_rows
 from fsr_sim.model.allocation import SaturationReport
 from fsr_sim.model.vehicle import Vehicle
 
@@ -57,6 +63,25 @@ class ControlOutput:
     saturated: bool
     desired: WrenchCommand  # the law's wrench before allocation, and the attitude it commands
     shortfall: np.ndarray | None = None  # (6,) demanded - produced body wrench [N, N m] (wrench_shortfall)
+
+    @classmethod
+    def from_row(cls, stamp: float, row: np.ndarray, rotors: bool, tilting: bool) -> ControlOutput:
+        """The output of one core tick (its row, :mod:`fsr_control.core.controller`)."""
+        def part(at: int, size: int = 3) -> np.ndarray:
+            return row[at:at + size].copy()
+
+        n = (len(row) - core.ROTOR_SPEEDS) // 2
+        reference = Reference(
+            stamp, part(core.REFERENCE_POSITION), part(core.REFERENCE_VELOCITY), part(core.REFERENCE_ACCELERATION),
+            part(core.REFERENCE_JERK), part(core.REFERENCE_SNAP), part(core.REFERENCE_ROTATION, 9).reshape(3, 3),
+            part(core.REFERENCE_ANGULAR_VELOCITY), part(core.REFERENCE_ANGULAR_ACCELERATION),
+            float(row[core.REFERENCE_YAW]), float(row[core.REFERENCE_YAW_RATE]),
+            float(row[core.REFERENCE_YAW_ACCELERATION]))
+        desired = WrenchCommand(part(core.DESIRED_FORCE), part(core.DESIRED_TORQUE),
+                                part(core.COMMANDED_ROTATION, 9).reshape(3, 3))
+        return cls(stamp, part(core.FORCE), part(core.TORQUE), part(core.ROTOR_SPEEDS, n) if rotors else None,
+                   part(core.ROTOR_SPEEDS + n, n) if tilting else None, reference, bool(row[core.SATURATED]),
+                   desired, part(core.SHORTFALL, 6))
 
     @property
     def thrust(self) -> float:
@@ -103,17 +128,20 @@ class FlightController:
         self.law = make_control_law(config, vehicle)
         if vehicle.is_tilting and actuation != "rotors":
             raise ValueError("a tilting-rotor vehicle needs 'actuation: rotors' (its wrench is 6-D)")
-        if actuation == "wrench":
-            self.actuator = WrenchActuation()
-        elif vehicle.is_tilting:
-            objective = config.secondary_objective
-            self.actuator = TiltingActuation.with_objective(
-                vehicle, objective.type, objective.exponent, objective.iterations, config.allocation
-            )
-        else:
-            self.actuator = FixedRotorActuation(vehicle, config.allocation, config.air_mode)
+        objective = config.secondary_objective
+        self.actuator = make_actuation(vehicle, actuation, config.allocation, config.air_mode, objective.type,
+                                       objective.exponent, objective.iterations)
         self.compensator = (WrenchCompensator(config.compensation, vehicle)
                             if config.compensation is not None else None)
+        compensation = ((self.compensator.params, self.compensator.state) if self.compensator is not None
+                        else pack_compensation(None, vehicle))
+        self.rotors = actuation == "rotors"
+        self.tilting = self.rotors and vehicle.is_tilting
+        self.output = np.zeros(core.output_size(vehicle.rotor_count))  # the last tick's output row
+        self.state = core.ControllerState(self.law.memory, self.actuator.state, compensation[1],
+                                          np.zeros((DERIVATIVES, CHANNELS)))
+        self._law_and_allocation = (self.law.params, self.actuator.params, compensation[0])
+        self.params: core.ControllerParams | None = None  # packed with the trajectory's table
         self.trajectory: Trajectory | None = None
         self._pending_goal: tuple[np.ndarray, np.ndarray, float] | None = None
         self.last_stamp = start_time
@@ -141,10 +169,30 @@ class FlightController:
             goal_position, goal_rotation, duration = self._pending_goal
             self._pending_goal = None
             self.trajectory.replan(goal_position, goal_rotation, time, duration)
+        self._pack()
+
+    def _pack(self) -> None:
+        """(Re)pack the core's parameters with the trajectory's current table."""
+        self.params = core.ControllerParams(self.trajectory.table(), *self._law_and_allocation)
 
     def reference(self, stamp_s: float) -> Reference:
         """The desired state at ``stamp_s`` [s] (the trajectory must exist)."""
         return self.trajectory.evaluate(stamp_s)
+
+    def command_row(self, stamp_s: float, position: Vec3, rotation: Mat3, velocity_world: Vec3,
+                    angular_velocity_body: Vec3) -> np.ndarray:
+        """The core tick for the state at ``stamp_s`` [s] (position, velocity world and angular velocity body as
+        3-tuples of floats, ``R`` as its rows): its output row (:attr:`output`, reused at every call).
+
+        Raises ValueError when no attitude can be commanded (the reference is in the row then, nothing else)."""
+        if self.trajectory is None:
+            self._plan(np.array(position), np.array(rotation), stamp_s)
+        self.last_stamp = stamp_s
+        status = core.controller_tick(self.params, self.state, stamp_s, position, rotation, velocity_world,
+                                      angular_velocity_body, self.output)
+        if status != ATTITUDE_OK:
+            raise ValueError(ATTITUDE_ERRORS[status])
+        return self.output
 
     def command(
         self,
@@ -154,26 +202,10 @@ class FlightController:
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
     ) -> ControlOutput:
-        """Command for the state at ``stamp_s`` [s]."""
-        if self.trajectory is None:
-            self._plan(position, rotation, stamp_s)
-        self.last_stamp = stamp_s
-        reference = self.trajectory.evaluate(stamp_s)
-        compensator = self.compensator
-        if compensator is None:
-            desired = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body)
-            actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
-        else:  # cancel the estimate of t_(k-1); then feed the observer this state and this command
-            estimate = compensator.estimate(stamp_s, position)
-            desired = self.law.compute(reference, position, rotation, velocity_world, angular_velocity_body,
-                                       estimate)
-            actuated = self.actuator.allocate(stamp_s, desired.force_body, desired.torque_body)
-            compensator.record(rotation, velocity_world, angular_velocity_body, actuated.force_body,
-                               actuated.torque_body)
-        return ControlOutput(
-            stamp_s, actuated.force_body, actuated.torque_body, actuated.rotor_speeds, actuated.tilt_angles,
-            reference, actuated.saturated, desired, actuated.shortfall,
-        )
+        """Command for the state at ``stamp_s`` [s] (arrays: position (3,), ``R`` (3, 3), velocities (3,))."""
+        row = self.command_row(float(stamp_s), _vector(position), matrix_rows(np.ascontiguousarray(rotation, float)),
+                               _vector(velocity_world), _vector(angular_velocity_body))
+        return ControlOutput.from_row(float(stamp_s), row, self.rotors, self.tilting)
 
     def set_goal(
         self,
@@ -210,3 +242,9 @@ class FlightController:
             self._pending_goal = (position, rotation, duration)
             return
         self.trajectory.replan(position, rotation, now, duration)
+        self._pack()
+
+
+def _vector(values: np.ndarray) -> Vec3:
+    x, y, z = np.asarray(values, dtype=float).tolist()
+    return x, y, z

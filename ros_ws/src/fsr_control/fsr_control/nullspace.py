@@ -19,9 +19,9 @@ step's ``z``) solve it, with
     hess = p sum_i (|t_i|^(p-2) N_i^T N_i + (p - 2) |t_i|^(p-4) (N_i^T t_i)(N_i^T t_i)^T).
 
 Thrusts are scaled by their mean before the steps so that the powers stay near 1. The constant
-``N_i^T N_i`` is precomputed (the first Hessian term is then one matrix product) and the 2 x 2 Newton
-system of the tilting quadrotor is solved in closed form (numpy's per-call overhead dominates at this
-size). The wrench is unchanged
+``N_i^T N_i`` is precomputed once (:func:`null_space_gram`) and the Newton steps run in the compiled core
+(:func:`fsr_control.core.allocation.null_space_correction`; the 2 x 2 system of the tilting quadrotor in
+closed form). The wrench is unchanged
 (to rounding): tracking is the same, only the rotor speeds and tilt angles change. Over the exercise-5
 flight it lowers the peak rotor speed while the vehicle holds roll = pitch = 45 deg (numbers in the README,
 "Voliro secondary objective", checked by ``tests/flights/test_flight_ex5.py``).
@@ -32,59 +32,8 @@ from __future__ import annotations
 import numpy as np
 
 
-class PeakThrustObjective:
-    """Null-space correction ``N z`` that minimises ``sum_i |t_i|^p`` (module docstring)."""
-
-    def __init__(self, null_basis: np.ndarray, exponent: int = 8, iterations: int = 3) -> None:
-        if exponent < 4 or exponent % 2:
-            raise ValueError(f"exponent must be an even integer >= 4, got {exponent}")
-        if iterations < 1:
-            raise ValueError(f"iterations must be >= 1, got {iterations}")
-        self.basis = np.asarray(null_basis, dtype=float)  # (2n, k)
-        rows, self.dimension = self.basis.shape
-        self.rotor_count = rows // 2
-        self.per_rotor = self.basis.reshape(self.rotor_count, 2, self.dimension)  # N_i: (2, k)
-        self.exponent = exponent
-        self.iterations = iterations
-        self._z = np.zeros(self.dimension)  # previous solution [N], warm start
-        # N_i^T N_i per rotor, flattened: sum_i w_i N_i^T N_i = (w @ ntn).reshape(k, k).
-        self._ntn = np.einsum("ijk,ijl->ikl", self.per_rotor, self.per_rotor).reshape(self.rotor_count, -1)
-
-    def correction(self, u_p: np.ndarray) -> np.ndarray:
-        """``N z`` [N] to add to the minimum-norm solution ``u_p`` (shape (2n,))."""
-        if self.dimension == 0:
-            return np.zeros_like(u_p)
-        pairs = u_p.reshape(self.rotor_count, 2)
-        scale = float(np.sqrt(np.einsum("ij,ij->i", pairs, pairs)).sum()) / self.rotor_count  # the mean, as np.mean
-        if not scale > 1e-9:
-            self._z[:] = 0.0
-            return np.zeros_like(u_p)
-        half = self.exponent // 2
-        k = self.dimension
-        u = u_p / scale
-        z = self._z / scale
-        for _ in range(self.iterations):
-            t = (u + self.basis @ z).reshape(self.rotor_count, 2)
-            sq = np.einsum("ij,ij->i", t, t)  # |t_i|^2
-            nt = np.einsum("ijk,ij->ik", self.per_rotor, t)  # N_i^T t_i, (n, k)
-            w1 = sq ** (half - 1)  # |t_i|^(p-2)
-            w2 = (self.exponent - 2) * sq ** (half - 2)  # (p-2) |t_i|^(p-4)
-            grad = w1 @ nt
-            hess = (w1 @ self._ntn).reshape(k, k) + (nt.T * w2) @ nt
-            z = z - _solve(hess, grad)
-        self._z = z * scale
-        return self.basis @ self._z
-
-    def reset(self) -> None:
-        self._z[:] = 0.0
-
-
-def _solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """``A^-1 b`` for the small symmetric positive-definite Hessian: closed form for 2 x 2 (the tilting
-    quadrotor), LAPACK otherwise."""
-    if rhs.shape == (2,):
-        (a, b), (c, d) = matrix.tolist()
-        r0, r1 = rhs.tolist()
-        det = a * d - b * c
-        return np.array(((d * r0 - b * r1) / det, (a * r1 - c * r0) / det))
-    return np.linalg.solve(matrix, rhs)
+def null_space_gram(null_basis: np.ndarray) -> np.ndarray:
+    """``N_i^T N_i`` of every rotor ``i`` (rows ``2i, 2i + 1`` of the null basis (2n, k)), flattened: (n, k * k)."""
+    rows, k = null_basis.shape
+    per_rotor = null_basis.reshape(rows // 2, 2, k)
+    return np.ascontiguousarray(np.einsum("ijk,ijl->ikl", per_rotor, per_rotor).reshape(rows // 2, k * k))

@@ -7,13 +7,16 @@ import copy
 import numpy as np
 import pytest
 
-from fsr_control.compensation import CONTACT_TOLERANCE, Surfaces, WrenchCompensator, surfaces_for
+from fsr_control.compensation import CONTACT_TOLERANCE, WrenchCompensator
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController
 from fsr_control.planning.trajectory import Trajectory, Waypoint
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
+from fsr_sim.core.surfaces import ceiling_rest_z, ground_rest_z, in_contact
+from fsr_sim.model.environment import Environment, Surface, contact_mask, pack_surfaces
 from fsr_sim.model.so3 import rotation_from_euler_zyx
+from fsr_sim.model.vehicle import load_vehicle
 
 
 def with_keys(name: str, **changes: object) -> Scenario:
@@ -41,8 +44,9 @@ def test_estimate_takes_the_estimator_filter_and_the_surfaces():
                                          estimator__c0=25.0, estimator__r=3))
     assert (config.compensation.c0, config.compensation.r) == (25.0, 3)
     assert config.compensation.control_period == pytest.approx(0.001)
-    assert config.compensation.surfaces.ground_rest_z == pytest.approx(-0.15)  # octocopter feet 0.15 m down
-    assert config.compensation.surfaces.ceiling_rest_z is None
+    surfaces = config.compensation.surfaces
+    assert ground_rest_z(surfaces) == pytest.approx(-0.15)  # octocopter feet 0.15 m down
+    assert surfaces.ground and not surfaces.ceiling
 
 
 def test_estimate_is_refused_without_the_estimator():
@@ -58,22 +62,20 @@ def test_unknown_mode_is_refused():
         controller_config(with_keys("ex3_estimation", controller__compensation="integral"))
 
 
-def test_contact_rule_ground_and_ceiling():
-    surfaces = Surfaces(ground_rest_z=-0.15, ceiling_rest_z=-2.9)
-    assert surfaces.in_contact(-0.15)  # standing on the ground
-    assert surfaces.in_contact(-0.15 - 0.5 * CONTACT_TOLERANCE)
-    assert not surfaces.in_contact(-0.16)  # octo_ground_effect's low hover: 1 cm clearance
-    assert surfaces.in_contact(-2.9) and not surfaces.in_contact(-2.8)
-    mask = surfaces.contact_mask(np.array([-0.15, -0.16, -1.0, -2.9]))
+def test_contact_rule_feet_or_top_within_the_tolerance():
+    octocopter = load_vehicle("octocopter")  # feet 0.15 m below, top 0.1 m above the centre
+    surfaces = pack_surfaces(Environment(ceiling=Surface(enabled=True, height=-3.0)), octocopter)
+    assert ceiling_rest_z(surfaces) == pytest.approx(-3.0 + octocopter.top_height)
+    rest = ground_rest_z(surfaces)
+    assert in_contact(surfaces, rest)  # standing on the ground
+    assert in_contact(surfaces, rest - 0.5 * CONTACT_TOLERANCE)
+    assert not in_contact(surfaces, rest - 0.01)  # octo_ground_effect's low hover: 1 cm clearance
+    top = ceiling_rest_z(surfaces)
+    assert in_contact(surfaces, top) and not in_contact(surfaces, top + 0.1)
+    mask = contact_mask(surfaces, np.array([rest, rest - 0.01, -1.0, top]))
     assert mask.tolist() == [True, False, False, True]
-    assert not Surfaces().in_contact(100.0)
-
-
-def test_surfaces_for_uses_contact_and_top_heights():
-    vehicle = simulation_config(load_scenario("ceiling_approach")).vehicle
-    surfaces = surfaces_for(vehicle, 0.0, -3.0)
-    assert surfaces.ground_rest_z == pytest.approx(-vehicle.contact_height)
-    assert surfaces.ceiling_rest_z == pytest.approx(-3.0 + vehicle.top_height)
+    free = pack_surfaces(Environment(ground=Surface(enabled=False)), octocopter)
+    assert not in_contact(free, 100.0)
 
 
 def hover_compensator(c0: float = 10.0) -> tuple[WrenchCompensator, float]:
@@ -126,9 +128,9 @@ def test_a_stamp_gap_restarts_the_observer():
 
 def test_touching_the_ground_restarts_the_observer():
     compensator = converged_compensator()
-    ground_rest_z = compensator.config.surfaces.ground_rest_z
-    assert ground_rest_z == pytest.approx(-0.1)  # step_disturbance: ground at 0, quadrotor feet 0.1 m down
-    assert compensator.estimate(0.2, np.array([0.0, 0.0, ground_rest_z])) is None
+    rest = ground_rest_z(compensator.config.surfaces)
+    assert rest == pytest.approx(-0.1)  # step_disturbance: ground at 0, quadrotor feet 0.1 m down
+    assert compensator.estimate(0.2, np.array([0.0, 0.0, rest])) is None
     assert compensator.in_contact and compensator.report.contact_steps == 1 and compensator.report.gaps == 0
     assert not np.any(compensator.observer.estimate)
 
@@ -175,7 +177,7 @@ def test_geometric_meets_a_force_by_tilting_and_cancels_the_torque():
     law, reference, state = law_inputs(tilting=False)
     state = (reference.position, state[1], reference.velocity, state[3])  # on the reference: |a| ~ m g
     plain = law.compute(reference, *state)
-    law._previous = None  # the same first step for both calls (measured acceleration)
+    law.reset()  # the same first step for both calls (measured acceleration)
     zero = (0.0, 0.0, 0.0)
     tau_hat = (0.0, 0.0, -0.4)
     compensated = law.compute(reference, *state, ((2.0, 0.0, 0.0), tau_hat, zero, zero))
@@ -184,7 +186,7 @@ def test_geometric_meets_a_force_by_tilting_and_cancels_the_torque():
     z_plain, z_comp = plain.rotation_commanded[:, 2], compensated.rotation_commanded[:, 2]
     assert z_comp[0] - z_plain[0] == pytest.approx(2.0 / plain.thrust, rel=0.05)
     assert compensated.thrust - plain.thrust == pytest.approx(2.0 * state[1][0, 2], abs=1e-12)  # u_T = -a^T R_b e3
-    law._previous = None
+    law.reset()
     only_torque = law.compute(reference, *state, (zero, tau_hat, zero, zero))
     np.testing.assert_allclose(only_torque.torque_body, plain.torque_body - np.array(tau_hat), atol=1e-12)
     np.testing.assert_array_equal(only_torque.force_body, plain.force_body)

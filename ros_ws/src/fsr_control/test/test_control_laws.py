@@ -77,7 +77,7 @@ def test_null_space_objective_keeps_the_wrench_and_lowers_the_peak_thrust():
     ours = TiltingActuation.with_objective(vehicle, "min_peak_speed", exponent=8, iterations=50)
     wrench = np.array((6.0, -4.5, -4.5, 0.01, -0.02, 0.003))  # roughly the 45/45 deg hover
     u_p = plain.inverse @ wrench
-    correction = ours.secondary.correction(u_p)
+    correction = ours.null_space_correction(u_p)
     np.testing.assert_allclose(allocation @ correction, 0.0, atol=1e-12)  # in the null space: same wrench
     thrust = np.linalg.norm((u_p + correction).reshape(4, 2), axis=1)
     assert thrust.max() < np.linalg.norm(u_p.reshape(4, 2), axis=1).max() - 0.01

@@ -36,7 +36,7 @@ def test_packets_equal_the_message_objects(file, overrides):
                                     rotation_from_quaternion(q / np.linalg.norm(q)), rng.normal(size=3),
                                     rng.normal(size=3))
         expected = controller_messages(stamp, output, rotors)
-        packed = packets.pack(stamp, output)
+        packed = packets.pack(stamp, controller.output)
         assert [topic for topic, _ in packed] == [topic for topic, _ in expected]
         for (topic, data), (_, message) in zip(packed, expected, strict=True):
             if topic in ("reference", "attitude_cmd"):  # quaternion and R w on floats: equal to rounding

@@ -8,8 +8,6 @@ import yaml
 
 from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
 from fsr_sim.model.frames import GRAVITY
-from fsr_sim.model.rigid_body import RigidBody, pack_state
-from fsr_sim.model.so3 import rotation_from_quaternion
 
 
 def make_plant(vehicle="quadrotor_ex4", actuation="wrench", **values):
@@ -17,10 +15,11 @@ def make_plant(vehicle="quadrotor_ex4", actuation="wrench", **values):
     return Plant(load_vehicle(vehicle), **{"dt": 0.001, "actuation": actuation, **values})
 
 
-def test_model_imports_neither_yaml_nor_ros():
+def test_model_imports_neither_ros_nor_the_yaml_readers():
+    """The model loads no ROS and none of fsr's configuration readers (numba itself imports PyYAML)."""
     code = ("import sys, fsr_sim.model, fsr_sim.model.allocation; "
-            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('yaml', 'rclpy', 'rosidl_parser') "
-            "or m.endswith(('.msg', '_msgs'))))")
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_parser') "
+            "or m.startswith('fsr_sim.config') or m.endswith(('.msg', '_msgs'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
@@ -77,26 +76,23 @@ def test_rotor_hover_stays_put_away_from_surfaces(vehicle):
 
 def test_torque_free_spinning_body_conserves_angular_momentum_and_stays_orthonormal():
     inertia = np.diag((0.02, 0.03, 0.05))
-    body = RigidBody(1.0, inertia)
-    state = pack_state(np.zeros(3), np.eye(3), np.zeros(3), np.array((0.3, 5.0, 0.4)))  # near-unstable axis
-    zero = np.zeros(3)
+    vehicle = load_vehicle("quadrotor_ex4").with_mass_properties(1.0, inertia)
+    plant = Plant(vehicle, dt=1e-3, actuation="wrench", environment=Environment(ground=Surface(enabled=False)),
+                  angular_velocity=(0.3, 5.0, 0.4))  # near-unstable axis; gravity does not turn the body
 
-    def no_wrench(_t, _p, _r):
-        return zero, zero
+    def world_momentum():
+        r = plant.rotation
+        return r @ inertia @ plant.angular_velocity, r
 
-    def world_momentum(s):
-        r = rotation_from_quaternion(s[6:10])
-        return r @ inertia @ s[10:13], r
-
-    momentum0, _ = world_momentum(state)
-    energy0 = 0.5 * state[10:13] @ inertia @ state[10:13]
-    for k in range(100_000):
-        state = body.step(k * 1e-3, state, 1e-3, no_wrench)
-    momentum, r = world_momentum(state)
+    momentum0, _ = world_momentum()
+    energy0 = 0.5 * plant.angular_velocity @ inertia @ plant.angular_velocity
+    for _ in range(100_000):
+        plant.step()
+    momentum, r = world_momentum()
     np.testing.assert_allclose(momentum, momentum0, rtol=0, atol=1e-9 * np.linalg.norm(momentum0))
-    assert 0.5 * state[10:13] @ inertia @ state[10:13] == pytest.approx(energy0, rel=1e-9)
+    assert 0.5 * plant.angular_velocity @ inertia @ plant.angular_velocity == pytest.approx(energy0, rel=1e-9)
     np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-14)
-    assert np.linalg.norm(state[6:10]) == pytest.approx(1.0, abs=1e-15)
+    assert np.linalg.norm(plant.quaternion) == pytest.approx(1.0, abs=1e-15)
 
 
 def test_ground_stops_the_vehicle():

@@ -12,7 +12,7 @@ while the true plant (mass ``m``, inertia ``I``) obeys, averaged over the same s
     m a_k = m g e3 + <R f_a> + f_ext + f_contact
 
 with ``f_a`` the body force the rotors really produce (``f_c`` scaled per rotor by the ground/ceiling
-thrust ratio, :class:`fsr_sim.model.environment.ThrustEffects`; ``f_c`` itself in wrench actuation) and
+thrust ratio; ``f_c`` itself in wrench actuation) and
 ``<.>`` the mean over the step (trapezoid of its ends). Eliminating ``a_k`` gives the effective force::
 
     f_eff = f_ext + (<R f_a> - R_k f_c) + f_contact + (m_e - m) (a_k - g e3)      [N, world NED]
@@ -23,12 +23,17 @@ plant sees an upward, negative-z force). The torque (body FRD, ``omega_dot_k`` b
 
     tau_eff = tau_ext + (<tau_a> - tau_c) + tau_contact + (I_e - I) omega_dot + omega x (I_e - I) omega
 
-Contact: the plant holds the vehicle on the ground (its state is put back on the ground with zero velocity
-and angular velocity at the end of a step); the contact force is the constraint force of those steps,
+Contact: the plant holds the vehicle on a surface (its state is put back on it with zero velocity and angular
+velocity at the end of a step: the contact rule of :func:`fsr_sim.core.surfaces.in_contact` with no motion
+left); the contact force is the constraint force of those steps,
 ``m a_k - m g e3 - <R f_a> - f_ext`` (and ``I omega_dot + omega x I omega - <tau_a> - tau_ext``), zero in
 every other step. Everything else comes from the recording and the scenario, not from the estimate.
 ``f_eff`` of step k is stamped ``t_k`` (the last sample, which has no step, is NaN) and given in body FRD
 (``R_k^T f_eff``, like ``wrench_estimate``) and world NED.
+
+No physics is written here: the actuator wrench, the thrust ratios and the contact rule are the plant's own
+compiled functions (:func:`fsr_sim.core.plant.actuator_wrench_log`, :func:`fsr_sim.model.environment.
+thrust_ratio_log`, :func:`fsr_sim.model.environment.contact_mask`), applied to the whole log.
 """
 
 from __future__ import annotations
@@ -38,17 +43,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_bringup.analysis.load import Flight, hold
-from fsr_sim.model.allocation import clamp_rotor_speeds, rotor_axes, tilt_basis
-from fsr_sim.model.environment import (
-    ThrustEffects,
-    ceiling_effect_ratio,
-    ground_effect_ratio,
-    multirotor_ground_effect_ratio,
-)
-from fsr_sim.model.vehicle import GRAVITY, Vehicle
-
-E3 = np.array((0.0, 0.0, 1.0))
-CONTACT_TOLERANCE = 1e-9  # m: a state this close to the resting height counts as held by the ground
+from fsr_sim.config.scenario import SimulationConfig, plant_from_config
+from fsr_sim.core.plant import actuator_wrench_log
+from fsr_sim.model.environment import contact_mask, pack_surfaces, thrust_ratio_log
+from fsr_sim.model.frames import E3, GRAVITY
 
 
 @dataclass
@@ -75,30 +73,23 @@ class EffectiveWrench:
         return np.hstack((self.force_body, self.torque_body))
 
 
-def actuator_wrench(vehicle: Vehicle, speeds: np.ndarray, tilts: np.ndarray | None,
+def actuator_wrench(config: SimulationConfig, speeds: np.ndarray, tilts: np.ndarray | None,
                     ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Body wrench the rotors produce, vectorised over samples, as the plant computes it.
+    """Body wrench the rotors produce for commands along a log, computed by the plant itself
+    (:func:`fsr_sim.core.plant.actuator_wrench_log`: speeds clamped to the limits, tilts to theirs, thrust and
+    lever-arm torque scaled by the thrust ratio, drag torque not).
 
-    speeds (n, r) commanded rotor speeds [rad/s] (clamped here to the vehicle's limits, as the plant does);
-    tilts (n, r) [rad] or None; ratios (n, r) thrust ratio ``T / T_OGE`` per rotor. Returns force (n, 3) [N]
-    and torque (n, 3) [N m] in body FRD: ``f = sum c_f r_i u_i z_i``,
-    ``tau = sum u_i (c_f r_i p_i x z_i - k_i c_m z_i)`` with ``u_i = |w_i| w_i`` (drag not scaled).
+    speeds (n, r) commanded rotor speeds [rad/s] (NaN: 0); tilts (n, r) [rad] or None; ratios (n, r) thrust
+    ratio ``T / T_OGE`` per rotor. Returns force (n, 3) [N] and torque (n, 3) [N m] in body FRD.
     """
-    speeds = np.nan_to_num(np.asarray(speeds, dtype=float))
-    clamped, _ = clamp_rotor_speeds(vehicle, np.abs(speeds) * speeds)
-    u = np.abs(clamped) * clamped  # (n, r)
-    if tilts is None or vehicle.tilt_axes is None:
-        axes = np.broadcast_to(rotor_axes(vehicle), (len(u), vehicle.rotor_count, 3))
-    else:
-        limit = vehicle.tilt_angle_max
-        alpha = np.clip(np.nan_to_num(np.asarray(tilts, dtype=float)), -limit, limit)[..., None]
-        z_v, z_l = tilt_basis(vehicle)
-        axes = np.cos(alpha) * z_v + np.sin(alpha) * z_l  # (n, r, 3)
-    thrust = vehicle.c_f * (ratios * u)[..., None] * axes  # per rotor force (n, r, 3)
-    force = thrust.sum(axis=1)
-    lever = np.cross(vehicle.positions, thrust).sum(axis=1)
-    drag = -(u * vehicle.spins * vehicle.c_m)[..., None] * axes
-    return force, lever + drag.sum(axis=1)
+    plant = plant_from_config(config)
+    speeds = np.ascontiguousarray(np.nan_to_num(np.asarray(speeds, dtype=float)))
+    with_tilts = tilts is not None and config.plant_vehicle.is_tilting
+    tilt_values = np.ascontiguousarray(np.nan_to_num(np.asarray(tilts, dtype=float))) if with_tilts else speeds
+    force, torque = np.zeros((len(speeds), 3)), np.zeros((len(speeds), 3))
+    actuator_wrench_log(plant.params, plant.core_state, speeds, tilt_values, with_tilts,
+                        np.ascontiguousarray(ratios, dtype=float), force, torque)
+    return force, torque
 
 
 def effective_wrench(flight: Flight) -> EffectiveWrench | None:
@@ -128,9 +119,9 @@ def effective_wrench(flight: Flight) -> EffectiveWrench | None:
         series = thrust_ratio_series(flight)
         ratios = series[1] * series[2] if series is not None else np.ones_like(speeds)
         # The same command acts at the end of the step, where the ratios (pose) have moved on.
-        f_start, tau_start = actuator_wrench(plant, speeds, tilts, ratios)
+        f_start, tau_start = actuator_wrench(config, speeds, tilts, ratios)
         next_ratios = np.vstack((ratios[1:], ratios[-1:]))
-        f_end, tau_end = actuator_wrench(plant, speeds, tilts, next_ratios)
+        f_end, tau_end = actuator_wrench(config, speeds, tilts, next_ratios)
     else:
         f_start = f_end = f_cmd
         tau_start = tau_end = tau_cmd
@@ -146,14 +137,11 @@ def effective_wrench(flight: Flight) -> EffectiveWrench | None:
     omega_dot[:-1] = np.diff(omega, axis=0) / dt
     gravity = GRAVITY * E3
     thrust_change = mean_actuator_world - np.einsum("kij,kj->ki", rotation, f_cmd)
-    # Contact: the ground held the vehicle at the end of the step (state put back at rest).
+    # Contact: a surface held the vehicle at the end of the step (state put back at rest on it).
     in_contact = np.zeros(n, dtype=bool)
-    ground = config.environment.ground
-    if ground.enabled:
-        rest = ground.height - plant.contact_height
-        held = (odom.position[:, 2] >= rest - CONTACT_TOLERANCE) & ~np.any(odom.velocity_world, axis=1) \
-            & ~np.any(omega, axis=1)
-        in_contact[:-1] = held[1:]
+    held = contact_mask(pack_surfaces(config.environment, plant), odom.position[:, 2]) \
+        & ~np.any(odom.velocity_world, axis=1) & ~np.any(omega, axis=1)
+    in_contact[:-1] = held[1:]
     contact_force = np.zeros((n, 3))
     contact_torque = np.zeros((n, 3))
     if in_contact.any():
@@ -182,24 +170,7 @@ def thrust_ratio_series(flight: Flight) -> tuple[np.ndarray, np.ndarray, np.ndar
     odom, config = flight.odom, flight.config
     if odom is None or config is None:
         return None
-    env, vehicle = config.environment, config.plant_vehicle
-    # World z of each rotor centre: p_z + (R p_i)_z, vectorised over the flight.
-    rotor_down = odom.position[:, 2:3] + odom.rotation[:, 2, :] @ vehicle.positions.T
-    ground = np.ones_like(rotor_down)
-    ceiling = np.ones_like(rotor_down)
-    if env.ground.enabled and env.ground.effect:
-        distance = env.ground.height - rotor_down
-        if env.ground_model == "multirotor":
-            effects = ThrustEffects(env, vehicle.positions, vehicle.rotor_radius)
-            ground = multirotor_ground_effect_ratio(
-                distance, vehicle.rotor_radius, effects.separation, effects.arm_lengths, env.body_factor,
-                env.ground.max_ratio,
-            )
-        else:
-            ground = ground_effect_ratio(distance, vehicle.rotor_radius, env.ground.max_ratio)
-    if env.ceiling.enabled and env.ceiling.effect:
-        ceiling = ceiling_effect_ratio(
-            rotor_down - env.ceiling.height, vehicle.rotor_radius, env.ceiling_k1, env.ceiling_k2,
-            env.ceiling.max_ratio,
-        )
+    surfaces = pack_surfaces(config.environment, config.plant_vehicle)
+    ground = thrust_ratio_log(surfaces._replace(ceiling_effect=False), odom.position[:, 2], odom.rotation)
+    ceiling = thrust_ratio_log(surfaces._replace(ground_effect=False), odom.position[:, 2], odom.rotation)
     return odom.t, ground, ceiling

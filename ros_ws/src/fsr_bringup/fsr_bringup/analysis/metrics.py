@@ -45,6 +45,7 @@ from fsr_bringup.analysis.load import Flight, hold, load_flight
 from fsr_estimation.core import metrics as estimator_metrics
 from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
+from fsr_sim.model.environment import contact_mask
 from fsr_sim.model.so3 import relative_rotation_angles
 from fsr_sim.recording.reader import Recording
 
@@ -155,7 +156,7 @@ def saturation(flight: Flight) -> dict[str, Any] | None:
 def compensation(flight: Flight) -> dict[str, Any] | None:
     """Whether the controller cancelled the estimated external wrench (``controller.compensation`` of the
     scenario in the metadata) and, if so, the states in which the contact rule switched it off
-    (:meth:`fsr_control.compensation.Surfaces.contact_mask` on ``odom``) and the late estimates: 0, the
+    (the contact rule, :func:`fsr_sim.model.environment.contact_mask`, on ``odom``) and the late estimates: 0, the
     observer runs inside the controller (:mod:`fsr_control.compensation`). None without a scenario."""
     if flight.compensation_mode is None:
         return None
@@ -163,7 +164,7 @@ def compensation(flight: Flight) -> dict[str, Any] | None:
         return {"mode": flight.compensation_mode}
     contact = None
     if flight.odom is not None:
-        contact = int(flight.compensation.surfaces.contact_mask(flight.odom.position[:, 2]).sum())
+        contact = int(contact_mask(flight.compensation.surfaces, flight.odom.position[:, 2]).sum())
     return {"mode": "estimate", "observer": "controller", "late_estimates": 0, "contact_steps": contact,
             "c0": flight.compensation.c0, "r": flight.compensation.r}
 

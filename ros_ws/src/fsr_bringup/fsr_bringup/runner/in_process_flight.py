@@ -1,20 +1,10 @@
-"""The closed loop in one process, with exactly the modules of the node graph and its lockstep contract.
+"""The closed loop in one process, with exactly the per-step functions of the node graph and its lockstep.
 
-Per step ``k`` (``t_k = k * control_period``, stamps in integer ns as ``Plant.stamp_ns``):
-
-1. the ``odom`` round trip: :func:`fsr_sim.model.odometry.odometry_values` (what the simulator publishes)
-   and :func:`fsr_sim.model.odometry.state_from_odometry_values` (what the nodes read back), the same
-   arithmetic as the graph, so results agree with it to rounding;
-2. ``FlightController.command(t_k, ...)`` -> wrench (what is applied), rotor speeds / tilts, reference;
-3. the estimator: :class:`fsr_estimation.core.stamped.StampedEstimator` gets the state and the command
-   stamped ``t_k``, as the estimator node does with ``odom`` and ``wrench_cmd``;
-4. the plant holds the command over ``[t_k, t_k+1]`` (``physics_substeps`` RK4 steps); a state that
-   diverges (``Plant.divergence()``) ends the flight, as the simulator does.
-
-The final state ``t_N`` is published and answered (the controller does not know it is the last) but not
-applied. With a recording, :class:`fsr_bringup.recording.flight_recording.FlightRecorder` writes what the
-nodes publish, the payloads their own packers build (byte for byte the graph's). Ctrl-C (KeyboardInterrupt)
-ends the flight as ``stopped``: the arrays and the recording hold every step flown.
+The loop itself is compiled (:mod:`fsr_bringup.core.flight_loop`: the simulator's lockstep step, the
+controller's tick and the estimator's sample, the functions the nodes call) and runs ``CHUNK_STEPS`` steps per
+call; between calls this driver writes the recording (:class:`fsr_bringup.recording.flight_recording.
+FlightRecorder`: the payloads the nodes publish, packed from the loop's arrays) and polls ``stop``, so Ctrl-C
+(KeyboardInterrupt) ends the flight as ``stopped`` with every step flown in the arrays and the recording.
 """
 
 from __future__ import annotations
@@ -27,12 +17,18 @@ from typing import Any
 
 import numpy as np
 
+from fsr_bringup.core import flight_loop
 from fsr_control.config.controller_config import controller_config
-from fsr_control.flight_controller import FlightController, seconds_from_ns
+from fsr_control.core import controller as control_layout
+from fsr_control.core.flatness import ATTITUDE_ERRORS
+from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
-from fsr_sim.model.odometry import odometry_values, state_from_odometry_values
+from fsr_sim.core.odometry import ODOM_QUATERNION, PUBLISHED_SIZE, TRUTH_FORCE, TRUTH_TORQUE
+from fsr_sim.model.plant import divergence_reason
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_INTERRUPTED, process_age
+
+CHUNK_STEPS = 1000  # steps per call of the compiled loop (signals and the recording are handled in between)
 
 
 @dataclass
@@ -162,12 +158,12 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process.
 
     ``recording``: write the MCAP file there. ``max_steps``: stop after that many steps (default: the
-    scenario's duration). ``stop``: polled before each step; a signal name (e.g. ``"SIGINT"``) ends the flight
-    there, between two steps (``end_reason`` ``stopped``, ``interrupted``). A KeyboardInterrupt (Ctrl-C in a
-    notebook) ends it too, wherever it strikes.
+    scenario's duration). ``stop``: polled between chunks of steps; a signal name (e.g. ``"SIGINT"``) ends the
+    flight there (``end_reason`` ``stopped``, ``interrupted``). A KeyboardInterrupt (Ctrl-C in a notebook)
+    ends it too, at the end of the chunk being flown.
     """
     from fsr_estimation.config.estimator_config import estimator_config
-    from fsr_estimation.core.stamped import StampedEstimator
+    from fsr_estimation.core.observer import MomentumObserver
 
     scenario = getattr(scenario, "scenario", scenario)
     sim = simulation_config(scenario)
@@ -175,17 +171,17 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     estimation = estimator_config(scenario)
     plant = plant_from_config(sim)
     controller = FlightController(config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation)
-    estimator = (StampedEstimator(estimation.mass, estimation.inertia, estimation.c0, estimation.r, sim.control_period)
-                 if estimation.enabled else None)
+    observer = MomentumObserver(estimation.mass, estimation.inertia, estimation.c0, estimation.r,
+                                sim.control_period) if estimation.enabled else MomentumObserver(1.0, (1, 1, 1),
+                                                                                               1.0, 1, 1.0)
     rotors = sim.actuation == "rotors"
     n = sim.vehicle.rotor_count
     steps = sim.step_count if max_steps is None else min(sim.step_count, int(max_steps))
     size = steps + 1
-    # Per-step values are collected in lists (one append per value, no small numpy writes) and stacked at the end.
-    rows: dict[str, list] = {key: [] for key in (
-        "time", "state", "quaternion", "p", "v", "a", "ref_rotation", "rotation_commanded", "force", "torque",
-        "force_desired", "torque_desired", "speeds", "tilts", "ext_force", "ext_torque", "est_force", "est_torque",
-        "mass_est")}
+    period_ns = int(round(sim.control_period * 1e9))
+    states, published = np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE))
+    control = np.zeros((size, control_layout.output_size(n)))
+    estimates = np.zeros((size, 7))
     recorder = None
     if recording is not None:
         from fsr_bringup.recording.flight_recording import FlightRecorder
@@ -194,106 +190,77 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     end_reason, reason, interrupted = "finished", f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
-    disturbed = bool(sim.disturbances)
-    tilting = rotors and sim.vehicle.is_tilting
-    append = {key: values.append for key, values in rows.items()}
     startup = process_age()
     start = time.perf_counter()
-    last = -1
+    count = 0  # steps flown and recorded (rows 0..count-1)
     try:
         if recorder is not None:
             recorder.status(0, "running", "", 0)
-        for k in range(size):
+        outcome = flight_loop.GOING_ON
+        while outcome == flight_loop.GOING_ON:
             signal_name = stop() if stop is not None else None
             if signal_name:
                 raise _Stopped(signal_name)
-            stamp_ns = plant.stamp_ns
-            state_vector = plant.state_vector
-            published = odometry_values(state_vector)
-            position, rotation, velocity_world, angular_velocity = state_from_odometry_values(*published)
-            output = controller.command(seconds_from_ns(stamp_ns), position, rotation, velocity_world,
-                                        angular_velocity)
-            external_wrench = plant.external_wrench() if disturbed else None
-            if external_wrench is not None:
-                append["ext_force"](rotation.T @ external_wrench[0])
-                append["ext_torque"](external_wrench[1])
-            estimate = None
-            if estimator is not None:
-                estimator.add_state(stamp_ns, rotation, velocity_world, angular_velocity)
-                estimate = estimator.add_command(stamp_ns, output.force_body, output.torque_body)
-                append["est_force"](estimate.force_body)
-                append["est_torque"](estimate.torque_body)
-                append["mass_est"](estimate.mass)
-            append["time"](seconds_from_ns(stamp_ns))
-            append["state"](state_vector.tolist())
-            append["quaternion"](published[1])
-            reference = output.reference
-            append["p"](reference.position)
-            append["v"](reference.velocity)
-            append["a"](reference.acceleration)
-            append["ref_rotation"](reference.rotation)
-            append["rotation_commanded"](output.desired.rotation_commanded)
-            append["force_desired"](output.desired.force_body)
-            append["torque_desired"](output.desired.torque_body)
-            append["force"](output.force_body)
-            append["torque"](output.torque_body)
-            if rotors:
-                append["speeds"](output.rotor_speeds)
-                if tilting:
-                    append["tilts"](output.tilt_angles)
-            if recorder is not None:
-                recorder.step_values(stamp_ns, published, external_wrench, output, estimate)
-            last = k
-            if k == steps:
-                break
-            if rotors:
-                plant.set_rotor_command(output.rotor_speeds, output.tilt_angles)
-            else:
-                plant.set_wrench_command(output.thrust, output.torque_body)
-            plant.step()
-            divergence = plant.divergence()
-            if divergence is not None:
-                end_reason, reason = "diverged", divergence
-                break
-    except KeyboardInterrupt as stop:  # Ctrl-C (fsr-fly also turns SIGTERM into one)
-        end_reason, reason, interrupted = "stopped", f"received {getattr(stop, 'signal_name', 'SIGINT')}", True
+            last = min(count + CHUNK_STEPS - 1, steps)
+            outcome, k, detail = flight_loop.fly_steps(
+                plant.params, plant.core_state, controller.params, controller.state, estimation.enabled,
+                observer.params, observer.state, count, last, steps, period_ns, states, published, control,
+                estimates)
+            flown = k + 1 if outcome != flight_loop.CONTROLLER_FAILED else k
+            if recorder is not None and flown > count:
+                recorder.write_steps(np.arange(count, flown, dtype=np.int64) * period_ns, published[count:flown],
+                                     control[count:flown], estimates[count:flown] if estimation.enabled else None)
+            count = flown
+            if outcome == flight_loop.DIVERGED:
+                end_reason, reason = "diverged", divergence_reason(detail, plant.params, plant.core_state)
+            elif outcome == flight_loop.CONTROLLER_FAILED:
+                end_reason, reason = "diverged", f"no command at t = {k * period_ns * 1e-9:.4f} s: " \
+                                                 f"{ATTITUDE_ERRORS[detail]}"
+    except KeyboardInterrupt as stopped:  # Ctrl-C (fsr-fly also turns SIGTERM into one)
+        end_reason, reason, interrupted = "stopped", f"received {getattr(stopped, 'signal_name', 'SIGINT')}", True
     finally:
         if recorder is not None:
             try:
-                final_ns = int(round(rows["time"][last] * 1e9)) if last >= 0 else 0
-                recorder.status(final_ns, end_reason, reason, max(last, 0))
+                recorder.status(max(count - 1, 0) * period_ns, end_reason, reason, max(count - 1, 0))
             finally:
                 recorder.close()
     wall = time.perf_counter() - start
-    count = last + 1
+    return flight_run(scenario, states[:count], published[:count], control[:count],
+                      estimates[:count] if estimation.enabled else None, controller, rotors,
+                      rotors and sim.vehicle.is_tilting, period_ns, end_reason, reason, wall, interrupted, startup)
 
-    def stack(key: str, shape: tuple[int, ...], present: bool = True) -> np.ndarray | None:
-        """The first ``count`` rows of a column (zeros where the loop did not fill it), or None."""
-        if not present:
-            return None
-        values = rows[key][:count]
-        if not values:
-            return np.zeros((count, *shape))
-        return np.array(values, dtype=float).reshape((len(values), *shape))
 
-    states = stack("state", (13,))
-    states[:, 6:10] = stack("quaternion", (4,))
-    external_force = stack("ext_force", (3,)) if disturbed else np.zeros((count, 3))
-    external_torque = stack("ext_torque", (3,)) if disturbed else np.zeros((count, 3))
-    with_estimator = estimator is not None
+def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, control: np.ndarray,
+               estimates: np.ndarray | None, controller: FlightController, rotors: bool, tilting: bool,
+               period_ns: int, end_reason: str, reason: str, wall: float, interrupted: bool,
+               startup: float | None) -> FlightRun:
+    """The :class:`FlightRun` of the flight loop's arrays (rows 0..K)."""
+    count = len(states)
+    n = (control.shape[1] - control_layout.ROTOR_SPEEDS) // 2
+    state = states.copy()
+    state[:, 6:10] = published[:, ODOM_QUATERNION:ODOM_QUATERNION + 4]  # the published sign (w >= 0)
+
+    def columns(at: int, width: int = 3) -> np.ndarray:
+        return control[:, at:at + width].copy()
+
     failures = {"diverged": [f"flight diverged: {reason}"], "stopped": [f"flight interrupted ({reason})"]}
+    c = control_layout
     return FlightRun(
-        time=np.array(rows["time"][:count], dtype=float), state=states, reference_position=stack("p", (3,)),
-        reference_velocity=stack("v", (3,)), reference_acceleration=stack("a", (3,)),
-        reference_rotation=stack("ref_rotation", (3, 3)), force_cmd=stack("force", (3,)),
-        torque_cmd=stack("torque", (3,)), rotor_speeds=stack("speeds", (n,), rotors),
-        tilt_angles=stack("tilts", (n,), tilting), external_force_body=external_force,
-        external_torque_body=external_torque, estimate_force_body=stack("est_force", (3,), with_estimator),
-        estimate_torque_body=stack("est_torque", (3,), with_estimator),
-        mass_estimate=stack("mass_est", (), with_estimator),
+        time=np.arange(count, dtype=np.int64) * period_ns * 1e-9, state=state,
+        reference_position=columns(c.REFERENCE_POSITION), reference_velocity=columns(c.REFERENCE_VELOCITY),
+        reference_acceleration=columns(c.REFERENCE_ACCELERATION),
+        reference_rotation=columns(c.REFERENCE_ROTATION, 9).reshape(count, 3, 3), force_cmd=columns(c.FORCE),
+        torque_cmd=columns(c.TORQUE), rotor_speeds=columns(c.ROTOR_SPEEDS, n) if rotors else None,
+        tilt_angles=columns(c.ROTOR_SPEEDS + n, n) if tilting else None,
+        external_force_body=published[:, TRUTH_FORCE:TRUTH_FORCE + 3].copy(),
+        external_torque_body=published[:, TRUTH_TORQUE:TRUTH_TORQUE + 3].copy(),
+        estimate_force_body=None if estimates is None else estimates[:, 0:3].copy(),
+        estimate_torque_body=None if estimates is None else estimates[:, 3:6].copy(),
+        mass_estimate=None if estimates is None else estimates[:, 6].copy(),
         saturation=controller.saturation.as_dict(), tilt_saturation=controller.tilt_saturation.as_dict(),
-        end_reason=end_reason, reason=reason, wall_time=wall, rotation_commanded=stack("rotation_commanded", (3, 3)),
-        force_desired=stack("force_desired", (3,)), torque_desired=stack("torque_desired", (3,)),
-        scenario=scenario, failures=failures.get(end_reason, []), interrupted=interrupted,
+        end_reason=end_reason, reason=reason, wall_time=wall,
+        rotation_commanded=columns(c.COMMANDED_ROTATION, 9).reshape(count, 3, 3),
+        force_desired=columns(c.DESIRED_FORCE), torque_desired=columns(c.DESIRED_TORQUE), scenario=scenario,
+        failures=failures.get(end_reason, []), interrupted=interrupted,
         compensation=controller.compensation_summary(), startup_time=startup,
     )

@@ -32,11 +32,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsr_control.allocation import ALLOCATION_STRATEGIES
-from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig, surfaces_for
+from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig
 from fsr_control.controllers import geometric, voliro
 from fsr_control.planning.trajectory import Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import Section, checked_spd
+from fsr_sim.model.environment import pack_surfaces
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
@@ -118,9 +119,7 @@ def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> 
         raise controller.error("compensation", "'estimate' needs the estimator: set estimator.enabled: true "
                                                "(or controller.compensation: none)")
     sim = simulation_config(scenario)
-    env = sim.environment
-    surfaces = surfaces_for(vehicle, env.ground.height if env.ground.enabled else None,
-                            env.ceiling.height if env.ceiling.enabled else None)
+    surfaces = pack_surfaces(sim.environment, vehicle)
     if estimation.c0 * sim.control_period > MAX_C0_PERIOD:
         raise controller.error("compensation", f"estimator.c0 * control period must be <= {MAX_C0_PERIOD:g} with "
                                                f"compensation (the compensated loop diverges from about 1), got "

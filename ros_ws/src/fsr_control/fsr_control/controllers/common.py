@@ -1,10 +1,10 @@
-"""What the control laws share: their interface, gains as float rows and the tracking errors (1 kHz).
+"""What the control laws share: their interface and their Python shell around the compiled core.
 
 The interface (:class:`ControlLaw`): ``compute(reference, position, rotation, velocity_world,
 angular_velocity_body) -> WrenchCommand``, the body wrench to produce and the attitude it commands;
-allocation (fsr_control.allocation) turns the wrench into rotor speeds and tilts. Both laws start from the
-position and velocity errors ``e_p = p - p_d``, ``e_v = v - v_d`` (world NED); the 3-vector algebra is
-fsr_sim.model.so3's single-sample float functions (one definition of each formula for the whole stack).
+allocation (fsr_control.allocation) turns the wrench into rotor speeds and tilts. The laws themselves are
+written once, in the compiled core (:mod:`fsr_control.core.laws`); :class:`CompiledLaw` packs a law's gains
+and nominal model once and calls it.
 """
 
 from __future__ import annotations
@@ -14,8 +14,12 @@ from typing import Protocol
 
 import numpy as np
 
+from fsr_control.core import laws
+from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
+from fsr_control.core.reference import ReferenceSample
 from fsr_control.planning.trajectory import Reference
-from fsr_sim.model.so3 import Mat3, Vec3
+from fsr_sim.core.so3 import Vec3, matrix_rows
+from fsr_sim.model.vehicle import Vehicle
 
 Compensation = tuple[Vec3, Vec3, Vec3, Vec3]
 """The estimated external wrench a law cancels (:mod:`fsr_control.compensation`): ``(f_hat, tau_hat, f_hat_dot,
@@ -76,29 +80,66 @@ class ControlLaw(Protocol):
         """
 
 
-def gain_rows(gain: np.ndarray) -> Mat3:
-    """A 3x3 gain matrix as float rows (for :func:`fsr_sim.model.so3.mat_vec3`)."""
-    return tuple(tuple(row) for row in np.asarray(gain, dtype=float).tolist())
+def compensation_of(compensation: Compensation | None) -> laws.Compensation:
+    """The core's :class:`~fsr_control.core.laws.Compensation` of ``(f_hat, tau_hat, f_hat_dot, f_hat_ddot)``."""
+    if compensation is None:
+        return laws.NO_COMPENSATION
+    force, torque, rate, acceleration = (tuple(float(v) for v in part) for part in compensation)
+    return laws.Compensation(True, force, torque, rate, acceleration)
 
 
-def tracking_errors(reference: Reference, position: np.ndarray, velocity_world: np.ndarray) -> tuple[Vec3, Vec3]:
-    """``(e_p, e_v) = (p - p_d, v - v_d)`` [m, m/s] (world NED), as float tuples."""
-    px, py, pz = position.tolist()
-    dx, dy, dz = reference.position.tolist()
-    vx, vy, vz = velocity_world.tolist()
-    ux, uy, uz = reference.velocity.tolist()
-    return (px - dx, py - dy, pz - dz), (vx - ux, vy - uy, vz - uz)
+def pack_law(vehicle: Vehicle, gains: dict[str, np.ndarray], voliro: bool,
+             angular_feedforward: str = "consistent") -> laws.LawParams:
+    """The core's :class:`~fsr_control.core.laws.LawParams` (gains (3, 3) each; ``k_v`` is Voliro's ``k_d``)."""
+    def gain(name: str) -> np.ndarray:
+        return np.ascontiguousarray(np.asarray(gains[name], dtype=float).reshape(3, 3))
+
+    return laws.LawParams(voliro, float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float),
+                          gain("k_p"), gain("k_d" if voliro else "k_v"), gain("k_r"), gain("k_w"),
+                          angular_feedforward == "report")
 
 
-def linear_feedback(k_a: Mat3, e_a: Vec3, k_b: Mat3, e_b: Vec3, scale: float, feedforward: Vec3) -> Vec3:
-    """``-K_a e_a - K_b e_b + scale * feedforward`` (the PD terms of both laws)."""
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = k_a
-    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = k_b
-    x, y, z = e_a
-    u, v, w = e_b
-    fx, fy, fz = feedforward
-    return (
-        -(a00 * x + a01 * y + a02 * z) - (b00 * u + b01 * v + b02 * w) + scale * fx,
-        -(a10 * x + a11 * y + a12 * z) - (b10 * u + b11 * v + b12 * w) + scale * fy,
-        -(a20 * x + a21 * y + a22 * z) - (b20 * u + b21 * v + b22 * w) + scale * fz,
+class CompiledLaw:
+    """A law of the compiled core on a nominal vehicle: its packed parameters (:attr:`params`) and memory."""
+
+    def __init__(self, params: laws.LawParams) -> None:
+        self.params = params
+        self.memory = np.zeros(laws.MEMORY_SIZE)
+        self.mass = params.mass
+        self.inertia = params.inertia
+
+    def reset(self) -> None:
+        """Forget the previous sample (the geometric law's measured acceleration restarts from the model's)."""
+        self.memory[:] = 0.0
+
+    def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
+                angular_velocity_body: np.ndarray, compensation: Compensation | None = None) -> WrenchCommand:
+        """The body wrench for this state and reference (:meth:`ControlLaw.compute`). Raises ValueError when no
+        attitude can be commanded (a zero thrust vector, or one horizontal along the heading)."""
+        sample = reference_sample(reference)
+        state = (_vector(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), _vector(velocity_world),
+                 _vector(angular_velocity_body))
+        if self.params.voliro:
+            result = laws.voliro_law(self.params, sample, *state, compensation_of(compensation))
+        else:
+            result = laws.geometric_law(self.params, self.memory, float(reference.time), sample, *state,
+                                        compensation_of(compensation))
+        status, force, torque, rotation_commanded = result
+        if status != ATTITUDE_OK:
+            raise ValueError(ATTITUDE_ERRORS[status])
+        return WrenchCommand(np.array(force), np.array(torque), np.array(rotation_commanded))
+
+
+def _vector(values: np.ndarray) -> tuple[float, float, float]:
+    x, y, z = np.asarray(values, dtype=float).tolist()
+    return x, y, z
+
+
+def reference_sample(reference: Reference) -> ReferenceSample:
+    """The core's :class:`~fsr_control.core.reference.ReferenceSample` of a :class:`Reference`."""
+    return ReferenceSample(
+        _vector(reference.position), _vector(reference.velocity), _vector(reference.acceleration),
+        _vector(reference.jerk), _vector(reference.snap), matrix_rows(np.ascontiguousarray(reference.rotation)),
+        _vector(reference.angular_velocity), _vector(reference.angular_acceleration), float(reference.yaw),
+        float(reference.yaw_rate), float(reference.yaw_acceleration),
     )

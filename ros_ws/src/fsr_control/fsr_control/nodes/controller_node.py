@@ -10,9 +10,10 @@ Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
 axis gave way at the rotor limits, see fsr_control.allocation), ``reference``, ``attitude_cmd`` (the commanded
 attitude ``R_c``) and ``wrench_desired`` (the law's wrench before allocation), all stamped ``t_k`` (lockstep
-contract; packed by :class:`fsr_control.nodes.packets.ControllerPackets` and published as CDR bytes, the
-values of :func:`fsr_control.nodes.messages.controller_messages`). ``odom`` is read from its CDR bytes
-(:mod:`fsr_sim.ros.cdr_read`) and taken from a wait set (``hot_subscriptions``, see
+contract): the compiled core's tick (:meth:`fsr_control.flight_controller.FlightController.command_row`, what the
+in-process loop runs) packed by :class:`fsr_control.nodes.packets.ControllerPackets` and published as CDR bytes.
+``odom`` is read from its CDR bytes (:func:`fsr_sim.ros.conversions.odometry_state_from_bytes`) and taken from a
+wait set (``hot_subscriptions``, see
 :class:`fsr_sim.ros.wait_set.WaitSetSpinner`); the node has no parameter services (parameters are read once).
 NaN/inf odom or goals are dropped with a rate-limited warning. Asked to stop after the simulator ended (its
 final ``sim_status``), it first answers every odom still queued up to the simulator's last state and waits
@@ -41,7 +42,7 @@ from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.model.allocation import WRENCH_AXES
-from fsr_sim.ros.conversions import state_from_odometry_bytes
+from fsr_sim.ros.conversions import odometry_state_from_bytes
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
@@ -123,12 +124,12 @@ class ControllerNode(Node):
         start = time.perf_counter()
         self.flight_end.activity()
         try:
-            stamp_ns, position, rotation, velocity_world, angular_velocity = state_from_odometry_bytes(data)
+            stamp_ns, position, rotation, velocity_world, angular_velocity = odometry_state_from_bytes(data)
         except ValueError as error:
             self.warn(f"dropped an odom: {error}")
             return
         try:
-            output = self.controller.command(
+            row = self.controller.command_row(
                 seconds_from_ns(stamp_ns), position, rotation, velocity_world, angular_velocity
             )
         except (ValueError, ArithmeticError) as error:  # never crash mid-flight; the simulator holds/fails safe
@@ -136,7 +137,7 @@ class ControllerNode(Node):
             self.answered_ns = stamp_ns
             return
         publishers = self.publishers_by_topic
-        for topic, packet in self.packets.pack(stamp_ns, output):
+        for topic, packet in self.packets.pack(stamp_ns, row):
             publishers[topic].publish(packet)
         self.answered_ns = stamp_ns
         self.callback_seconds += time.perf_counter() - start

@@ -1,18 +1,18 @@
 """The controller's per-step messages as packed CDR bytes: what the controller node publishes and what an
 in-process recording writes (:mod:`fsr_sim.ros.cdr_pack`; no rclpy needed).
 
-Same topics and values as :func:`fsr_control.nodes.messages.controller_messages` (tested equal field by
-field): ``rotor_cmd`` (rotor actuation only: ``rotor_i`` velocities, zero positions, and ``tilt_i`` positions
-with zero velocities for a tilting vehicle), ``wrench_cmd``, ``wrench_shortfall`` (when the allocation reports
-one), ``reference``, ``attitude_cmd``, ``wrench_desired``, all stamped with the answered state's stamp.
+The numbers are slices of the core tick's output row (:mod:`fsr_control.core.controller`), one or many
+rows at once (:meth:`ControllerPackets.values`): ``rotor_cmd`` (rotor actuation only: ``rotor_i`` velocities,
+zero positions, and ``tilt_i`` positions with zero velocities for a tilting vehicle), ``wrench_cmd``,
+``wrench_shortfall``, ``reference``, ``attitude_cmd``, ``wrench_desired``, all stamped with the answered
+state's stamp (same values as :func:`fsr_control.nodes.messages.controller_messages`, tested field by field).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+import numpy as np
 
-from fsr_control.flight_controller import ControlOutput
+from fsr_control.core import controller as core
 from fsr_sim.ros import cdr_pack
 
 WORLD_FRAME = "world_ned"
@@ -20,7 +20,7 @@ BODY_FRAME = "base_link_frd"
 
 
 class ControllerPackets:
-    """Packs a :class:`ControlOutput` into ``(topic, CDR bytes)`` pairs (relative topic names).
+    """Packs output rows of the core tick into ``(topic, CDR bytes)`` pairs (relative topic names).
 
     ``rotor_count`` and ``tilting`` fix ``rotor_cmd``'s joint names (rotor actuation, ``rotors`` True)."""
 
@@ -33,7 +33,6 @@ class ControllerPackets:
             names += [f"tilt_{i + 1}" for i in range(rotor_count)]
         count = len(names)
         self._rotor = cdr_pack.joint_state(BODY_FRAME, names, count, count) if rotors else None
-        self._zeros = [0.0] * rotor_count
         self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
         self._reference = cdr_pack.trajectory_point(WORLD_FRAME, BODY_FRAME)
         self._attitude = cdr_pack.quaternion_stamped(WORLD_FRAME)
@@ -43,58 +42,28 @@ class ControllerPackets:
         if self._rotor is not None:
             self.templates["rotor_cmd"] = self._rotor
 
-    def pack(self, stamp_ns: int, output: ControlOutput) -> list[tuple[str, bytes]]:
+    def pack(self, stamp_ns: int, row: np.ndarray) -> list[tuple[str, bytes]]:
         """Everything the controller publishes for the state stamped ``stamp_ns`` [ns], in publication order."""
         templates = self.templates
-        return [(topic, templates[topic].pack(stamp_ns, values)) for topic, values in self.values(output)]
+        return [(topic, templates[topic].pack(stamp_ns, values.tolist())) for topic, values in self.values(row)]
 
-    def values(self, output: ControlOutput) -> list[tuple[str, Sequence[float]]]:
-        """``(topic, numbers in field order)`` of everything published for ``output``, in publication order."""
-        published: list[tuple[str, Sequence[float]]] = []
+    def values(self, rows: np.ndarray) -> list[tuple[str, np.ndarray]]:
+        """``(topic, numbers in field order)`` of everything published for an output row (or for the rows of a
+        (K, width) array: then (K, m) each), in publication order."""
+        n = self.rotor_count
+        published: list[tuple[str, np.ndarray]] = []
         if self.rotors:
-            speeds = output.rotor_speeds.tolist()
-            if output.tilt_angles is not None:
-                values = [*self._zeros, *output.tilt_angles.tolist(), *speeds, *self._zeros]
+            speeds = rows[..., core.ROTOR_SPEEDS:core.ROTOR_SPEEDS + n]
+            zeros = np.zeros_like(speeds)
+            if self.tilting:
+                tilts = rows[..., core.ROTOR_SPEEDS + n:core.ROTOR_SPEEDS + 2 * n]
+                published.append(("rotor_cmd", np.concatenate((zeros, tilts, speeds, zeros), axis=-1)))
             else:
-                values = [*self._zeros, *speeds]
-            published.append(("rotor_cmd", values))
-        published.append(("wrench_cmd", (*output.force_body.tolist(), *output.torque_body.tolist())))
-        if output.shortfall is not None:
-            published.append(("wrench_shortfall", output.shortfall.tolist()))
-        reference = output.reference
-        rows = reference.rotation.tolist()
-        published.append(("reference", (
-            *reference.position.tolist(), *quaternion_of_rows(rows),
-            *reference.velocity.tolist(), *_mat_vec(rows, reference.angular_velocity.tolist()),
-            *reference.acceleration.tolist(), *_mat_vec(rows, reference.angular_acceleration.tolist()),
-        )))
-        published.append(("attitude_cmd", quaternion_of_rows(output.rotation_cmd.tolist())))
-        published.append(("wrench_desired", (*output.force_desired.tolist(), *output.torque_desired.tolist())))
+                published.append(("rotor_cmd", np.concatenate((zeros, speeds), axis=-1)))
+        published.append(("wrench_cmd", rows[..., core.FORCE:core.FORCE + 6]))
+        published.append(("wrench_shortfall", rows[..., core.SHORTFALL:core.SHORTFALL + 6]))
+        published.append(("reference", rows[..., core.REFERENCE_POSITION:
+                                            core.REFERENCE_POSITION + core.REFERENCE_MESSAGE_SIZE]))
+        published.append(("attitude_cmd", rows[..., core.COMMANDED_QUATERNION:core.COMMANDED_QUATERNION + 4]))
+        published.append(("wrench_desired", rows[..., core.DESIRED_FORCE:core.DESIRED_FORCE + 6]))
         return published
-
-
-def quaternion_of_rows(r: list[list[float]]) -> tuple[float, float, float, float]:
-    """Unit quaternion ``[x, y, z, w]``, ``w >= 0``, of the rows of a rotation matrix: Shepperd's method of
-    :func:`fsr_sim.model.so3.quaternion_from_rotation` on floats (equal to it to rounding, ~1 us instead of ~7)."""
-    trace = r[0][0] + r[1][1] + r[2][2]
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        q = ((r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s, 0.25 * s)
-    elif r[0][0] > r[1][1] and r[0][0] > r[2][2]:
-        s = 2.0 * math.sqrt(1.0 + r[0][0] - r[1][1] - r[2][2])
-        q = (0.25 * s, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s, (r[2][1] - r[1][2]) / s)
-    elif r[1][1] > r[2][2]:
-        s = 2.0 * math.sqrt(1.0 + r[1][1] - r[0][0] - r[2][2])
-        q = ((r[0][1] + r[1][0]) / s, 0.25 * s, (r[1][2] + r[2][1]) / s, (r[0][2] - r[2][0]) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + r[2][2] - r[0][0] - r[1][1])
-        q = ((r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, 0.25 * s, (r[1][0] - r[0][1]) / s)
-    x, y, z, w = q
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if w < 0.0:
-        norm = -norm
-    return x / norm, y / norm, z / norm, w / norm
-
-
-def _mat_vec(rows: list[list[float]], v: list[float]) -> tuple[float, float, float]:
-    return tuple(row[0] * v[0] + row[1] * v[1] + row[2] * v[2] for row in rows)

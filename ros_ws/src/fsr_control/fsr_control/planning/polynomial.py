@@ -15,14 +15,13 @@ from __future__ import annotations
 
 import numpy as np
 
-DEGREE = 7
-DERIVATIVES = 5  # value, 1st (velocity), 2nd (acceleration), 3rd (jerk), 4th (snap)
+from fsr_control.core.reference import DEGREE, DERIVATIVES, polynomial_derivatives
+
 REST_TO_REST = np.array((0.0, 0.0, 0.0, 0.0, 35.0, -84.0, 70.0, -20.0))
 
 # d^n/dtau^n of tau^k is falling(k, n) tau^(k-n): row n holds falling(k, n) for k = 0..7.
 _FALLING = np.array([[float(np.prod(np.arange(k - n + 1, k + 1))) if k >= n else 0.0 for k in range(8)]
                      for n in range(DERIVATIVES)])
-_EXPONENTS = np.arange(DEGREE + 1)
 # End conditions at tau = 1 on c_4..c_7 (value and derivatives 1..3).
 _END_INVERSE = np.linalg.inv(_FALLING[:4, 4:])
 
@@ -72,16 +71,11 @@ class SepticSegment:
             residual[:, 0] += goal
             coefficients[:, 4:] = residual @ _END_INVERSE.T
         self.coefficients = coefficients
-        self._table = _derivative_coefficients(coefficients, self.duration)
-        self._rest = np.zeros((DERIVATIVES, start.size))
-        self._rest[0] = goal
+        self.table = np.ascontiguousarray(_derivative_coefficients(coefficients, self.duration))
 
     def evaluate(self, t: float) -> np.ndarray:
-        """Shape (5, c): value and time derivatives 1..4 at ``t`` [s] (clamped to the segment's start)."""
-        tau = (t - self.start_time) / self.duration
-        if tau >= 1.0:
-            return self._rest.copy()
-        if tau < 0.0:
-            tau = 0.0
-        powers = tau**_EXPONENTS
-        return self._table @ powers
+        """Shape (5, c): value and time derivatives 1..4 at ``t`` [s] (clamped to the segment's start), by the
+        compiled core (:func:`fsr_control.core.reference.polynomial_derivatives`)."""
+        out = np.empty((DERIVATIVES, len(self.goal)))
+        polynomial_derivatives(self.table, self.goal, self.start_time, self.duration, float(t), out)
+        return out

@@ -19,6 +19,9 @@ plans from the current reference to a new goal: the position and ``theta`` keep 
 acceleration and jerk (smooth even mid-motion); the start's angular rate is projected on the new axis
 (exact for yaw-only references; for a tilting vehicle replanned mid-rotation the rate about other axes
 restarts from zero).
+
+Construction and replanning are Python (they run once, or once per goal); sampling the reference at a time is
+the compiled core's (:mod:`fsr_control.core.reference`) on the table :meth:`Trajectory.table` packs.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsr_control.core import reference as core
 from fsr_control.planning.polynomial import SepticSegment
 from fsr_sim.model.frames import E3
 from fsr_sim.model.so3 import rotation_exp, rotation_log, skew
@@ -80,6 +84,12 @@ class Reference:
     yaw_rate: float
     yaw_acceleration: float
 
+    @classmethod
+    def from_sample(cls, t: float, sample: core.ReferenceSample) -> Reference:
+        """The :class:`Reference` at ``t`` [s] of the core's :class:`~fsr_control.core.reference.ReferenceSample`."""
+        return cls(t, *(np.array(value) for value in sample[:8]), float(sample.yaw), float(sample.yaw_rate),
+                   float(sample.yaw_acceleration))
+
 
 class _Segment:
     """Position + angle polynomial and the fixed-axis attitude of one leg."""
@@ -107,36 +117,6 @@ class _Segment:
         self.yaw_start = yaw_start  # set for yaw-only (fixed-rotor) references
         self.start_time = start_time
         self.end_time = start_time + duration
-
-    def evaluate(self, t: float) -> tuple[Reference, np.ndarray]:
-        """The reference at ``t`` and the raw channel derivatives (5, 4): x, y, z, theta."""
-        d = self.poly.evaluate(t)
-        theta, theta_dot, theta_ddot = d[:3, 3].tolist()  # Python floats: cheaper scalar arithmetic
-        if self.yaw_start is not None:
-            yaw = self.yaw_start + theta
-            rotation = yaw_rotation(yaw)
-            yaw_rate, yaw_acc = theta_dot, theta_ddot
-        else:
-            rotation = self.rotation_start + math.sin(theta) * self._r0_s + (1.0 - math.cos(theta)) * self._r0_s2
-            world_axis = rotation @ self.axis
-            yaw = math.atan2(rotation[1, 0], rotation[0, 0])
-            yaw_rate, yaw_acc = world_axis[2] * theta_dot, world_axis[2] * theta_ddot
-        reference = Reference(
-            time=t,
-            position=d[0, :3],
-            velocity=d[1, :3],
-            acceleration=d[2, :3],
-            jerk=d[3, :3],
-            snap=d[4, :3],
-            rotation=rotation,
-            angular_velocity=self.axis * theta_dot,
-            angular_acceleration=self.axis * theta_ddot,
-            yaw=yaw,
-            yaw_rate=yaw_rate,
-            yaw_acceleration=yaw_acc,
-        )
-        return reference, d
-
 
 class Trajectory:
     """Waypoints flown from a start pose; ``evaluate(t)`` gives the :class:`Reference` at ``t`` [s]."""
@@ -170,7 +150,7 @@ class Trajectory:
             position = np.array(waypoint.position, dtype=float)
             rotation, yaw = self._end_attitude(segment)
             t += waypoint.duration + waypoint.hold
-        self._cursor = 0
+        self._table: core.TrajectoryTable | None = None
 
     @property
     def end_time(self) -> float:
@@ -178,6 +158,7 @@ class Trajectory:
         return self._segments[-1].end_time
 
     def _append(self, segment: _Segment) -> None:
+        self._table = None
         self._segments.append(segment)
         self._starts.append(segment.start_time)
 
@@ -214,27 +195,44 @@ class Trajectory:
         return _Segment(t0, duration, (position, np.asarray(goal_position, dtype=float)), rotation, axis, angle,
                         yaw, start_rates)
 
-    def _active(self, t: float) -> _Segment:
-        cursor = self._cursor
-        segments = self._segments
-        if segments[cursor].start_time > t:
-            cursor = 0  # time went back: search again
-        if cursor + 1 < len(segments) and segments[cursor + 1].start_time <= t:
-            cursor = max(bisect.bisect_right(self._starts, t) - 1, 0)
-        self._cursor = cursor
-        return segments[cursor]
+    def table(self) -> core.TrajectoryTable:
+        """The segments as the core's :class:`~fsr_control.core.reference.TrajectoryTable` (packed once per plan)."""
+        if self._table is None:
+            segments = self._segments
+            self._table = core.TrajectoryTable(
+                start_time=np.array([s.start_time for s in segments]),
+                duration=np.array([s.poly.duration for s in segments]),
+                coefficients=np.ascontiguousarray([s.poly.table for s in segments]),
+                goal=np.ascontiguousarray([s.poly.goal for s in segments]),
+                rotation_start=np.ascontiguousarray([s.rotation_start for s in segments]),
+                r0_s=np.ascontiguousarray([s._r0_s for s in segments]),
+                r0_s2=np.ascontiguousarray([s._r0_s2 for s in segments]),
+                axis=np.ascontiguousarray([s.axis for s in segments]),
+                yaw_start=np.array([np.nan if s.yaw_start is None else s.yaw_start for s in segments]),
+            )
+        return self._table
+
+    def _sample(self, t: float) -> tuple[int, np.ndarray, core.ReferenceSample]:
+        """(active segment, its channel derivatives (5, 4), the reference) at ``t`` [s]."""
+        table = self.table()
+        segment = core.active_segment(table, t)
+        derivatives = np.empty((core.DERIVATIVES, core.CHANNELS))
+        core.channel_derivatives(table, segment, t, derivatives)
+        return segment, derivatives, core.reference_from_derivatives(table, segment, derivatives)
 
     def evaluate(self, t: float) -> Reference:
         """The desired state at ``t`` [s]."""
-        return self._active(t).evaluate(t)[0]
+        t = float(t)
+        return Reference.from_sample(t, self._sample(t)[2])
 
     def replan(self, goal_position: np.ndarray, goal_rotation: np.ndarray, now: float, duration: float) -> None:
         """Plan from the reference at ``now`` [s] to a new goal pose over ``duration`` [s] (then hold).
 
         Waypoints not yet reached are dropped. For a yaw-only trajectory only the goal's yaw is used.
         """
-        active = self._active(now)
-        reference, derivatives = active.evaluate(now)
+        index, derivatives, sample = self._sample(float(now))
+        active = self._segments[index]
+        reference = Reference.from_sample(now, sample)
         start_rates = derivatives[1:4]
         if self.full_attitude:
             yaw = None
@@ -248,4 +246,3 @@ class Trajectory:
         del self._segments[keep:]
         del self._starts[keep:]
         self._append(segment)
-        self._cursor = len(self._segments) - 1

@@ -22,8 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_estimation.core.observer import MomentumObserver
-from fsr_sim.model.so3 import euler_rates3, euler_zyx_from_rotation_rows
+from fsr_estimation.core.observer import MomentumObserver, _vector
+from fsr_estimation.core.observer_step import euler_inputs
+from fsr_sim.core.so3 import matrix_rows
 
 MAX_PENDING = 1000  # unpaired stamps kept per stream (about 1 s at 1 kHz)
 PERIOD_TOLERANCE = 0.01  # relative deviation of a stamp difference from the control period that is accepted
@@ -79,8 +80,8 @@ class StampedEstimator:
     def add_state(self, stamp_ns: int, rotation: np.ndarray, velocity_world: np.ndarray,
                   angular_velocity_body: np.ndarray) -> Estimate | None:
         """The state stamped ``stamp_ns``; returns the estimate if this completes a pair."""
-        eta = euler_zyx_from_rotation_rows(np.asarray(rotation, dtype=float).tolist())
-        eta_dot = euler_rates3(eta[0], eta[1], np.asarray(angular_velocity_body, dtype=float).tolist())
+        eta, eta_dot = euler_inputs(matrix_rows(np.ascontiguousarray(rotation, dtype=float)),
+                                    _vector(angular_velocity_body))
         return self._store(self._states, stamp_ns, (velocity_world, eta, eta_dot))
 
     def add_command(self, stamp_ns: int, force_body: np.ndarray, torque_body: np.ndarray) -> Estimate | None:

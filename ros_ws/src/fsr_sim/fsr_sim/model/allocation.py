@@ -19,10 +19,10 @@ substitution: ``u_w,i = sqrt(u_v,i^2 + u_l,i^2) / c_f``, ``alpha_i = atan2(u_l,i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsr_sim.core import rotors as core_rotors
 from fsr_sim.model.vehicle import Vehicle
 
 ROTOR_AXIS_UNTILTED = np.array((0.0, 0.0, -1.0))
@@ -103,50 +103,79 @@ def static_from_rotor_commands(vehicle: Vehicle, speed_sq: np.ndarray, tilt: np.
 
 
 WRENCH_AXES = ("force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z")  # body FRD
-SHORTFALL_TOLERANCE = 1e-9  # N or N m: a larger |commanded - achieved| on an axis means that axis gave way
+SHORTFALL_TOLERANCE = core_rotors.SHORTFALL_TOLERANCE
 
 
-@dataclass
+def rotor_columns(vehicle: Vehicle, axes: np.ndarray) -> np.ndarray:
+    """The core's rotor columns (n, 9) for rotor axes (n, 3): force ``c_f z_i``, lever torque ``c_f p_i x z_i``,
+    drag torque ``-k_i c_m z_i`` per unit squared speed (:mod:`fsr_sim.core.rotors`)."""
+    force_and_lever = wrench_columns(vehicle, axes, vehicle.c_f, 0.0)
+    drag = wrench_columns(vehicle, axes, 0.0, vehicle.c_m)[3:]
+    return np.ascontiguousarray(np.hstack((force_and_lever[:3].T, force_and_lever[3:].T, drag.T)))
+
+
 class SaturationReport:
     """Running record of rotor-speed (and tilt) saturation: how often, since when, which rotor, and which
-    wrench axis gave way (:meth:`record_shortfall`) by how much."""
+    wrench axis gave way (:meth:`record_shortfall`) by how much. A view of the core's record array
+    (:mod:`fsr_sim.core.rotors`), which the compiled code fills; ``SaturationReport(n)`` makes a new one."""
 
-    count: int = 0
-    first_time: float | None = None
-    last_time: float | None = None
-    worst_rotor: int | None = None  # 1-based rotor index of the largest excess
-    worst_excess: float = 0.0  # rad/s beyond the limit
-    per_rotor: dict[int, int] = field(default_factory=dict)
-    axis_steps: list[int] = field(default_factory=lambda: [0] * len(WRENCH_AXES))  # steps each axis gave way
-    axis_max_shortfall: list[float] = field(default_factory=lambda: [0.0] * len(WRENCH_AXES))  # N / N m
+    def __init__(self, rotor_count: int = 0, record: np.ndarray | None = None) -> None:
+        if record is None:
+            record = np.zeros(core_rotors.saturation_size(rotor_count))
+            core_rotors.reset_saturation(record)
+        self.array = record
+
+    @property
+    def count(self) -> int:
+        return int(self.array[core_rotors.SATURATED_COUNT])
+
+    @property
+    def first_time(self) -> float | None:
+        value = float(self.array[core_rotors.FIRST_TIME])
+        return None if value != value else value
+
+    @property
+    def last_time(self) -> float | None:
+        value = float(self.array[core_rotors.LAST_TIME])
+        return None if value != value else value
+
+    @property
+    def worst_rotor(self) -> int | None:
+        """1-based rotor index of the largest excess (None: never saturated)."""
+        return int(self.array[core_rotors.WORST_ROTOR]) or None
+
+    @property
+    def worst_excess(self) -> float:
+        """rad/s beyond the limit."""
+        return float(self.array[core_rotors.WORST_EXCESS])
+
+    @property
+    def per_rotor(self) -> dict[int, int]:
+        counts = self.array[core_rotors.PER_ROTOR:]
+        return {i + 1: int(c) for i, c in enumerate(counts.tolist()) if c}
+
+    @property
+    def axis_steps(self) -> list[int]:
+        """Steps each wrench axis gave way (``WRENCH_AXES`` order)."""
+        return [int(v) for v in self.array[core_rotors.AXIS_STEPS:core_rotors.AXIS_STEPS + 6].tolist()]
+
+    @property
+    def axis_max_shortfall(self) -> list[float]:
+        """Largest shortfall of each wrench axis [N / N m]."""
+        return self.array[core_rotors.AXIS_MAX_SHORTFALL:core_rotors.AXIS_MAX_SHORTFALL + 6].tolist()
+
+    def record(self, time: float, excess: np.ndarray) -> bool:
+        """Record one command; ``excess`` per rotor [rad/s] (0 where within limits). True if it saturated."""
+        excess = np.ascontiguousarray(excess, dtype=float).reshape(-1)
+        missing = core_rotors.saturation_size(len(excess)) - len(self.array)
+        if missing > 0:  # made without a rotor count
+            self.array = np.concatenate((self.array, np.zeros(missing)))
+        return bool(core_rotors.record_saturation(self.array, float(time), excess))
 
     def record_shortfall(self, shortfall: np.ndarray) -> None:
         """Record one saturated step's ``commanded - achieved`` body wrench ``[f; tau]`` (shape (6,), N and N m):
         every axis with ``|shortfall| > SHORTFALL_TOLERANCE`` gave way on this step."""
-        steps, largest = self.axis_steps, self.axis_max_shortfall
-        for axis, value in enumerate(shortfall.tolist()):
-            magnitude = abs(value)
-            if magnitude > SHORTFALL_TOLERANCE:
-                steps[axis] += 1
-                if magnitude > largest[axis]:
-                    largest[axis] = magnitude
-
-    def record(self, time: float, excess: np.ndarray) -> bool:
-        """Record one command; ``excess`` per rotor [rad/s] (0 where within limits). True if it saturated."""
-        if not excess.max() > 0.0:  # the common case, decided with one reduction
-            return False
-        saturated = np.flatnonzero(excess > 0.0)
-        self.count += 1
-        if self.first_time is None:
-            self.first_time = time
-        self.last_time = time
-        for index in saturated:
-            self.per_rotor[int(index) + 1] = self.per_rotor.get(int(index) + 1, 0) + 1
-        worst = int(np.argmax(excess))
-        if excess[worst] > self.worst_excess:
-            self.worst_excess = float(excess[worst])
-            self.worst_rotor = worst + 1
-        return True
+        core_rotors.record_shortfall(self.array, np.ascontiguousarray(shortfall, dtype=float))
 
     def as_dict(self) -> dict:
         return {
@@ -164,18 +193,13 @@ class SaturationReport:
 
 
 def clamp_rotor_speeds(vehicle: Vehicle, speed_sq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotor speeds [rad/s] from squared speeds, clamped to ``[w_min, w_max]``; also the excess per rotor.
-
-    A negative ``u_w`` (reverse thrust, not available) counts as an excess below ``w_min``.
-    """
-    # Per rotor on Python floats (a handful of rotors, twice per 1 kHz step): the same values as
-    # sign(u) sqrt(|u|) and clip, without numpy's per-call overhead. NaN stays NaN (as with np.clip).
-    low, high = vehicle.rotor_speed_min, vehicle.rotor_speed_max
+    """Rotor speeds [rad/s] from squared speeds (any shape), clamped to ``[w_min, w_max]``; also the excess per
+    rotor (:func:`fsr_sim.core.rotors.clamped_speed`: a negative ``u_w`` counts as an excess below ``w_min``)."""
     speed_sq = np.asarray(speed_sq, dtype=float)
-    speeds = [math.copysign(math.sqrt(abs(u)), u) if u != 0.0 else 0.0 for u in speed_sq.ravel().tolist()]
-    clamped = [s if s != s else min(max(s, low), high) for s in speeds]
-    excess = [abs(s - c) for s, c in zip(speeds, clamped, strict=True)]
-    return np.array(clamped).reshape(speed_sq.shape), np.array(excess).reshape(speed_sq.shape)
+    flat = np.ascontiguousarray(speed_sq).reshape(-1)
+    speeds, excess = np.empty_like(flat), np.empty_like(flat)
+    core_rotors.clamped_speeds(flat, vehicle.rotor_speed_min, vehicle.rotor_speed_max, speeds, excess)
+    return speeds.reshape(speed_sq.shape), excess.reshape(speed_sq.shape)
 
 
 class FixedRotorAllocator:
@@ -192,7 +216,7 @@ class FixedRotorAllocator:
         self.allocation = wrench_from_rotor_speed_sq(vehicle)
         self.rows = np.flatnonzero(np.any(np.abs(self.allocation) > 1e-15, axis=1))
         self.inverse = np.linalg.pinv(self.allocation[self.rows])
-        self.saturation = SaturationReport()
+        self.saturation = SaturationReport(vehicle.rotor_count)
 
     def rotor_speed_sq(self, thrust: float, torque_body: np.ndarray) -> np.ndarray:
         """Squared speeds for a thrust ``u_T`` [N] along ``-z_b`` and a body torque [N m] (unclamped)."""

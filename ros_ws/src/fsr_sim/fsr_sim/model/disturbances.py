@@ -9,8 +9,9 @@ force in the world frame and the torque in the body frame, so with ``R`` the att
 
 For the exercise-3 yaw torque ``[0, 0, -0.4]`` the two agree while the vehicle stays level.
 
-From Python: :func:`constant`, :func:`step`, :func:`sinusoid`, :func:`table`. Scenario syntax (a list under
-``disturbances``, parsed by :mod:`fsr_sim.config.plant_sections`)::
+From Python: :func:`constant`, :func:`step`, :func:`sinusoid`, :func:`table`. The plant evaluates them per step in
+the compiled core (:mod:`fsr_sim.core.disturbances`) from one table packed by :func:`pack_disturbances`.
+Scenario syntax (a list under ``disturbances``, parsed by :mod:`fsr_sim.config.plant_sections`)::
 
     - {kind: constant, force: [1, 1, 0], torque: [0, 0, -0.4]}          # frame: world (default)
     - {kind: step, start: 10.0, force: [2, 0, 0]}                         # zero before start
@@ -25,8 +26,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from fsr_sim.core import disturbances as core
+from fsr_sim.core.so3 import matrix_rows
 from fsr_sim.model.checks import InvalidValueError, finite_array
-from fsr_sim.model.so3 import Mat3, mat_t_vec3, mat_vec3
 
 ZERO3 = np.zeros(3)
 FRAMES = ("world", "body")
@@ -48,17 +50,9 @@ class DisturbanceProfile:
 
     def wrench(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(force in ``frame`` [N], torque in ``frame`` [N m]) at time ``t`` [s]."""
-        if self.kind == "table":
-            return (
-                np.array([np.interp(t, self.times, self.force[:, i]) for i in range(3)]),
-                np.array([np.interp(t, self.times, self.torque[:, i]) for i in range(3)]),
-            )
-        if t < self.start or t >= self.end:
-            return ZERO3, ZERO3
-        if self.kind == "sinusoid":
-            s = np.sin(2.0 * np.pi * self.frequency_hz * (t - self.start) + self.phase)
-            return self.offset_force + s * self.force, self.offset_torque + s * self.torque
-        return self.force, self.torque
+        table, knots = pack_disturbances([self])
+        force, torque = core.profile_wrench(table[0], knots, float(t))
+        return np.array(force), np.array(torque)
 
 
 def constant(force: ArrayLike = ZERO3, torque: ArrayLike = ZERO3, frame: str = "world") -> DisturbanceProfile:
@@ -108,6 +102,30 @@ def _profile(kind: str, frame: str, force: ArrayLike, torque: ArrayLike, **field
                               **fields)
 
 
+KINDS = {"constant": core.CONSTANT, "step": core.STEP, "sinusoid": core.SINUSOID, "table": core.TABLE}
+
+
+def pack_disturbances(profiles: list[DisturbanceProfile]) -> tuple[np.ndarray, np.ndarray]:
+    """The profiles as the core's table (m, ``WIDTH``) and knot rows (k, ``KNOT_WIDTH``)
+    (:mod:`fsr_sim.core.disturbances`)."""
+    table = np.zeros((len(profiles), core.WIDTH))
+    knots = []
+    for row, profile in zip(table, profiles, strict=True):
+        row[core.KIND] = KINDS[profile.kind]
+        row[core.BODY_FRAME] = profile.frame == "body"
+        row[core.START], row[core.END] = profile.start, profile.end
+        row[core.FREQUENCY], row[core.PHASE] = profile.frequency_hz, profile.phase
+        if profile.kind == "table":
+            row[core.KNOT_START], row[core.KNOT_COUNT] = len(knots), len(profile.times)
+            knots += np.column_stack((profile.times, profile.force, profile.torque)).tolist()
+            continue
+        row[core.FORCE:core.FORCE + 3] = profile.force
+        row[core.TORQUE:core.TORQUE + 3] = profile.torque
+        row[core.OFFSET_FORCE:core.OFFSET_FORCE + 3] = profile.offset_force
+        row[core.OFFSET_TORQUE:core.OFFSET_TORQUE + 3] = profile.offset_torque
+    return table, np.array(knots, dtype=float).reshape(len(knots), core.KNOT_WIDTH)
+
+
 def total_external_wrench(
     profiles: list[DisturbanceProfile], t: float, rotation: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -116,24 +134,7 @@ def total_external_wrench(
     ``f_world = sum_world f + R sum_body f`` and ``tau_body = R^T sum_world tau + sum_body tau`` with ``R``
     (shape (3, 3)) the attitude body FRD -> world NED.
     """
-    total = external_wrench_floats(profiles, t, np.asarray(rotation, dtype=float).tolist())
-    return np.array(total[:3]), np.array(total[3:])
-
-
-def external_wrench_floats(
-    profiles: list[DisturbanceProfile], t: float, rotation: Mat3
-) -> tuple[float, float, float, float, float, float]:
-    """:func:`total_external_wrench` on Python floats (rows of ``R``): ``(f_x, f_y, f_z)`` world [N] and
-    ``(tau_x, tau_y, tau_z)`` body [N m] (the plant evaluates it at every RK4 stage)."""
-    fx = fy = fz = tx = ty = tz = 0.0
-    for profile in profiles:
-        force, torque = profile.wrench(t)
-        force = force.tolist()
-        torque = torque.tolist()
-        if profile.frame == "body":
-            force = mat_vec3(rotation, force)
-        else:
-            torque = mat_t_vec3(rotation, torque)
-        fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
-        tx, ty, tz = tx + torque[0], ty + torque[1], tz + torque[2]
-    return fx, fy, fz, tx, ty, tz
+    table, knots = pack_disturbances(profiles)
+    rows = matrix_rows(np.ascontiguousarray(rotation, dtype=float))
+    force, torque = core.external_wrench(table, knots, float(t), rows)
+    return np.array(force), np.array(torque)

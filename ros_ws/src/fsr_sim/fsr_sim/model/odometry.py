@@ -1,6 +1,7 @@
 """The state as the simulator publishes it (``nav_msgs/Odometry`` values) and as the nodes read it back.
 
-One definition of the arithmetic on both sides of ``odom``, shared by the simulator node, the controller
+One definition of the arithmetic on both sides of ``odom`` (the compiled core's :mod:`fsr_sim.core.odometry`,
+called here from Python), shared by the simulator node, the controller
 and estimator nodes (on the values :mod:`fsr_sim.ros.cdr_read` takes from the bytes; message objects through
 :mod:`fsr_sim.ros.conversions`) and the in-process loop, so that a flight in one process and the node graph
 see bit-identical numbers; :func:`odometry_values_ok` is the one check the nodes apply before using them:
@@ -17,20 +18,30 @@ import math
 
 import numpy as np
 
-from fsr_sim.model.so3 import Vec3, rotation_from_quaternion
+from fsr_sim.core import odometry as core
+from fsr_sim.core.so3 import Vec3
 
 Quaternion = tuple[float, float, float, float]
+NO_EXTERNAL_WRENCH = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+
+def published_row(state_vector: np.ndarray, external: tuple | None = None) -> np.ndarray:
+    """The published row (19,) of :mod:`fsr_sim.core.odometry`: ``odom`` then ``wrench_truth`` numbers, for a
+    state (13,) and the true external wrench (force world [N], torque body [N m]; None: zero)."""
+    row = np.empty(core.PUBLISHED_SIZE)
+    if external is None:
+        external = NO_EXTERNAL_WRENCH
+    else:
+        external = tuple(tuple(float(v) for v in part) for part in external)
+    core.publish_state(np.ascontiguousarray(state_vector, dtype=float), external, row)
+    return row
 
 
 def odometry_values(state_vector: np.ndarray) -> tuple[Vec3, Quaternion, Vec3, Vec3]:
     """(position world [m], quaternion ``[x, y, z, w]`` with ``w >= 0``, velocity body [m/s], angular velocity
     body [rad/s]) of a plant state vector (shape (13,), :mod:`fsr_sim.model.rigid_body` layout)."""
-    x, y, z, _, _, _, qx, qy, qz, qw, wx, wy, wz = state_vector.tolist()
-    if qw < 0.0:
-        qx, qy, qz, qw = -qx, -qy, -qz, -qw
-    rotation = rotation_from_quaternion((qx, qy, qz, qw))
-    vbx, vby, vbz = (rotation.T @ state_vector[3:6]).tolist()
-    return (x, y, z), (qx, qy, qz, qw), (vbx, vby, vbz), (wx, wy, wz)
+    x, y, z, qx, qy, qz, qw, vx, vy, vz, wx, wy, wz = published_row(state_vector)[:core.ODOM_SIZE].tolist()
+    return (x, y, z), (qx, qy, qz, qw), (vx, vy, vz), (wx, wy, wz)
 
 
 def state_from_odometry_values(
@@ -38,9 +49,14 @@ def state_from_odometry_values(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(position world [m], ``R`` body -> world, velocity world [m/s], angular velocity body [rad/s]) from the
     published values (shapes (3,), (3, 3), (3,), (3,))."""
-    rotation = rotation_from_quaternion(quaternion)
-    velocity_world = rotation @ np.array(velocity_body, dtype=float)
-    return np.array(position, dtype=float), rotation, velocity_world, np.array(angular_velocity_body, dtype=float)
+    row = np.array((*position, *quaternion, *velocity_body, *angular_velocity_body), dtype=float)
+    return state_from_odometry_row(row)
+
+
+def state_from_odometry_row(row: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`state_from_odometry_values` of the first 13 numbers of a published row."""
+    position, rotation, velocity_world, angular_velocity = core.read_odometry(row)
+    return np.array(position), np.array(rotation), np.array(velocity_world), np.array(angular_velocity)
 
 
 def odometry_values_ok(pose: tuple[float, ...], twist: tuple[float, ...]) -> bool:

@@ -1,7 +1,9 @@
 """The true plant: rigid body + rotors (with ground/ceiling effect) + disturbances + ground contact.
 
-Inputs are held constant over a step (zero-order hold) while the state-dependent parts (thrust ratios near
-surfaces, time-varying disturbances) are evaluated at every RK4 stage. Two actuation modes (SPEC §3.1):
+A checked shell around the compiled core (:mod:`fsr_sim.core.plant`): the constructor checks its arguments and
+packs them once (:class:`~fsr_sim.core.plant.PlantParams`); every method calls the core. Inputs are held
+constant over a step (zero-order hold) while the state-dependent parts (thrust ratios near surfaces,
+time-varying disturbances) are evaluated at every RK4 stage. Two actuation modes:
 
 * ``rotors``: rotor speeds ``w_i`` [rad/s] (clamped to the vehicle's limits, saturation recorded) and, for
   a tilting vehicle, tilt angles ``alpha_i`` [rad] (clamped to +-tilt_angle_max), applied instantly;
@@ -33,26 +35,84 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fsr_sim.model.allocation import SaturationReport, clamp_rotor_speeds, rotor_axes, tilt_basis, wrench_columns
+from fsr_sim.core import plant as core
+from fsr_sim.core import rotors as core_rotors
+from fsr_sim.core.rigid_body import STATE_SIZE
+from fsr_sim.core.surfaces import has_thrust_effects
+from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.checks import InvalidValueError, finite_array
-from fsr_sim.model.disturbances import DisturbanceProfile, external_wrench_floats, total_external_wrench
-from fsr_sim.model.environment import Environment, ThrustEffects
+from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances, total_external_wrench
+from fsr_sim.model.environment import Environment, pack_surfaces, thrust_ratio_log
 from fsr_sim.model.rigid_body import (
     ANGULAR_VELOCITY,
     POSITION,
     QUATERNION,
     VELOCITY,
-    RigidBody,
     RigidBodyState,
     pack_state,
 )
-from fsr_sim.model.so3 import Mat3, Vec3, mat_vec3, rotation_from_euler_zyx, rotation_from_quaternion
+from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
 from fsr_sim.model.vehicle import Vehicle
 
-MAX_SPEED = 100.0  # m/s: beyond this the simulation is considered diverged
-MAX_SPIN = 200.0  # rad/s
+MAX_SPEED = core.MAX_SPEED
+MAX_SPIN = core.MAX_SPIN
 DEFAULT_CRASH_SPEED = 3.0  # m/s downward at ground contact
 ACTUATIONS = ("rotors", "wrench")
+
+
+def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, environment: Environment,
+               disturbances: Sequence[DisturbanceProfile], crash_speed: float) -> core.PlantParams:
+    """The core's :class:`~fsr_sim.core.plant.PlantParams` of a checked vehicle and environment."""
+    n = vehicle.rotor_count
+    if vehicle.is_tilting:
+        vertical, lateral = (rotor_columns(vehicle, axes) for axes in tilt_basis(vehicle))
+    else:
+        vertical, lateral = rotor_columns(vehicle, rotor_axes(vehicle)), np.zeros((n, core_rotors.COLUMN_WIDTH))
+    table, knots = pack_disturbances(list(disturbances))
+    inertia = np.ascontiguousarray(vehicle.inertia, dtype=float)
+    return core.PlantParams(
+        mass=float(vehicle.mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia), dt=float(dt),
+        substeps=int(substeps), period=float(dt) * int(substeps), wrench_actuation=actuation == "wrench",
+        speed_min=float(vehicle.rotor_speed_min), speed_max=float(vehicle.rotor_speed_max),
+        tilting=vehicle.is_tilting, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
+        lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
+        disturbance_knots=knots, crash_speed=float(crash_speed),
+    )
+
+
+def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.PlantState:
+    """A :class:`~fsr_sim.core.plant.PlantState` at rest in ``state_vector`` (13,), no command yet."""
+    n = params.vertical_columns.shape[0]
+    state = core.PlantState(
+        x=np.array(state_vector, dtype=float), speeds=np.zeros(n), speed_sq=np.zeros(n), tilts=np.zeros(n),
+        wrench_command=np.zeros(6), columns=params.vertical_columns.copy(),
+        body_wrench=np.zeros(6), ratios=np.ones(n), work=np.zeros((5, STATE_SIZE)),
+        status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),
+    )
+    core_rotors.reset_saturation(state.saturation)
+    if params.tilting:
+        core_rotors.tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
+    core.update_actuator_wrench(params, state)
+    return state
+
+
+def divergence_reason(code: int, params: core.PlantParams, state: core.PlantState) -> str | None:
+    """The message of a :func:`fsr_sim.core.plant.divergence` code (None: the flight goes on)."""
+    x, status = state.x.tolist(), state.status
+    if code == core.NOT_FINITE:
+        return "state is not finite (NaN or inf)"
+    if code == core.TOO_FAST:
+        return f"speed {math.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]):.1f} m/s exceeds {MAX_SPEED} m/s"
+    if code == core.SPINNING:
+        spin = math.sqrt(x[10] * x[10] + x[11] * x[11] + x[12] * x[12])
+        return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
+    if code == core.GROUND_CRASH:
+        return (f"crashed into the ground at {status[core.MAX_IMPACT]:.2f} m/s "
+                f"(limit {params.crash_speed} m/s)")
+    if code == core.CEILING_CRASH:
+        return (f"crashed into the ceiling at {status[core.MAX_CEILING_IMPACT]:.2f} m/s "
+                f"(limit {params.crash_speed} m/s)")
+    return None
 
 
 class Plant:
@@ -116,42 +176,32 @@ class Plant:
             rotation = rotation_from_euler_zyx(np.deg2rad(finite_array(attitude_rpy_deg, (3,), "attitude_rpy_deg")))
         rotation = np.eye(3) if rotation is None else finite_array(rotation, (3, 3), "rotation")
         self.vehicle = vehicle
-        self.body = RigidBody(vehicle.mass, vehicle.inertia)
-        self.state_vector = pack_state(
-            finite_array(position, (3,), "position"), rotation, finite_array(velocity, (3,), "velocity"),
-            finite_array(angular_velocity, (3,), "angular_velocity"),
-        )
-        self.step_index = 0
         self.dt = float(dt)
         self.substeps = int(substeps)
         self.actuation = actuation
         self.environment = Environment() if environment is None else environment
         self.disturbances = list(disturbances)
-        self.effects = ThrustEffects(self.environment, vehicle.positions, vehicle.rotor_radius)
-        self.saturation = SaturationReport()
         self.crash_speed = crash_speed
-        self.max_impact_speed = 0.0
-        self.in_contact = False
-        self.max_ceiling_impact_speed = 0.0  # [m/s] upward speed at ceiling contact
-        self.at_ceiling = False
-        self.ground_cap_steps = 0
-        self.ceiling_cap_steps = 0
-        n = vehicle.rotor_count
-        self.rotor_speeds = np.zeros(n)
-        self.tilt_angles = np.zeros(n) if vehicle.is_tilting else None
-        self.force_command = np.zeros(3)
-        self.torque_command = np.zeros(3)
-        self._speed_sq = np.zeros(n)
-        # Constant per-rotor columns of the tilt basis (z_v, z_l): the axes are linear in (cos, sin) of the tilt.
-        self._tilt_columns = [self._columns(axes) for axes in tilt_basis(vehicle)] if vehicle.is_tilting else None
-        self._set_axes(self.tilt_angles)
-        self._ratios = np.ones(n)
-        self._update_body_wrench()
+        self.params = pack_plant(vehicle, dt, substeps, actuation, self.environment, self.disturbances, crash_speed)
+        self.core_state = new_plant_state(self.params, pack_state(
+            finite_array(position, (3,), "position"), rotation, finite_array(velocity, (3,), "velocity"),
+            finite_array(angular_velocity, (3,), "angular_velocity"),
+        ))
+        self.saturation = SaturationReport(record=self.core_state.saturation)
 
     # ----- time -------------------------------------------------------------------------------------
     @property
     def period(self) -> float:
-        return self.dt * self.substeps
+        return self.params.period
+
+    @property
+    def step_index(self) -> int:
+        """Control periods stepped so far (the state's time is ``step_index * period``)."""
+        return int(self.core_state.status[core.STEP_INDEX])
+
+    @step_index.setter
+    def step_index(self, value: int) -> None:
+        self.core_state.status[core.STEP_INDEX] = int(value)
 
     @property
     def time(self) -> float:
@@ -165,98 +215,111 @@ class Plant:
 
     # ----- state ------------------------------------------------------------------------------------
     @property
+    def state_vector(self) -> np.ndarray:
+        """The 13 numbers of the state (:mod:`fsr_sim.model.rigid_body` layout; the core's array, not a copy)."""
+        return self.core_state.x
+
+    @property
     def state(self) -> RigidBodyState:
         """A snapshot of the current state: ``.position``, ``.velocity`` (world), ``.rotation``, ``.quaternion``,
         ``.angular_velocity`` (body), ``.vector`` (the 13 numbers)."""
-        return RigidBodyState(self.state_vector.copy())
+        return RigidBodyState(self.core_state.x.copy())
 
     @property
     def position(self) -> np.ndarray:
         """Position [m], world NED (a view of the state vector)."""
-        return self.state_vector[POSITION]
+        return self.core_state.x[POSITION]
 
     @property
     def velocity(self) -> np.ndarray:
         """Velocity [m/s], world NED (a view of the state vector)."""
-        return self.state_vector[VELOCITY]
+        return self.core_state.x[VELOCITY]
 
     @property
     def rotation(self) -> np.ndarray:
         """``R`` body FRD -> world NED."""
-        return rotation_from_quaternion(self.state_vector[QUATERNION])
+        return rotation_from_quaternion(self.core_state.x[QUATERNION])
 
     @property
     def quaternion(self) -> np.ndarray:
         """Unit quaternion ``[x, y, z, w]`` body -> world (a view of the state vector)."""
-        return self.state_vector[QUATERNION]
+        return self.core_state.x[QUATERNION]
 
     @property
     def angular_velocity(self) -> np.ndarray:
         """Angular velocity [rad/s], body FRD (a view of the state vector)."""
-        return self.state_vector[ANGULAR_VELOCITY]
+        return self.core_state.x[ANGULAR_VELOCITY]
+
+    @property
+    def rotor_speeds(self) -> np.ndarray:
+        """The applied (clamped) rotor speeds [rad/s]."""
+        return self.core_state.speeds.copy()
+
+    @property
+    def tilt_angles(self) -> np.ndarray | None:
+        """The applied tilt angles [rad] (None for fixed rotors)."""
+        return self.core_state.tilts.copy() if self.vehicle.is_tilting else None
+
+    @property
+    def force_command(self) -> np.ndarray:
+        """The commanded body force [N] (wrench actuation)."""
+        return self.core_state.wrench_command[:3].copy()
+
+    @property
+    def torque_command(self) -> np.ndarray:
+        """The commanded body torque [N m] (wrench actuation)."""
+        return self.core_state.wrench_command[3:].copy()
+
+    # ----- contact and surfaces ---------------------------------------------------------------------
+    def _status(self, entry: int) -> float:
+        return float(self.core_state.status[entry])
+
+    @property
+    def in_contact(self) -> bool:
+        """Whether the ground held the vehicle at the end of the last RK4 step."""
+        return bool(self._status(core.IN_CONTACT))
+
+    @property
+    def at_ceiling(self) -> bool:
+        return bool(self._status(core.AT_CEILING))
+
+    @property
+    def max_impact_speed(self) -> float:
+        """Fastest downward speed at ground contact so far [m/s]."""
+        return self._status(core.MAX_IMPACT)
+
+    @property
+    def max_ceiling_impact_speed(self) -> float:
+        """Fastest upward speed at ceiling contact so far [m/s]."""
+        return self._status(core.MAX_CEILING_IMPACT)
+
+    @property
+    def ground_cap_steps(self) -> int:
+        """Control steps in which a rotor's ground-effect ratio was held at ``max_ratio``."""
+        return int(self._status(core.GROUND_CAP_STEPS))
+
+    @property
+    def ceiling_cap_steps(self) -> int:
+        return int(self._status(core.CEILING_CAP_STEPS))
 
     # ----- commands ---------------------------------------------------------------------------------
-    def _columns(self, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(3, n) force, lever-arm torque and drag torque per squared speed for rotor axes (n, 3): the three
-        parts of :func:`fsr_sim.model.allocation.wrench_columns` (kept apart: only the first two scale with
-        the surface-effect ratio)."""
-        v = self.vehicle
-        force_and_lever = wrench_columns(v, axes, v.c_f, 0.0)
-        return force_and_lever[:3], force_and_lever[3:], wrench_columns(v, axes, 0.0, v.c_m)[3:]
-
-    def _set_axes(self, tilts: np.ndarray | None) -> None:
-        if self._tilt_columns is None or tilts is None:
-            # force (scaled by the thrust ratio), lever-arm torque (scaled too) and drag torque columns
-            self._force_cols, self._lever_cols, self._drag_cols = self._columns(rotor_axes(self.vehicle, tilts))
-            return
-        # z_i = cos(alpha_i) z_v,i + sin(alpha_i) z_l,i, so each column is the same combination of the
-        # constant columns of z_v and z_l (no np.cross / np.tile per command).
-        c, s = np.cos(tilts), np.sin(tilts)
-        (f_v, l_v, d_v), (f_l, l_l, d_l) = self._tilt_columns
-        self._force_cols = f_v * c + f_l * s
-        self._lever_cols = l_v * c + l_l * s
-        self._drag_cols = d_v * c + d_l * s
-
-    def _update_body_wrench(self) -> None:
-        """Cache the actuator wrench as floats: constant over the period unless thrust ratios vary with pose."""
-        if self.actuation == "wrench":
-            self._body_wrench = (*self.force_command.tolist(), *self.torque_command.tolist())
-        elif not self.effects.enabled:
-            u = self._speed_sq
-            self._body_wrench = (*(self._force_cols @ u).tolist(),
-                                 *(self._lever_cols @ u + self._drag_cols @ u).tolist())
-        else:
-            # Per rotor: force and lever-arm torque at ratio 1 (scaled per stage by the ratio), and the
-            # total drag torque (not scaled).
-            u = self._speed_sq
-            self._rotor_terms = list(zip((self._force_cols * u).T.tolist(), (self._lever_cols * u).T.tolist(),
-                                         strict=True))
-            self._drag_torque = (self._drag_cols @ u).tolist()
-
     def set_rotor_command(self, speeds: ArrayLike, tilts: ArrayLike | None = None) -> bool:
         """Apply rotor speeds [rad/s], shape (n,) (and tilts [rad], shape (n,), for a tilting vehicle), held
         until the next command; speeds are clamped to the vehicle's limits. Returns True if anything
         saturated (recorded in :attr:`saturation`)."""
-        speeds = np.asarray(speeds, dtype=float)
-        clamped, excess = clamp_rotor_speeds(self.vehicle, np.abs(speeds) * speeds)
-        saturated = self.saturation.record(self.time, excess)
-        self.rotor_speeds = clamped
-        self._speed_sq = np.abs(clamped) * clamped
-        if self.vehicle.is_tilting and tilts is not None:
-            limit = self.vehicle.tilt_angle_max
-            self.tilt_angles = np.minimum(np.maximum(np.asarray(tilts, dtype=float), -limit), limit)
-            self._set_axes(self.tilt_angles)
-        self._update_body_wrench()
-        return saturated
+        speeds = np.ascontiguousarray(speeds, dtype=float)
+        with_tilts = tilts is not None
+        tilt_array = np.ascontiguousarray(tilts, dtype=float) if with_tilts else speeds
+        return bool(core.set_rotor_command(self.params, self.core_state, speeds, tilt_array, with_tilts))
 
     def set_wrench(self, force_body: ArrayLike, torque_body: ArrayLike) -> None:
         """Apply a body wrench (``actuation: wrench``): force [N] and torque [N m], body FRD, held until the
         next command. The report's thrust ``u_T`` is ``force_body = [0, 0, -u_T]``."""
         if self.actuation != "wrench":
             raise RuntimeError("set_wrench needs actuation='wrench' (this plant takes rotor speeds)")
-        self.force_command = np.array(force_body, dtype=float).reshape(3)
-        self.torque_command = np.array(torque_body, dtype=float).reshape(3)
-        self._update_body_wrench()
+        wrench = np.concatenate((np.asarray(force_body, dtype=float).reshape(3),
+                                 np.asarray(torque_body, dtype=float).reshape(3)))
+        core.set_wrench_command(self.params, self.core_state, wrench)
 
     def set_wrench_command(self, thrust: float, torque_body: ArrayLike) -> None:
         """Apply ``u_T`` [N] along ``-z_b`` and ``tau_b`` [N m]: :meth:`set_wrench` with ``f_b = -u_T e3``."""
@@ -265,125 +328,27 @@ class Plant:
     @property
     def thrust(self) -> float:
         """``u_T = -f_z`` [N] of the commanded body wrench (``actuation: wrench``)."""
-        return -float(self.force_command[2])
+        return -float(self.core_state.wrench_command[2])
 
     def cut_thrust(self) -> None:
         """Failsafe: all rotors stopped / zero wrench."""
-        self.force_command = np.zeros(3)
-        self.torque_command = np.zeros(3)
-        self.rotor_speeds = np.zeros(self.vehicle.rotor_count)
-        self._speed_sq = np.zeros(self.vehicle.rotor_count)
-        self._update_body_wrench()
+        core.cut_thrust(self.params, self.core_state)
 
     # ----- dynamics ---------------------------------------------------------------------------------
-    def body_wrench(self, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Actuator wrench (force body [N], torque body [N m]) at the given pose."""
-        if self.actuation == "wrench":
-            return self.force_command.copy(), self.torque_command.copy()
-        u = self._speed_sq
-        if self.effects.enabled:
-            self._ratios = self.effects.ratios(position, rotation)
-            scaled = self._ratios * u
-        else:
-            scaled = u
-        return self._force_cols @ scaled, self._lever_cols @ scaled + self._drag_cols @ u
-
-    def _wrench(self, t: float, position: Vec3, rotation: Mat3) -> tuple[float, float, float, float, float, float]:
-        """Force world (excluding gravity) [N] and torque body [N m] at an RK4 stage, on Python floats."""
-        if self.actuation == "rotors" and self.effects.enabled:
-            fx = fy = fz = 0.0
-            tx, ty, tz = self._drag_torque
-            for ratio, (force, lever) in zip(self.effects.ratios_floats(position[2], rotation[2]), self._rotor_terms,
-                                             strict=True):
-                fx, fy, fz = fx + ratio * force[0], fy + ratio * force[1], fz + ratio * force[2]
-                tx, ty, tz = tx + ratio * lever[0], ty + ratio * lever[1], tz + ratio * lever[2]
-        else:
-            fx, fy, fz, tx, ty, tz = self._body_wrench
-        fx, fy, fz = mat_vec3(rotation, (fx, fy, fz))
-        disturbances = self.disturbances
-        if disturbances:
-            ex, ey, ez, ux, uy, uz = external_wrench_floats(disturbances, t, rotation)
-            return fx + ex, fy + ey, fz + ez, tx + ux, ty + uy, tz + uz
-        return fx, fy, fz, tx, ty, tz
-
     def external_wrench(self) -> tuple[np.ndarray, np.ndarray]:
         """True external wrench now: (force world NED [N], torque body FRD [N m])."""
         return total_external_wrench(self.disturbances, self.time, self.rotation)
 
     def thrust_ratios(self) -> np.ndarray:
         """Ground/ceiling thrust ratio of each rotor at the current pose (1 away from surfaces)."""
-        if not self.effects.enabled:
+        if not has_thrust_effects(self.params.surfaces):
             return np.ones(self.vehicle.rotor_count)
-        return self.effects.ratios(self.position, self.rotation)
+        return thrust_ratio_log(self.params.surfaces, self.position[2:3], self.rotation[None])[0]
 
     def step(self) -> None:
         """Advance one period: ``physics_substeps`` RK4 steps of ``physics_dt``, with ground contact."""
-        ceiling = self.environment.ceiling.enabled
-        for sub in range(self.substeps):
-            t = self.time + sub * self.dt
-            self.state_vector = self.body.step_floats(t, self.state_vector, self.dt, self._wrench)
-            self._apply_ground_contact()
-            if ceiling:
-                self._apply_ceiling_contact()
-        effects = self.effects
-        if effects.ground_capped or effects.ceiling_capped:
-            self._count_capped_steps()
-        self.step_index += 1
-
-    def _count_capped_steps(self) -> None:
-        effects = self.effects
-        self.ground_cap_steps += effects.ground_capped
-        self.ceiling_cap_steps += effects.ceiling_capped
-        effects.ground_capped = effects.ceiling_capped = False
-
-    def _apply_ground_contact(self) -> None:
-        ground = self.environment.ground
-        self.in_contact = False
-        if not ground.enabled:
-            return
-        rest_z = ground.height - self.vehicle.contact_height
-        state = self.state_vector
-        if state[2] < rest_z:
-            return
-        self.in_contact = True
-        impact = state[5]
-        if impact > self.max_impact_speed:
-            self.max_impact_speed = float(impact)
-        state[2] = rest_z
-        state[VELOCITY] = 0.0  # held by the ground (no bounce, no sliding)
-        state[ANGULAR_VELOCITY] = 0.0
-
-    def _apply_ceiling_contact(self) -> None:
-        """The top of the vehicle (``top_height`` above the centre) stops at the ceiling, like the ground
-        (called only when the ceiling is enabled)."""
-        ceiling = self.environment.ceiling
-        self.at_ceiling = False
-        rest_z = ceiling.height + self.vehicle.top_height
-        state = self.state_vector
-        if state[2] > rest_z:
-            return
-        self.at_ceiling = True
-        impact = -state[5]  # upward (negative NED z) speed
-        if impact > self.max_ceiling_impact_speed:
-            self.max_ceiling_impact_speed = float(impact)
-        state[2] = rest_z
-        state[VELOCITY] = 0.0  # held against the ceiling while the net force pushes up
-        state[ANGULAR_VELOCITY] = 0.0
+        core.plant_step(self.params, self.core_state)
 
     def divergence(self) -> str | None:
         """Why the simulation cannot go on (NaN state, beyond physical bounds, crash), or None."""
-        s = self.state_vector.tolist()
-        if not all(map(math.isfinite, s)):
-            return "state is not finite (NaN or inf)"
-        speed = math.sqrt(s[3] * s[3] + s[4] * s[4] + s[5] * s[5])
-        if speed > MAX_SPEED:
-            return f"speed {speed:.1f} m/s exceeds {MAX_SPEED} m/s"
-        spin = math.sqrt(s[10] * s[10] + s[11] * s[11] + s[12] * s[12])
-        if spin > MAX_SPIN:
-            return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
-        if self.max_impact_speed > self.crash_speed:
-            return f"crashed into the ground at {self.max_impact_speed:.2f} m/s (limit {self.crash_speed} m/s)"
-        if self.max_ceiling_impact_speed > self.crash_speed:
-            return (f"crashed into the ceiling at {self.max_ceiling_impact_speed:.2f} m/s "
-                    f"(limit {self.crash_speed} m/s)")
-        return None
+        return divergence_reason(core.divergence(self.params, self.core_state), self.params, self.core_state)

@@ -27,8 +27,9 @@ after ``timeout`` s without one.
 
 Waiting uses :class:`fsr_sim.ros.wait_set.SubscriptionWaitSet` on the command subscription (the fastest
 measured style; the executor given by ``run_node`` is never spun, so the subscription's callback never runs).
-The state is published as packed CDR bytes (:class:`fsr_sim.nodes.state_packets.StatePackets`: the values
-of :class:`fsr_sim.nodes.state_messages.StateMessages`). Progress for a watcher (``fsr-fly``): ``sim_progress``
+Each step is the compiled core's lockstep step (:func:`fsr_sim.core.lockstep.advance`, the function the
+in-process loop calls too); the state is published as packed CDR bytes of the core's published row
+(:class:`fsr_sim.nodes.state_packets.StatePackets`). Progress for a watcher (``fsr-fly``): ``sim_progress``
 (rosgraph_msgs/Clock, the simulated time) every ``PROGRESS_STEPS`` steps, so that nothing needs to follow
 every ``/clock`` message.
 """
@@ -47,6 +48,10 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from fsr_sim.config.scenario import plant_from_config
+from fsr_sim.core import lockstep
+from fsr_sim.core.odometry import PUBLISHED_SIZE
+from fsr_sim.core.plant import RUNNING as PLANT_RUNNING
+from fsr_sim.model.plant import divergence_reason
 from fsr_sim.nodes.commands import RotorCommandReader, wrench_command_raw
 from fsr_sim.nodes.lockstep import (
     AHEAD,
@@ -85,7 +90,7 @@ class SimulatorNode(Node):
         self.scenario, self.config = load_simulation(self.params)
         self.plant = plant_from_config(self.config)
         self.messages = StatePackets()
-        self.has_disturbances = bool(self.plant.disturbances)
+        self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         vehicle = self.config.plant_vehicle
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.is_tilting)
 
@@ -308,18 +313,18 @@ class SimulatorNode(Node):
         """Step the plant one control period, then publish the new state or end the run."""
         self.have_command = False
         plant = self.plant
-        plant.step()
+        code = lockstep.advance(plant.params, plant.core_state, self.published)
         if (plant.ground_cap_steps or plant.ceiling_cap_steps) and len(self.surfaces_at_cap) < 2:
             self._warn_surface_cap()
-        reason = plant.divergence()
-        if reason is not None:
-            if bool(np.isfinite(self.plant.state_vector).all()):
-                self._publish_state()
-            self.get_logger().error(f"simulation diverged at t = {self.plant.time:.4f} s: {reason}")
+        if code != PLANT_RUNNING:
+            reason = divergence_reason(code, plant.params, plant.core_state)
+            if bool(np.isfinite(plant.state_vector).all()):
+                self._send_state()
+            self.get_logger().error(f"simulation diverged at t = {plant.time:.4f} s: {reason}")
             self._finish("diverged", reason, EXIT_DIVERGED)
             return
-        self._publish_state()
-        if self.plant.step_index >= self.config.step_count:
+        self._send_state()
+        if plant.step_index >= self.config.step_count:
             self._finish("finished", f"reached the scenario duration {self.config.duration:g} s", EXIT_OK)
 
     def _warn_surface_cap(self) -> None:
@@ -385,9 +390,14 @@ class SimulatorNode(Node):
 
     # ----- output -----------------------------------------------------------------------------------
     def _publish_state(self) -> None:
+        """Publish the current state (the core's published row, computed here)."""
+        lockstep.publish(self.plant.params, self.plant.core_state, self.published)
+        self._send_state()
+
+    def _send_state(self) -> None:
+        """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``)."""
         messages, plant = self.messages, self.plant
-        messages.fill_from(plant.stamp_ns, plant.state_vector, plant.external_wrench() if self.has_disturbances
-                           else None)
+        messages.fill_from_row(plant.stamp_ns, self.published)
         self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
         self.wrench_pub.publish(messages.wrench)
         if self.clock_pub is not None:

@@ -9,7 +9,7 @@
 * ``/clock`` (rosgraph_msgs/Clock): the simulated time of the state.
 
 Every stamp is the physics time ``t_k`` of the state, in exact integer nanoseconds (``Plant.stamp_ns``). The
-odometry arithmetic is :func:`fsr_sim.model.odometry.odometry_values`.
+numbers are the core's published row (:func:`fsr_sim.model.odometry.published_row`).
 """
 
 from __future__ import annotations
@@ -19,9 +19,8 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
-from fsr_sim.model.odometry import odometry_values
+from fsr_sim.model.odometry import published_row
 from fsr_sim.model.plant import Plant
-from fsr_sim.model.so3 import rotation_from_quaternion
 from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME
 
 NS_PER_S = 1_000_000_000
@@ -52,7 +51,8 @@ class StateMessages:
         """Refill the messages from a state vector (13,) and the true external wrench (force world [N], torque
         body [N m]; None: zero) at ``stamp_ns``: the simulator's conversion, also used to record a flight."""
         sec, nanosec = divmod(stamp_ns, NS_PER_S)
-        (x, y, z), (qx, qy, qz, qw), (vbx, vby, vbz), (wx, wy, wz) = odometry_values(state_vector)
+        x, y, z, qx, qy, qz, qw, vbx, vby, vbz, wx, wy, wz, fx, fy, fz, tx, ty, tz = published_row(
+            state_vector, external).tolist()
 
         odom = self.odom
         odom.header.stamp.sec = sec
@@ -68,14 +68,9 @@ class StateMessages:
         wrench = self.wrench
         wrench.header.stamp.sec = sec
         wrench.header.stamp.nanosec = nanosec
-        if external is not None:
-            force_world, torque_body = external
-            rotation = rotation_from_quaternion((qx, qy, qz, qw))
-            fx, fy, fz = (rotation.T @ force_world).tolist()
-            tx, ty, tz = np.asarray(torque_body, dtype=float).tolist()
-            w = wrench.wrench
-            w.force.x, w.force.y, w.force.z = fx, fy, fz
-            w.torque.x, w.torque.y, w.torque.z = tx, ty, tz
+        w = wrench.wrench
+        w.force.x, w.force.y, w.force.z = fx, fy, fz
+        w.torque.x, w.torque.y, w.torque.z = tx, ty, tz
 
         self.clock.clock.sec = sec
         self.clock.clock.nanosec = nanosec

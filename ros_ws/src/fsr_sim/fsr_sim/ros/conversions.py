@@ -17,6 +17,8 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
+from fsr_sim.core.odometry import read_odometry
+from fsr_sim.core.so3 import Mat3, Vec3
 from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
 from fsr_sim.model.so3 import quaternion_from_rotation
 from fsr_sim.ros import cdr_read
@@ -64,10 +66,11 @@ def state_from_odometry(msg: Odometry) -> tuple[np.ndarray, np.ndarray, np.ndarr
                                       (ang.x, ang.y, ang.z))
 
 
-def state_from_odometry_bytes(data: bytes) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`state_from_odometry` of an ``odom`` payload (CDR bytes of a ``raw=True`` subscription), with its
-    stamp [ns] first: what the controller and estimator nodes use. ValueError, naming the problem, for bytes
-    that cannot be read or values :func:`fsr_sim.model.odometry.odometry_values_ok` refuses (NaN/inf, a zero
+def odometry_state_from_bytes(data: bytes) -> tuple[int, Vec3, Mat3, Vec3, Vec3]:
+    """The state of an ``odom`` payload (CDR bytes of a ``raw=True`` subscription) as the compiled core takes it:
+    (stamp [ns], position world [m], rows of ``R`` body -> world, velocity world [m/s], angular velocity body
+    [rad/s]), by :func:`fsr_sim.core.odometry.read_odometry`. ValueError, naming the problem, for bytes that
+    cannot be read or values :func:`fsr_sim.model.odometry.odometry_values_ok` refuses (NaN/inf, a zero
     quaternion)."""
     try:
         stamp_ns, pose, twist = cdr_read.odometry(data)
@@ -75,7 +78,14 @@ def state_from_odometry_bytes(data: bytes) -> tuple[int, np.ndarray, np.ndarray,
         raise ValueError(f"cannot be read: {error}") from error
     if not odometry_values_ok(pose, twist):
         raise ValueError(f"odom at {stamp_ns} ns holds NaN/inf or a zero quaternion")
-    return stamp_ns, *state_from_odometry_values(pose[0:3], pose[3:7], twist[0:3], twist[3:6])
+    return stamp_ns, *read_odometry(pose + twist)
+
+
+def state_from_odometry_bytes(data: bytes) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`odometry_state_from_bytes` as arrays (position (3,), ``R`` (3, 3), velocity (3,), angular velocity
+    (3,)): what :func:`state_from_odometry` gives for the message."""
+    stamp_ns, *state = odometry_state_from_bytes(data)
+    return stamp_ns, *(np.array(part) for part in state)
 
 
 def wrench_stamped(

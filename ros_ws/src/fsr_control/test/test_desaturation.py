@@ -1,8 +1,12 @@
-"""Priority allocation (fsr_sim.model.desaturation) on hand-made wrenches: what gives way, and by how much."""
+"""Priority allocation (fsr_control.core.allocation) on hand-made wrenches: what gives way, and by how much."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from fsr_control.allocation import FixedRotorActuation, TiltingActuation
+from fsr_control.core.allocation import max_scale_in_box, max_scale_in_discs
 from fsr_sim.model.allocation import (
     SHORTFALL_TOLERANCE,
     FixedRotorAllocator,
@@ -10,21 +14,34 @@ from fsr_sim.model.allocation import (
     static_tilting_allocation,
     wrench_from_rotor_speed_sq,
 )
-from fsr_sim.model.desaturation import (
-    FixedRotorDesaturation,
-    TiltingDesaturation,
-    max_scale_in_box,
-    max_scale_in_discs,
-)
 from fsr_sim.model.vehicle import load_vehicle
+
+
+class FixedDesaturation:
+    """The core's priority allocation of fixed rotors, with and without air mode."""
+
+    def __init__(self, vehicle):
+        self.air_mode = FixedRotorActuation(vehicle, "priority", air_mode=True)
+        self.keeping_thrust = FixedRotorActuation(vehicle, "priority", air_mode=False)
+
+    def allocate(self, thrust, torque):
+        return self.air_mode.desaturated(thrust, torque)
+
+    def allocate_keeping_thrust(self, thrust, torque):
+        """The thrust exact and the torque scaled; None when the thrust alone does not fit."""
+        u_g = thrust * -self.keeping_thrust.inverse[:, 2]
+        low, high = self.keeping_thrust.params.speed_min ** 2, self.keeping_thrust.params.speed_max ** 2
+        if not np.all((low <= u_g) & (u_g <= high)):
+            return None
+        return self.keeping_thrust.desaturated(thrust, torque)
 
 
 def fixed(name: str, speed_min: float | None = None):
     vehicle = load_vehicle(name)
+    if speed_min is not None:
+        vehicle = replace(vehicle, rotor_speed_min=speed_min)
     allocator = FixedRotorAllocator(vehicle)
-    low = vehicle.rotor_speed_min if speed_min is None else speed_min
-    desaturation = FixedRotorDesaturation(allocator.inverse, allocator.rows, low, vehicle.rotor_speed_max)
-    return vehicle, allocator, desaturation, (low**2, vehicle.rotor_speed_max**2)
+    return vehicle, allocator, FixedDesaturation(vehicle), (vehicle.rotor_speed_min**2, vehicle.rotor_speed_max**2)
 
 
 def produced(vehicle, u_w) -> np.ndarray:
@@ -40,12 +57,13 @@ def assert_in_box(u_w, box, rel=1e-12):
 
 def test_max_scale_in_box_and_discs_closed_form():
     # base 0.5 in [0, 1]: direction +1 reaches the top at s = 0.5, direction -2 the bottom at s = 0.25.
-    assert max_scale_in_box([0.5, 0.5], [1.0, -2.0], [0.0, 0.0], [1.0, 1.0]) == 0.25
-    assert max_scale_in_box([0.5], [0.1], [0.0], [1.0]) == 1.0  # fits entirely
-    assert max_scale_in_box([1.0 + 1e-15], [1.0], [0.0], [1.0]) == 0.0  # rounding outside: no room
+    a = np.array
+    assert max_scale_in_box(a([0.5, 0.5]), a([1.0, -2.0]), 0.0, 1.0) == 0.25
+    assert max_scale_in_box(a([0.5]), a([0.1]), 0.0, 1.0) == 1.0  # fits entirely
+    assert max_scale_in_box(a([1.0 + 1e-15]), a([1.0]), 0.0, 1.0) == 0.0  # rounding outside: no room
     # Disc of radius 5 from (3, 0) along (0, 8): |(3, 8 s)| = 5 at s = 0.5.
-    assert max_scale_in_discs([3.0, 0.0], [0.0, 8.0], 25.0) == pytest.approx(0.5, rel=1e-15)
-    assert max_scale_in_discs([0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], 4.0) == 1.0
+    assert max_scale_in_discs(a([3.0, 0.0]), a([0.0, 8.0]), 25.0) == pytest.approx(0.5, rel=1e-15)
+    assert max_scale_in_discs(a([0.0, 0.0, 1.0, 0.0]), a([1.0, 0.0, 0.0, 0.0]), 4.0) == 1.0
 
 
 @pytest.mark.parametrize("name", ["quadrotor_ex4", "octocopter"])
@@ -112,9 +130,8 @@ def test_tilting_infeasible_yaw_keeps_force_and_roll_pitch():
     vehicle = load_vehicle("tilting_quadrotor_ex5")
     static = static_tilting_allocation(vehicle)
     max_thrust = vehicle.c_f * vehicle.rotor_speed_max**2
-    desaturation = TiltingDesaturation(np.linalg.pinv(static), max_thrust)
     force, torque = np.array((2.0, -1.0, -1.5 * vehicle.weight)), np.array((0.3, -0.2, 40.0))
-    u = desaturation.allocate(force, torque)
+    u = TiltingActuation(vehicle).desaturated(force, torque)
     thrusts = np.hypot(u[0::2], u[1::2])
     assert thrusts.max() <= max_thrust * (1 + 1e-12)
     assert thrusts.max() == pytest.approx(max_thrust, rel=1e-9)  # yaw took all the room there was
@@ -127,15 +144,14 @@ def test_tilting_hopeless_force_is_scaled_within_the_discs():
     vehicle = load_vehicle("tilting_quadrotor_ex5")
     static = static_tilting_allocation(vehicle)
     max_thrust = vehicle.c_f * vehicle.rotor_speed_max**2
-    u = TiltingDesaturation(np.linalg.pinv(static), max_thrust).allocate(
-        np.array((0.0, 0.0, -200.0)), np.array((5.0, 0.0, 5.0)))
+    u = TiltingActuation(vehicle).desaturated(np.array((0.0, 0.0, -200.0)), np.array((5.0, 0.0, 5.0)))
     assert np.hypot(u[0::2], u[1::2]).max() <= max_thrust * (1 + 1e-12)
     wrench = static @ u
     assert -200.0 < wrench[2] < 0.0 and abs(wrench[0]) < 1e-9 and abs(wrench[3]) < 1e-9  # force first, no room left
 
 
 def test_saturation_report_counts_the_axes_that_gave_way():
-    report = SaturationReport()
+    report = SaturationReport(4)
     report.record_shortfall(np.array((0.0, 0.0, 0.0, 0.0, 0.0, 0.2)))
     report.record_shortfall(np.array((0.0, 0.0, -0.5, 1e-15, 0.0, -0.4)))
     gave_way = report.as_dict()["gave_way"]

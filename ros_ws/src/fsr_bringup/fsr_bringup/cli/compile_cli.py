@@ -1,0 +1,133 @@
+"""``fsr-compile``: compile the flight core once, so that no flight and no node pays a compilation.
+
+    fsr-compile            # fill numba's cache (scripts/setup.sh runs it); a second run only loads it
+
+The core (:mod:`fsr_sim.core.jit`) is compiled by numba on first use and cached on disk in a folder keyed by
+its sources; this command uses every entry point the nodes, the in-process loop, the analysis and the Python
+API call -- a short flight of every built-in scenario, recorded and analysed, and the node-side calls -- so
+that each is compiled (or found in the cache) here. Exit codes: 0 done, 2 bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
+            "step_disturbance", "wind_rejection")
+
+
+def tour(folder: Path) -> None:
+    """Call every entry point of the core once (module docstring)."""
+    from fsr_bringup import simulate
+    from fsr_bringup.analysis.load import load_flight
+    from fsr_bringup.analysis.metrics import flight_metrics
+
+    for name in BUILT_IN:
+        path = folder / f"{name}.mcap"
+        simulate(name, duration=0.02, record=path)
+        flight_metrics(load_flight(path))
+    simulate("ex4_geometric", set={"actuation": "rotors"}, duration=0.02)
+    _node_calls()
+    _python_api()
+
+
+def _node_calls() -> None:
+    """What the simulator, controller and estimator nodes call per message (and at start-up)."""
+    from fsr_control.config.controller_config import controller_config
+    from fsr_control.flight_controller import FlightController, seconds_from_ns
+    from fsr_control.nodes.packets import ControllerPackets
+    from fsr_estimation.core.stamped import StampedEstimator
+    from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
+    from fsr_sim.core import lockstep
+    from fsr_sim.core.odometry import PUBLISHED_SIZE
+    from fsr_sim.nodes.state_packets import StatePackets
+    from fsr_sim.ros.conversions import odometry_state_from_bytes, state_from_odometry_bytes
+
+    for name, overrides in (("ex4_geometric", ["actuation=rotors"]), ("ex4_geometric", []), ("ex5_voliro", [])):
+        scenario = load_scenario(name, overrides)
+        sim = simulation_config(scenario)
+        plant = plant_from_config(sim)
+        controller = FlightController(controller_config(scenario), sim.vehicle, sim.actuation, sim.initial.position,
+                                      sim.initial.rotation)
+        estimator = StampedEstimator(1.5, np.ones(3), 10.0, 1, sim.control_period)
+        packets, state_packets = ControllerPackets(True, sim.vehicle.rotor_count), StatePackets()
+        row = np.zeros(PUBLISHED_SIZE)
+        lockstep.publish(plant.params, plant.core_state, row)
+        state_packets.fill_from_row(0, row)
+        stamp, position, rotation, velocity, omega = odometry_state_from_bytes(state_packets.odom)
+        output = controller.command_row(seconds_from_ns(stamp), position, rotation, velocity, omega)
+        packets.pack(stamp, output)
+        _, _, rotation_array, velocity_array, omega_array = state_from_odometry_bytes(state_packets.odom)
+        estimator.add_state(stamp, rotation_array, velocity_array, omega_array)
+        estimator.add_command(stamp, output[0:3].copy(), output[3:6].copy())
+        plant.set_wrench_command(1.0, np.zeros(3)) if sim.actuation == "wrench" else plant.set_rotor_command(
+            np.zeros(sim.vehicle.rotor_count), np.zeros(sim.vehicle.rotor_count))
+        plant.set_rotor_command(np.zeros(sim.vehicle.rotor_count))
+        plant.cut_thrust()
+        lockstep.advance(plant.params, plant.core_state, row)
+
+
+def _python_api() -> None:
+    """The Python API's shells: the plant, the laws, the allocations, the observer, rotations."""
+    from fsr_control.allocation import FixedRotorActuation, TiltingActuation, WrenchActuation
+    from fsr_control.planning.flatness import flat_attitude_rates
+    from fsr_estimation.core.observer import MomentumObserver
+    from fsr_sim.model import Plant, load_vehicle, so3
+    from fsr_sim.model.allocation import SaturationReport, clamp_rotor_speeds
+    from fsr_sim.model.disturbances import constant
+
+    quad, tilting = load_vehicle("quadrotor_ex4"), load_vehicle("tilting_quadrotor_ex5")
+    plant = Plant(quad, disturbances=[constant((1.0, 0.0, 0.0))], attitude_rpy_deg=(1.0, 2.0, 3.0))
+    plant.step()
+    plant.divergence()
+    plant.external_wrench()
+    plant.thrust_ratios()
+    force, torque = np.array((0.0, 0.0, -12.0)), np.array((0.01, 0.0, 0.0))
+    for actuation in (FixedRotorActuation(quad), TiltingActuation(tilting, objective="min_peak_speed"),
+                      WrenchActuation(quad)):
+        actuation.allocate(0.0, force, torque)
+    FixedRotorActuation(quad).desaturated(12.0, (0.0, 0.0, 1.0))
+    TiltingActuation(tilting).desaturated(force, torque)
+    TiltingActuation(tilting, objective="min_peak_speed").null_space_correction(np.ones(8))
+    observer = MomentumObserver(1.5, np.ones(3), 10.0, 2, 0.001)
+    observer.update(np.zeros(3), np.zeros(3), np.zeros(3), force, torque)
+    observer.wrench_body()
+    _ = observer.mass_estimate
+    report = SaturationReport(4)
+    report.record(0.0, np.ones(4))
+    report.record_shortfall(np.ones(6))
+    clamp_rotor_speeds(quad, np.ones(4))
+    rotation = so3.rotation_from_euler_zyx(np.array((0.1, 0.2, 0.3)))
+    so3.euler_zyx_from_rotation(rotation)
+    so3.euler_rate_matrix(np.zeros(3))
+    so3.euler_rate_matrix_derivative(np.zeros(3), np.zeros(3))
+    so3.attitude_error(rotation, np.eye(3))
+    so3.quaternion_from_rotation(rotation)
+    flat_attitude_rates(np.zeros(3), np.zeros(3), np.zeros(3), 0.0, 0.0, 0.0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="fsr-compile", description=__doc__.split("\n\n")[0].split(": ", 1)[1],
+                                     epilog="exit codes: 0 done, 2 bad arguments")
+    parser.parse_args(argv)
+    from fsr_sim.core.jit import numba
+
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as folder:
+        tour(Path(folder))
+    if numba.config.DISABLE_JIT:
+        print("fsr-compile: NUMBA_DISABLE_JIT is set: nothing to compile", file=sys.stderr)
+        return 0
+    print(f"fsr-compile: flight core compiled in {time.perf_counter() - start:.1f} s (cache: {numba.config.CACHE_DIR})",
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,76 @@
+"""The closed loop in one process (compiled core): the node graph's per-step functions and its lockstep
+contract, for many steps per call.
+
+Per step ``k`` (``t_k = k T``, stamps in integer ns, ``t_k = stamp * 1e-9`` as the nodes compute it):
+
+1. the simulator's published state (the ``odom`` and ``wrench_truth`` row of :mod:`fsr_sim.core.odometry`)
+   is read back by the controller (:func:`fsr_sim.core.odometry.read_odometry`),
+   the same arithmetic as over DDS, so a flight here and in the graph agree;
+2. the controller's tick (:func:`fsr_control.core.controller.controller_tick`) for the state stamped ``t_k``;
+3. the estimator (:func:`fsr_estimation.core.observer_step.estimate_from_state`) on the state and the
+   commanded wrench of ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd``;
+4. the command held over ``[t_k, t_k+1]``, the plant stepped and the state ``t_k+1`` published by the
+   simulator node's own step (:func:`fsr_sim.core.lockstep.advance`); a state that diverges ends the flight,
+   as the simulator does.
+
+The final state ``t_N`` is published and answered (the controller does not know it is the last) but not
+applied. :func:`fly_steps` runs steps ``first..last`` and returns, so the Python driver
+(:mod:`fsr_bringup.runner.in_process_flight`) can notice Ctrl-C and write the recording between calls.
+"""
+
+from __future__ import annotations
+
+from fsr_control.core.allocation import TILTING, WRENCH
+from fsr_control.core.controller import FORCE, ROTOR_SPEEDS, TORQUE, ControllerParams, ControllerState, controller_tick
+from fsr_control.core.flatness import ATTITUDE_OK
+from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
+from fsr_sim.core.jit import jit
+from fsr_sim.core.lockstep import advance, publish
+from fsr_sim.core.odometry import read_odometry
+from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
+
+GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED = 0, 1, 2, 3  # outcomes of fly_steps
+
+
+@jit
+def fly_steps(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
+              controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
+              observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
+              states, published, control, estimates) -> tuple:  # noqa: ANN001
+    """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (19),
+    ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published.
+    Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
+    ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
+    ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""
+    n = (control.shape[1] - ROTOR_SPEEDS) // 2
+    mode = controller.allocation.mode
+    if first == 0:
+        publish(plant, plant_state, published[0])
+    for k in range(first, last + 1):
+        t = (k * period_ns) * 1e-9
+        states[k] = plant_state.x
+        position, rotation, velocity_world, angular_velocity = read_odometry(published[k])
+        row = control[k]
+        status = controller_tick(controller, controller_state, t, position, rotation, velocity_world,
+                                 angular_velocity, row)
+        if status != ATTITUDE_OK:
+            return CONTROLLER_FAILED, k, status
+        force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
+        torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
+        if with_estimator:
+            estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force, torque,
+                                estimates[k])
+        if k == step_count:
+            return FINISHED, k, 0
+        if mode == WRENCH:  # u_T = -f_z along -z_b and tau_b (the RK4 stage row as scratch: copied before use)
+            wrench = plant_state.work[4, :6]
+            wrench[0], wrench[1], wrench[2] = 0.0, 0.0, force[2]
+            wrench[3], wrench[4], wrench[5] = torque
+            set_wrench_command(plant, plant_state, wrench)
+        else:
+            set_rotor_command(plant, plant_state, row[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
+                              row[ROTOR_SPEEDS + n:ROTOR_SPEEDS + 2 * n], mode == TILTING)
+        code = advance(plant, plant_state, published[k + 1])
+        if code != RUNNING:
+            return DIVERGED, k, code
+    return GOING_ON, last, 0

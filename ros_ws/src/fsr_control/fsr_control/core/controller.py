@@ -1,0 +1,131 @@
+"""The controller's per-step tick (compiled core): reference -> (compensation) -> law -> allocation.
+
+:func:`controller_tick` is what the controller node, :class:`fsr_control.flight_controller.FlightController`
+and the in-process loop run for the state stamped ``t``. It writes one output row (:func:`output_size`
+float64) laid out by the index constants below, in the order of the messages the controller publishes
+(``wrench_cmd``, ``wrench_shortfall``, ``reference``, ``attitude_cmd``, ``wrench_desired``: each a contiguous
+slice holding its numbers in field order), then what only the Python API and the recording's analysis need,
+then the rotor speeds and tilts.
+
+Frames: position world NED [m], ``R`` body FRD -> world, velocity world [m/s], angular velocity body [rad/s].
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from fsr_control.core.allocation import AllocationParams, AllocationState, allocate
+from fsr_control.core.compensation import (
+    CompensationParams,
+    CompensationState,
+    compensation_estimate,
+    compensation_record,
+)
+from fsr_control.core.flatness import ATTITUDE_OK
+from fsr_control.core.laws import NO_COMPENSATION, LawParams, geometric_law, voliro_law
+from fsr_control.core.reference import TrajectoryTable, sample_reference
+from fsr_sim.core.jit import jit
+from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, quaternion_from_rotation_rows
+
+# The output row. wrench_cmd: the body wrench the allocated command produces (body FRD, N and N m).
+FORCE, TORQUE = 0, 3
+SHORTFALL = 6  # wrench_shortfall: demanded minus produced body wrench (6)
+# reference (trajectory_msgs/MultiDOFJointTrajectory point): position, orientation (x y z w), linear velocity,
+# angular velocity R_d omega_d (world), linear acceleration, angular acceleration R_d omega_dot_d (world)
+REFERENCE_POSITION, REFERENCE_QUATERNION, REFERENCE_VELOCITY = 12, 15, 19
+REFERENCE_ANGULAR_VELOCITY_WORLD, REFERENCE_ACCELERATION, REFERENCE_ANGULAR_ACCELERATION_WORLD = 22, 25, 28
+REFERENCE_MESSAGE_SIZE = 19
+COMMANDED_QUATERNION = 31  # attitude_cmd: the commanded attitude R_c (x y z w)
+DESIRED_FORCE, DESIRED_TORQUE = 35, 38  # wrench_desired: the law's wrench before allocation
+REFERENCE_JERK, REFERENCE_SNAP = 41, 44
+REFERENCE_ROTATION = 47  # R_d, 9 entries row by row
+REFERENCE_ANGULAR_VELOCITY, REFERENCE_ANGULAR_ACCELERATION = 56, 59  # omega_d, omega_dot_d (desired body)
+REFERENCE_YAW, REFERENCE_YAW_RATE, REFERENCE_YAW_ACCELERATION = 62, 63, 64
+COMMANDED_ROTATION = 65  # R_c, 9 entries row by row
+SATURATED = 74
+ROTOR_SPEEDS = 75  # n entries [rad/s], then n tilts [rad]
+
+
+def output_size(rotor_count: int) -> int:
+    """Length of the output row for ``rotor_count`` rotors."""
+    return ROTOR_SPEEDS + 2 * rotor_count
+
+
+class ControllerParams(NamedTuple):
+    trajectory: TrajectoryTable
+    law: LawParams
+    allocation: AllocationParams
+    compensation: CompensationParams
+
+
+class ControllerState(NamedTuple):
+    law: np.ndarray  # the law's memory (fsr_control.core.laws)
+    allocation: AllocationState
+    compensation: CompensationState
+    reference: np.ndarray  # (5, 4) scratch: the active segment's channel derivatives
+
+
+@jit
+def _put3(out, at: int, v: Vec3) -> None:  # noqa: ANN001
+    out[at], out[at + 1], out[at + 2] = v[0], v[1], v[2]
+
+
+@jit
+def _put_rotation(out, at: int, rows: Mat3) -> None:  # noqa: ANN001
+    for i in range(3):
+        _put3(out, at + 3 * i, rows[i])
+
+
+@jit
+def _put_quaternion(out, at: int, rows: Mat3) -> None:  # noqa: ANN001
+    out[at], out[at + 1], out[at + 2], out[at + 3] = quaternion_from_rotation_rows(rows)
+
+
+@jit
+def controller_tick(params: ControllerParams, state: ControllerState, t: float, position: Vec3, rotation: Mat3,
+                    velocity_world: Vec3, angular_velocity: Vec3, out) -> int:  # noqa: ANN001
+    """The command for the state at ``t`` [s] into ``out`` (module docstring). Returns the law's status
+    (``ATTITUDE_OK``, or why no attitude could be commanded: ``out`` then holds only the reference)."""
+    reference = sample_reference(params.trajectory, t, state.reference)
+    rotation_d = reference.rotation
+    _put3(out, REFERENCE_POSITION, reference.position)
+    _put_quaternion(out, REFERENCE_QUATERNION, rotation_d)
+    _put3(out, REFERENCE_VELOCITY, reference.velocity)
+    _put3(out, REFERENCE_ANGULAR_VELOCITY_WORLD, mat_vec3(rotation_d, reference.angular_velocity))
+    _put3(out, REFERENCE_ACCELERATION, reference.acceleration)
+    _put3(out, REFERENCE_ANGULAR_ACCELERATION_WORLD, mat_vec3(rotation_d, reference.angular_acceleration))
+    _put3(out, REFERENCE_JERK, reference.jerk)
+    _put3(out, REFERENCE_SNAP, reference.snap)
+    _put_rotation(out, REFERENCE_ROTATION, rotation_d)
+    _put3(out, REFERENCE_ANGULAR_VELOCITY, reference.angular_velocity)
+    _put3(out, REFERENCE_ANGULAR_ACCELERATION, reference.angular_acceleration)
+    out[REFERENCE_YAW], out[REFERENCE_YAW_RATE] = reference.yaw, reference.yaw_rate
+    out[REFERENCE_YAW_ACCELERATION] = reference.yaw_acceleration
+    compensation = NO_COMPENSATION
+    if params.compensation.enabled:  # cancel the estimate of t_(k-1), then feed the observer this step
+        compensation = compensation_estimate(params.compensation, state.compensation, t, position[2])
+    if params.law.voliro:
+        status, force_d, torque_d, rotation_c = voliro_law(params.law, reference, position, rotation,
+                                                           velocity_world, angular_velocity, compensation)
+    else:
+        status, force_d, torque_d, rotation_c = geometric_law(params.law, state.law, t, reference, position,
+                                                              rotation, velocity_world, angular_velocity,
+                                                              compensation)
+    if status != ATTITUDE_OK:
+        return status
+    _put3(out, DESIRED_FORCE, force_d)
+    _put3(out, DESIRED_TORQUE, torque_d)
+    _put_rotation(out, COMMANDED_ROTATION, rotation_c)
+    _put_quaternion(out, COMMANDED_QUATERNION, rotation_c)
+    n = (out.shape[0] - ROTOR_SPEEDS) // 2
+    actuated = allocate(params.allocation, state.allocation, t, force_d, torque_d, out[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
+                        out[ROTOR_SPEEDS + n:], out[SHORTFALL:SHORTFALL + 6])
+    _put3(out, FORCE, actuated.force)
+    _put3(out, TORQUE, actuated.torque)
+    out[SATURATED] = 1.0 if actuated.saturated else 0.0
+    if params.compensation.enabled:
+        compensation_record(params.compensation, state.compensation, rotation, velocity_world, angular_velocity,
+                            actuated.force, actuated.torque)
+    return ATTITUDE_OK

@@ -1,0 +1,105 @@
+"""How the flight core is compiled: ``numba.njit`` with an on-disk cache that can never serve stale code.
+
+Every per-step function of fsr (plant, rotors, surfaces, disturbances, planner sampling, control laws,
+allocation, observer, the lockstep and the in-process loop) is written once, in numba's subset (functions on
+floats, tuples and float64 arrays), under a package's ``core/`` folder, and decorated with :data:`jit`:
+
+* compiled: ``numba.njit(cache=True, error_model="numpy")``, fastmath off, so a compiled run and the same
+  source under CPython (``NUMBA_DISABLE_JIT=1``: the decorator then returns the plain function) give the
+  same numbers bit for bit. ``error_model="numpy"``: a division by zero gives inf/NaN instead of raising (the
+  core checks its singular points itself and returns a status instead of raising);
+* cached: compiled machine code is kept in ``<cache>/<key>/`` where ``<cache>`` is ``$NUMBA_CACHE_DIR`` if
+  set, else ``$XDG_CACHE_HOME/fsr/numba`` (``~/.cache/fsr/numba``), and ``<key>`` a hash of every source
+  file under the ``core/`` folders of the installed fsr packages. numba's own cache checks only the file of
+  the function it loads, not the functions it calls from other files; with the key, any change of any core
+  file gives a fresh folder, so a stale cache can only cost a compilation, never a wrong result. The cache
+  lives outside the source tree, so a read-only or non-editable install works the same (an unwritable
+  cache folder falls back to one under the temporary directory).
+
+``fsr-compile`` (:mod:`fsr_bringup.cli.compile_cli`, run by ``scripts/setup.sh``) compiles every entry
+point once, so that no flight and no node pays a compilation.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import sys
+import tempfile
+from importlib.util import find_spec
+from pathlib import Path
+
+CORE_PACKAGES = ("fsr_sim", "fsr_estimation", "fsr_control", "fsr_bringup")  # lowest layer first
+
+
+def core_sources() -> list[Path]:
+    """Every ``core/*.py`` of the installed fsr packages (found without importing them)."""
+    files: list[Path] = []
+    for name in CORE_PACKAGES:
+        spec = find_spec(name)
+        for location in (spec.submodule_search_locations or []) if spec is not None else []:
+            files += sorted((Path(location) / "core").glob("*.py"))
+    return files
+
+
+def core_key() -> str:
+    """Hash of the core's sources and of the Python and numba versions (the cache folder's name)."""
+    digest = hashlib.sha256(sys.version.encode())
+    for path in core_sources():
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _writable(folder: Path) -> bool:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder):
+            return True
+    except OSError:
+        return False
+
+
+def cache_base() -> Path:
+    """The folder that holds one keyed cache folder per core version (module docstring)."""
+    base = os.environ.get("FSR_NUMBA_CACHE_BASE") or os.environ.get("NUMBA_CACHE_DIR")
+    if base:
+        return Path(base)
+    try:
+        home_cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    except RuntimeError:  # no home directory
+        home_cache = Path(tempfile.gettempdir())
+    return home_cache / "fsr" / "numba"
+
+
+def cache_folder(base: Path) -> Path:
+    """``base/<key>``, created if missing (a temporary folder if ``base`` cannot be written)."""
+    key = core_key()
+    folder = base / key
+    if not _writable(folder):
+        folder = Path(tempfile.gettempdir()) / f"fsr-numba-{os.getuid()}" / key
+        folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def _configure() -> None:
+    # Before numba is imported (its config reads the environment once). Child processes inherit the base,
+    # and each computes the key of its own installation.
+    base = cache_base()
+    os.environ["FSR_NUMBA_CACHE_BASE"] = str(base)
+    folder = str(cache_folder(base))
+    os.environ["NUMBA_CACHE_DIR"] = folder
+    import numba
+
+    numba.config.CACHE_DIR = folder
+
+
+_configure()
+
+import numba  # noqa: E402  (after the cache folder is set)
+
+jit = functools.partial(numba.njit, cache=True, error_model="numpy", fastmath=False)
+"""The decorator of every core function (module docstring)."""
+
+prange = numba.prange

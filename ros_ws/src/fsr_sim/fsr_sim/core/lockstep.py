@@ -1,0 +1,39 @@
+"""One lockstep step of the simulator (compiled core): what the simulator node and the in-process loop both
+call once per control period.
+
+The contract: the state stamped ``t_k`` is published; the command stamped ``t_k`` is applied over
+``[t_k, t_k+1]`` (:func:`apply_rotor_command` / :func:`apply_wrench_command`, or the failsafe: the last
+command held, or :func:`fsr_sim.core.plant.cut_thrust`); :func:`advance` steps the plant and publishes the
+state ``t_k+1`` (the row of :mod:`fsr_sim.core.odometry`), or reports why it diverged. The node keeps only
+the handshake, the waiting and the failsafe policy (:mod:`fsr_sim.nodes.lockstep`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from fsr_sim.core.jit import jit
+from fsr_sim.core.odometry import publish_state
+from fsr_sim.core.plant import PlantParams, PlantState, divergence, plant_external_wrench, plant_step
+
+
+@jit
+def publish(params: PlantParams, state: PlantState, out) -> None:  # noqa: ANN001
+    """The published row (19,) of the current state (``odom`` and ``wrench_truth``)."""
+    publish_state(state.x, plant_external_wrench(params, state), out)
+
+
+@jit
+def advance(params: PlantParams, state: PlantState, out) -> int:  # noqa: ANN001
+    """Step the plant one control period with the held command; publish the new state into ``out`` (19,)
+    if it is finite. Returns the divergence code (``RUNNING``: go on)."""
+    plant_step(params, state)
+    code = divergence(params, state)
+    x = state.x
+    finite = True
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            finite = False
+    if finite:
+        publish(params, state, out)
+    return code

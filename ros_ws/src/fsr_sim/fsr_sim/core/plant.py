@@ -1,0 +1,267 @@
+"""The true plant per step (compiled core): rigid body + rotors (with ground/ceiling effect) + disturbances +
+contact.
+
+Inputs are held over a step (zero-order hold) while the state-dependent parts (thrust ratios near surfaces,
+time-varying disturbances) are evaluated at every RK4 stage. Two actuations:
+
+* rotors: speeds ``w_i`` [rad/s] clamped to the vehicle's limits (saturation recorded) and, for a tilting
+  vehicle, tilts ``alpha_i`` [rad] clamped to ``+-tilt_max``, applied at once; ``f_b = sum c_f r_i u_w,i z_i``,
+  ``tau_b = sum u_w,i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the thrust ratio ``r_i`` of
+  :mod:`fsr_sim.core.surfaces` (drag torque is not scaled);
+* wrench: the commanded body wrench directly; surfaces then only act through contact.
+
+Ground and ceiling are solid: after each RK4 step a vehicle whose feet are below the ground (top above the
+ceiling) is put back on it with zero velocity and angular velocity (held: no bounce, no sliding); the fastest
+impact is kept, and one faster than ``crash_speed`` is a divergence (:func:`divergence`).
+
+:class:`PlantParams` is packed once from the checked ``Vehicle``/scenario objects
+(:class:`fsr_sim.model.plant.Plant`); :class:`PlantState` holds everything that changes.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from fsr_sim.core.disturbances import external_wrench
+from fsr_sim.core.jit import jit
+from fsr_sim.core.rigid_body import rigid_body_rates, rk4_combine, stage_state, state_rotation
+from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, scaled_rotor_wrench, tilted_columns
+from fsr_sim.core.so3 import mat_vec3
+from fsr_sim.core.surfaces import Surfaces, ceiling_rest_z, ground_rest_z, has_thrust_effects, thrust_ratios
+
+MAX_SPEED = 100.0  # m/s: beyond this the simulation is considered diverged
+MAX_SPIN = 200.0  # rad/s
+
+# divergence() codes (the message is made by fsr_sim.model.plant.divergence_reason)
+RUNNING, NOT_FINITE, TOO_FAST, SPINNING, GROUND_CRASH, CEILING_CRASH = 0, 1, 2, 3, 4, 5
+
+# PlantState.status entries
+STEP_INDEX, IN_CONTACT, AT_CEILING, MAX_IMPACT, MAX_CEILING_IMPACT = 0, 1, 2, 3, 4
+GROUND_CAP_STEPS, CEILING_CAP_STEPS, GROUND_CAPPED, CEILING_CAPPED = 5, 6, 7, 8
+STATUS_SIZE = 9
+
+
+class PlantParams(NamedTuple):
+    """Everything about the true plant that does not change during a flight (SI units, frames as above)."""
+
+    mass: float
+    inertia: np.ndarray  # (3, 3)
+    inertia_inv: np.ndarray  # (3, 3)
+    dt: float  # RK4 step [s]
+    substeps: int  # RK4 steps per control period
+    period: float  # dt * substeps [s]
+    wrench_actuation: bool
+    speed_min: float  # [rad/s]
+    speed_max: float
+    tilting: bool
+    tilt_max: float  # [rad]
+    vertical_columns: np.ndarray  # (n, 9) rotor columns at tilt 0 (fixed rotors: their only columns)
+    lateral_columns: np.ndarray  # (n, 9) rotor columns at tilt +pi/2 (zeros for fixed rotors)
+    surfaces: Surfaces
+    disturbances: np.ndarray  # (m, WIDTH) rows of fsr_sim.core.disturbances
+    disturbance_knots: np.ndarray  # (k, KNOT_WIDTH)
+    crash_speed: float  # [m/s]
+
+
+class PlantState(NamedTuple):
+    """What changes (float64 arrays, modified in place)."""
+
+    x: np.ndarray  # (13,) rigid-body state, fsr_sim.core.rigid_body layout
+    speeds: np.ndarray  # (n,) applied rotor speeds [rad/s] (clamped)
+    speed_sq: np.ndarray  # (n,) |w| w [(rad/s)^2]
+    tilts: np.ndarray  # (n,) applied tilt angles [rad]
+    wrench_command: np.ndarray  # (6,) commanded body force [N] and torque [N m] (wrench actuation)
+    columns: np.ndarray  # (n, 9) the rotors' columns at the applied tilts
+    body_wrench: np.ndarray  # (6,) actuator wrench of the held command away from surfaces
+    ratios: np.ndarray  # (n,) scratch: thrust ratios of the current stage
+    work: np.ndarray  # (5, 13) scratch: RK4 rates k1..k4 and the stage state
+    status: np.ndarray  # (STATUS_SIZE,) step index, contact, impacts, surface-cap counts
+    saturation: np.ndarray  # rotor-speed saturation record (fsr_sim.core.rotors)
+
+
+@jit
+def plant_time(params: PlantParams, state: PlantState) -> float:
+    """Simulated time [s] of the current state."""
+    return state.status[STEP_INDEX] * params.period
+
+
+@jit
+def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
+    """Cache the actuator wrench of the held command away from surfaces (constant over the period)."""
+    if params.wrench_actuation:
+        state.body_wrench[:] = state.wrench_command
+    else:
+        rotor_wrench(state.columns, state.speed_sq, state.body_wrench)
+
+
+@jit
+def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, with_tilts: bool) -> bool:  # noqa: ANN001
+    """Hold rotor speeds (n,) [rad/s] (and, ``with_tilts`` on a tilting vehicle, tilts (n,) [rad]) until the
+    next command; speeds are clamped to the limits. True if anything saturated (recorded)."""
+    n = speeds.shape[0]
+    excess = state.ratios  # scratch until the next stage
+    for i in range(n):
+        clamped, excess[i] = clamped_speed(abs(speeds[i]) * speeds[i], params.speed_min, params.speed_max)
+        state.speeds[i] = clamped
+        state.speed_sq[i] = abs(clamped) * clamped
+    saturated = record_saturation(state.saturation, plant_time(params, state), excess)
+    if params.tilting and with_tilts:
+        limit = params.tilt_max
+        for i in range(n):
+            tilt = tilts[i]
+            if tilt < -limit:
+                tilt = -limit
+            elif tilt > limit:
+                tilt = limit
+            state.tilts[i] = tilt
+        tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
+    update_actuator_wrench(params, state)
+    return saturated
+
+
+@jit
+def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None:  # noqa: ANN001
+    """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation)."""
+    state.wrench_command[:] = wrench
+    update_actuator_wrench(params, state)
+
+
+@jit
+def cut_thrust(params: PlantParams, state: PlantState) -> None:
+    """Failsafe: all rotors stopped, zero wrench (tilts are kept)."""
+    state.wrench_command[:] = 0.0
+    state.speeds[:] = 0.0
+    state.speed_sq[:] = 0.0
+    update_actuator_wrench(params, state)
+
+
+@jit
+def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple:  # noqa: ANN001
+    """Force world excluding gravity [N] and torque body [N m] at an RK4 stage (time ``t``, state ``x``)."""
+    rotation = state_rotation(x)
+    wrench = state.body_wrench
+    if not params.wrench_actuation and has_thrust_effects(params.surfaces):
+        ground_capped, ceiling_capped = thrust_ratios(params.surfaces, x[2], rotation[2], state.ratios)
+        if ground_capped:
+            state.status[GROUND_CAPPED] = 1.0
+        if ceiling_capped:
+            state.status[CEILING_CAPPED] = 1.0
+        (fx, fy, fz), (tx, ty, tz) = scaled_rotor_wrench(state.columns, state.speed_sq, state.ratios)
+    else:
+        fx, fy, fz, tx, ty, tz = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
+    fx, fy, fz = mat_vec3(rotation, (fx, fy, fz))
+    if params.disturbances.shape[0]:
+        (ex, ey, ez), (ux, uy, uz) = external_wrench(params.disturbances, params.disturbance_knots, t, rotation)
+        return (fx + ex, fy + ey, fz + ez), (tx + ux, ty + uy, tz + uz)
+    return (fx, fy, fz), (tx, ty, tz)
+
+
+@jit
+def _rates(params: PlantParams, state: PlantState, t: float, x, out) -> None:  # noqa: ANN001
+    force, torque = stage_wrench(params, state, t, x)
+    rigid_body_rates(x, params.mass, params.inertia, params.inertia_inv, force, torque, out)
+
+
+@jit
+def rk4_step(params: PlantParams, state: PlantState, t: float) -> None:
+    """One classical RK4 step of ``params.dt`` from time ``t`` [s] (the quaternion renormalised)."""
+    x, work = state.x, state.work
+    k1, k2, k3, k4, stage = work[0], work[1], work[2], work[3], work[4]
+    dt = params.dt
+    h = 0.5 * dt
+    _rates(params, state, t, x, k1)
+    stage_state(x, k1, h, stage)
+    _rates(params, state, t + h, stage, k2)
+    stage_state(x, k2, h, stage)
+    _rates(params, state, t + h, stage, k3)
+    stage_state(x, k3, dt, stage)
+    _rates(params, state, t + dt, stage, k4)
+    rk4_combine(x, k1, k2, k3, k4, dt)
+
+
+@jit
+def _hold_at(state: PlantState, rest_z: float) -> None:
+    x = state.x
+    x[2] = rest_z
+    x[3] = x[4] = x[5] = 0.0  # held by the surface (no bounce, no sliding)
+    x[10] = x[11] = x[12] = 0.0
+
+
+@jit
+def apply_contact(params: PlantParams, state: PlantState) -> None:
+    """Ground (and, when enabled, ceiling) contact after an RK4 step (module docstring)."""
+    surfaces, x, status = params.surfaces, state.x, state.status
+    status[IN_CONTACT] = 0.0
+    if surfaces.ground:
+        rest_z = ground_rest_z(surfaces)
+        if not x[2] < rest_z:
+            status[IN_CONTACT] = 1.0
+            if x[5] > status[MAX_IMPACT]:
+                status[MAX_IMPACT] = x[5]
+            _hold_at(state, rest_z)
+    if surfaces.ceiling:
+        status[AT_CEILING] = 0.0
+        rest_z = ceiling_rest_z(surfaces)
+        if not x[2] > rest_z:
+            status[AT_CEILING] = 1.0
+            if -x[5] > status[MAX_CEILING_IMPACT]:  # upward (negative NED z) speed
+                status[MAX_CEILING_IMPACT] = -x[5]
+            _hold_at(state, rest_z)
+
+
+@jit
+def plant_step(params: PlantParams, state: PlantState) -> None:
+    """Advance one control period: ``substeps`` RK4 steps of ``dt`` with contact; count the steps in which a
+    thrust ratio was held at a surface's ``max_ratio``."""
+    status = state.status
+    time = plant_time(params, state)
+    for sub in range(params.substeps):
+        rk4_step(params, state, time + sub * params.dt)
+        apply_contact(params, state)
+    if status[GROUND_CAPPED] != 0.0 or status[CEILING_CAPPED] != 0.0:
+        status[GROUND_CAP_STEPS] += status[GROUND_CAPPED]
+        status[CEILING_CAP_STEPS] += status[CEILING_CAPPED]
+        status[GROUND_CAPPED] = status[CEILING_CAPPED] = 0.0
+    status[STEP_INDEX] += 1.0
+
+
+@jit
+def divergence(params: PlantParams, state: PlantState) -> int:
+    """Why the simulation cannot go on, as a code (``RUNNING``: it can): a non-finite state, a speed or spin
+    beyond ``MAX_SPEED`` / ``MAX_SPIN``, an impact faster than ``crash_speed``."""
+    x = state.x
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return NOT_FINITE
+    if math.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]) > MAX_SPEED:
+        return TOO_FAST
+    if math.sqrt(x[10] * x[10] + x[11] * x[11] + x[12] * x[12]) > MAX_SPIN:
+        return SPINNING
+    if state.status[MAX_IMPACT] > params.crash_speed:
+        return GROUND_CRASH
+    if state.status[MAX_CEILING_IMPACT] > params.crash_speed:
+        return CEILING_CRASH
+    return RUNNING
+
+
+@jit
+def plant_external_wrench(params: PlantParams, state: PlantState) -> tuple:
+    """The true external wrench now: (force world NED [N], torque body FRD [N m])."""
+    return external_wrench(params.disturbances, params.disturbance_knots, plant_time(params, state),
+                           state_rotation(state.x))
+
+
+@jit
+def actuator_wrench_log(params: PlantParams, state: PlantState, speeds, tilts, with_tilts: bool, ratios,  # noqa: ANN001
+                        force, torque) -> None:  # noqa: ANN001
+    """The actuator wrench the plant applies for rotor commands along a log, with the plant's own functions:
+    command ``k`` (``speeds`` (N, n) [rad/s], ``tilts`` (N, n) [rad]) held by :func:`set_rotor_command` on the
+    scratch ``state``, at thrust ratios ``ratios`` (N, n); body force (N, 3) [N] and torque (N, 3) [N m]."""
+    for k in range(speeds.shape[0]):
+        set_rotor_command(params, state, speeds[k], tilts[k], with_tilts)
+        f, t = scaled_rotor_wrench(state.columns, state.speed_sq, ratios[k])
+        force[k, 0], force[k, 1], force[k, 2] = f
+        torque[k, 0], torque[k, 1], torque[k, 2] = t

@@ -1,0 +1,85 @@
+"""The compiled flight core: one source that runs compiled and under CPython with the same numbers, a cache that
+no flight or node has to fill, and a cache key that changes with the core's sources."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+FLY = str(Path(sys.executable).parent / "fsr-fly")
+FLIGHTS = (("ex3_estimation", {}), ("ex4_geometric", {"actuation": "rotors"}), ("ex5_voliro", {}),
+           ("octo_ground_effect", {}))
+FINAL_STATES = """
+import json, sys
+import numpy as np
+from fsr_bringup import simulate
+flights = json.loads(sys.argv[1])
+print(json.dumps([simulate(name, set=values).state[-1].tolist() for name, values in flights]))
+"""
+
+
+def final_states(disable_jit: bool) -> np.ndarray:
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1" if disable_jit else "0"}
+    out = subprocess.run([sys.executable, "-c", FINAL_STATES, json.dumps(FLIGHTS)], env=env, capture_output=True,
+                         text=True, check=True, timeout=280).stdout
+    return np.array(json.loads(out))
+
+
+@pytest.mark.slow
+def test_compiled_and_cpython_flights_are_bit_identical():
+    """The same source, compiled (fastmath off) and under CPython (NUMBA_DISABLE_JIT=1): identical final states
+    of whole flights (ex3, ex4 with rotors, ex5, the octocopter through its ground effect)."""
+    compiled, python = final_states(False), final_states(True)
+    assert np.array_equal(compiled, python), np.abs(compiled - python).max()
+
+
+@pytest.mark.slow
+def test_no_flight_and_no_node_compiles_with_the_cache_filled(tmp_path):
+    """After fsr-compile (scripts/setup.sh runs it) an in-process flight and every node of a graph flight only
+    load compiled code: numba's cache reports loads, never a save."""
+    env = {**os.environ, "NUMBA_DEBUG_CACHE": "1", "MPLBACKEND": "Agg"}
+    subprocess.run([str(Path(sys.executable).parent / "fsr-compile")], env=env, check=True, capture_output=True,
+                   timeout=280)
+    in_process = subprocess.run([FLY, "ex5_voliro", "--in-process", "--duration", "0.1", "--out", "a.mcap"],
+                                cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert in_process.returncode == 0, in_process.stderr
+    graph = subprocess.run([FLY, "ex5_voliro", "--duration", "0.05", "--out", "b.mcap", "--no-analysis"],
+                           cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert graph.returncode == 0, graph.stderr
+    logs = [in_process.stdout, *(path.read_text() for path in (tmp_path / "b" / "logs").glob("*.log"))]
+    assert any("[cache] data loaded" in text for text in logs[1:])  # the nodes use the cache ...
+    saved = [line for text in logs for line in text.splitlines() if "[cache] data saved" in line]
+    assert not saved  # ... and compile nothing
+
+
+def test_cache_key_follows_every_core_source(tmp_path, monkeypatch):
+    """The cache folder is named by a hash of the core's files: any change to any of them (also a function
+    called from another file, which numba's own cache would not notice) gives a new folder."""
+    from fsr_sim.core import jit
+
+    sources = jit.core_sources()
+    assert {path.parent.parent.name for path in sources} == set(jit.CORE_PACKAGES)
+    files = [tmp_path / "a.py", tmp_path / "b.py"]
+    for path in files:
+        path.write_text("x = 1\n")
+    monkeypatch.setattr(jit, "core_sources", lambda: files)
+    before = jit.core_key()
+    files[1].write_text("x = 2\n")
+    assert jit.core_key() != before
+    files[1].write_text("x = 1\n")
+    assert jit.core_key() == before
+
+
+def test_unwritable_cache_base_falls_back_to_a_temporary_folder(tmp_path):
+    from fsr_sim.core import jit
+
+    blocked = tmp_path / "file"
+    blocked.write_text("not a folder")
+    folder = jit.cache_folder(blocked)
+    assert folder.is_dir() and blocked not in folder.parents
