@@ -81,8 +81,10 @@ def polynomial_derivatives(coefficients, goal, start_time: float, duration: floa
         return
     if tau < 0.0:
         tau = 0.0
-    powers = (1.0, math.pow(tau, 1.0), math.pow(tau, 2.0), math.pow(tau, 3.0), math.pow(tau, 4.0),
-              math.pow(tau, 5.0), math.pow(tau, 6.0), math.pow(tau, 7.0))  # tau^k, k = 0..7 (pow, as numpy's)
+    # tau^k, k = 0..7, by products (a pow with a constant exponent would be folded differently by LLVM)
+    tau2 = tau * tau
+    tau4 = tau2 * tau2
+    powers = (1.0, tau, tau2, tau2 * tau, tau4, tau4 * tau, tau4 * tau2, tau4 * tau2 * tau)
     for n in range(coefficients.shape[0]):
         for c in range(coefficients.shape[1]):
             total = 0.0

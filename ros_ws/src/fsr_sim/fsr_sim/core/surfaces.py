@@ -21,6 +21,7 @@ centre of mass and the top ``top_height`` above it, along world down.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -63,6 +64,12 @@ def has_thrust_effects(surfaces: Surfaces) -> bool:
 
 
 @jit
+def _three_halves(x: float) -> float:
+    """``x^(3/2)`` as ``x sqrt(x)`` (exact operations: the same bits compiled and under CPython)."""
+    return x * math.sqrt(x)
+
+
+@jit
 def thrust_ratios(surfaces: Surfaces, position_down: float, rotation_row2: Vec3, out) -> tuple[bool, bool]:  # noqa: ANN001
     """``T_i / T_OGE,i`` of every rotor into ``out`` (n,) for the centre's down-coordinate ``p_z`` [m] and the
     third row of ``R``; returns whether a ground / a ceiling ratio was held at its ``max_ratio``.
@@ -89,8 +96,8 @@ def thrust_ratios(surfaces: Surfaces, position_down: float, rotation_row2: Vec3,
                 neighbours = 0.0
                 for j in range(n):
                     if j != i:
-                        neighbours = neighbours + c / (separation_sq[i, j] + q) ** 1.5
-                body = 2.0 * surfaces.body_factor * rho2 * z / (surfaces.arm_sq[i] + q) ** 1.5
+                        neighbours = neighbours + c / _three_halves(separation_sq[i, j] + q)
+                body = 2.0 * surfaces.body_factor * rho2 * z / _three_halves(surfaces.arm_sq[i] + q)
                 denominator = denominator - neighbours - body
             if denominator < surfaces.ground_floor:
                 denominator = surfaces.ground_floor
