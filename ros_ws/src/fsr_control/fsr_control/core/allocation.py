@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.rotors import clamped_speed, record_saturation, record_shortfall
 
 WRENCH, FIXED, TILTING = 0, 1, 2
@@ -95,7 +95,7 @@ def _inside(values, low: float, high: float) -> bool:  # noqa: ANN001
     return True
 
 
-@jit
+@jit_inline
 def _with_yaw(params: AllocationParams, base, tau_z: float, yaw, out) -> None:  # noqa: ANN001
     """The yaw step: ``out = base + s* v_yaw`` with the largest ``s* in [0, 1]`` that stays in the box."""
     for i in range(base.shape[0]):
@@ -106,7 +106,7 @@ def _with_yaw(params: AllocationParams, base, tau_z: float, yaw, out) -> None:  
         out[i] = base[i] + s * yaw[i]
 
 
-@jit
+@jit_inline
 def fixed_desaturation(params: AllocationParams, thrust: float, torque: tuple, scratch, out) -> bool:  # noqa: ANN001
     """Squared speeds ``u_w`` (into ``out``) inside the box ``[w_min^2, w_max^2]`` for thrust ``u_T`` [N] and a body
     torque [N m], by priority (:mod:`fsr_sim.model.desaturation`): without air mode the thrust exact and the
@@ -157,7 +157,7 @@ def fixed_desaturation(params: AllocationParams, thrust: float, torque: tuple, s
     return True
 
 
-@jit
+@jit_inline
 def allocate_fixed(params: AllocationParams, state: AllocationState, time: float, force: tuple, torque: tuple,
                    speeds, shortfall) -> Actuated:  # noqa: ANN001
     """Rotor speeds [rad/s] (into ``speeds``) for a body force (only ``f_z = -u_T`` [N] is used) and torque."""
@@ -210,7 +210,7 @@ def max_scale_in_discs(base, direction, radius_sq: float) -> float:  # noqa: ANN
     return scale if scale > 0.0 else 0.0
 
 
-@jit
+@jit_inline
 def tilting_desaturation(params: AllocationParams, wrench: tuple, scratch, out) -> None:  # noqa: ANN001
     """``u`` [N] (into ``out``, (2n,)) with every rotor's thrust vector ``|(u_v,i, u_l,i)| <= c_f w_max^2``: body
     force, then roll/pitch torque, then yaw torque, each added at the largest scale in ``[0, 1]`` that fits."""
@@ -264,7 +264,7 @@ def _solve_small(matrix, rhs, out) -> None:  # noqa: ANN001
         out[row] = total / matrix[row, row]
 
 
-@jit
+@jit_inline
 def null_space_correction(params: AllocationParams, state: AllocationState, u) -> None:  # noqa: ANN001
     """Add ``N z`` to ``u`` (2n,) [N] with ``z`` minimising ``sum_i |t_i|^p`` (:mod:`fsr_control.nullspace`): a
     few Newton steps warm-started from the previous command's ``z``, on thrusts scaled by their mean."""
@@ -321,7 +321,7 @@ def null_space_correction(params: AllocationParams, state: AllocationState, u) -
         u[row] = u[row] + total
 
 
-@jit
+@jit_inline
 def allocate_tilting(params: AllocationParams, state: AllocationState, time: float, force: tuple, torque: tuple,
                      speeds, tilts, shortfall) -> Actuated:  # noqa: ANN001
     """Rotor speeds [rad/s] and tilts [rad] (into ``speeds``, ``tilts``) for a body force [N] and torque [N m]."""
@@ -378,7 +378,7 @@ def allocate_tilting(params: AllocationParams, state: AllocationState, time: flo
     return Actuated((produced[0], produced[1], produced[2]), (produced[3], produced[4], produced[5]), saturated)
 
 
-@jit
+@jit_inline
 def allocate(params: AllocationParams, state: AllocationState, time: float, force: tuple, torque: tuple, speeds,
              tilts, shortfall) -> Actuated:  # noqa: ANN001
     """The allocation of ``params.mode`` (module docstring)."""

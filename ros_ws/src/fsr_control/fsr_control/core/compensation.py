@@ -14,7 +14,7 @@ import numpy as np
 
 from fsr_control.core.laws import NO_COMPENSATION, Compensation
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, observer_update, reset_observer
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.so3 import (
     Mat3,
     Vec3,
@@ -49,7 +49,7 @@ class CompensationState(NamedTuple):
     memory: np.ndarray  # (MEMORY_SIZE,)
 
 
-@jit
+@jit_inline
 def compensation_estimate(params: CompensationParams, state: CompensationState, stamp: float,
                           position_down: float) -> Compensation:
     """The estimate of the previous stamp for the state at ``stamp`` [s], or inactive (in contact, first step,
@@ -95,7 +95,7 @@ def compensation_estimate(params: CompensationParams, state: CompensationState, 
     return Compensation(True, (w[0], w[1], w[2]), torque, rate, acceleration)
 
 
-@jit
+@jit_inline
 def compensation_record(params: CompensationParams, state: CompensationState, rotation: Mat3,
                         velocity_world: Vec3, angular_velocity: Vec3, force_body: tuple, torque_body: tuple) -> None:
     """Feed the observer the state of this stamp and the body wrench commanded for it [N, N m]."""

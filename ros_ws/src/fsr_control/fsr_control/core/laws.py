@@ -15,7 +15,7 @@ import numpy as np
 
 from fsr_control.core.flatness import ATTITUDE_OK, attitude_from_thrust_vector
 from fsr_control.core.reference import ReferenceSample
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.core.so3 import (
     Mat3,
@@ -74,7 +74,7 @@ def linear_feedback(k_a: Mat3, e_a: Vec3, k_b: Mat3, e_b: Vec3, scale: float, fe
     )
 
 
-@jit
+@jit_inline
 def _measured_acceleration(memory, t: float, velocity_world: Vec3, thrust: float, mass: float,  # noqa: ANN001
                            z_b: Vec3) -> Vec3:
     """Acceleration [m/s^2] from consecutive velocities (includes unmodelled forces); the model's
@@ -90,7 +90,7 @@ def _measured_acceleration(memory, t: float, velocity_world: Vec3, thrust: float
     return (-scale * z_b[0], -scale * z_b[1], GRAVITY - scale * z_b[2])
 
 
-@jit
+@jit_inline
 def geometric_law(params: LawParams, memory, t: float, reference: ReferenceSample, position: Vec3,  # noqa: ANN001
                   rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
     """``(status, [0, 0, -u_T], tau_b, R_d)`` of the geometric law (:mod:`fsr_control.controllers.geometric`)."""
@@ -148,7 +148,7 @@ def geometric_law(params: LawParams, memory, t: float, reference: ReferenceSampl
     return status, (0.0, 0.0, -thrust), torque, rotation_desired
 
 
-@jit
+@jit_inline
 def voliro_law(params: LawParams, reference: ReferenceSample, position: Vec3, rotation: Mat3,
                velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
     """``(status, f_b, tau_b, R_d)`` of the Voliro law (:mod:`fsr_control.controllers.voliro`): the body wrench

@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, yaw_rotation_rows
 
 DERIVATIVES = 5  # value, velocity, acceleration, jerk, snap
@@ -58,7 +58,7 @@ class ReferenceSample(NamedTuple):
     yaw_acceleration: float
 
 
-@jit
+@jit_inline
 def active_segment(table: TrajectoryTable, t: float) -> int:
     """Index of the last segment starting at or before ``t`` [s] (0 if none)."""
     starts = table.start_time
@@ -93,7 +93,7 @@ def polynomial_derivatives(coefficients, goal, start_time: float, duration: floa
             out[n, c] = total
 
 
-@jit
+@jit_inline
 def channel_derivatives(table: TrajectoryTable, segment: int, t: float, out) -> None:  # noqa: ANN001
     """:func:`polynomial_derivatives` of the 4 channels of ``segment`` into ``out`` (5, 4)."""
     polynomial_derivatives(table.coefficients[segment], table.goal[segment], table.start_time[segment],
@@ -107,7 +107,7 @@ def _rodrigues_row(r0, r0_s, r0_s2, sin_theta: float, versine: float) -> Vec3:  
             r0[2] + sin_theta * r0_s[2] + versine * r0_s2[2])
 
 
-@jit
+@jit_inline
 def reference_from_derivatives(table: TrajectoryTable, segment: int, d) -> ReferenceSample:  # noqa: ANN001
     """The :class:`ReferenceSample` of ``segment`` from its channel derivatives ``d`` (5, 4)."""
     theta, theta_dot, theta_ddot = d[0, 3], d[1, 3], d[2, 3]
@@ -135,7 +135,7 @@ def reference_from_derivatives(table: TrajectoryTable, segment: int, d) -> Refer
     )
 
 
-@jit
+@jit_inline
 def sample_reference(table: TrajectoryTable, t: float, scratch) -> ReferenceSample:  # noqa: ANN001
     """The reference at ``t`` [s]; ``scratch`` (5, 4) receives the active segment's channel derivatives."""
     segment = active_segment(table, t)

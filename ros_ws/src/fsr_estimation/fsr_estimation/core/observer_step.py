@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.so3 import (
     Mat3,
     euler_rate_derivative_rows,
@@ -65,7 +65,7 @@ def new_observer_state(order: int) -> ObserverState:
                          np.zeros(2), np.zeros(1))
 
 
-@jit
+@jit_inline
 def reset_observer(state: ObserverState) -> None:
     """Forget all history: the next update is sample k = 0 again (estimate zero)."""
     state.gamma[:] = 0.0
@@ -80,7 +80,7 @@ def _put_rows(array, rows: Mat3) -> None:  # noqa: ANN001
             array[i, j] = rows[i][j]
 
 
-@jit
+@jit_inline
 def _store_sample_terms(params: ObserverParams, state: ObserverState, eta: tuple, eta_dot: tuple,
                         force_body: tuple, torque_body: tuple) -> None:
     """b_k, M(eta[k]) and R_b,k for the next step and for :func:`wrench_body`."""
@@ -101,7 +101,7 @@ def _store_sample_terms(params: ObserverParams, state: ObserverState, eta: tuple
     state.euler[0], state.euler[1] = phi, theta
 
 
-@jit
+@jit_inline
 def observer_update(params: ObserverParams, state: ObserverState, velocity_world: tuple, eta: tuple,
                     eta_dot: tuple, force_body: tuple, torque_body: tuple) -> None:
     """Take sample k (velocity world [m/s], ZYX Euler angles [rad] and rates [rad/s], the actuator wrench of
@@ -129,7 +129,7 @@ def observer_update(params: ObserverParams, state: ObserverState, velocity_world
     state.samples[0] += 1.0
 
 
-@jit
+@jit_inline
 def wrench_body(params: ObserverParams, state: ObserverState) -> tuple:
     """The latest estimate in body FRD: (force ``R_b^T f_e`` [N], torque ``Q^-T tau_e`` [N m])."""
     w = state.estimate
@@ -138,7 +138,7 @@ def wrench_body(params: ObserverParams, state: ObserverState) -> tuple:
     return force, torque
 
 
-@jit
+@jit_inline
 def mass_estimate(params: ObserverParams, state: ObserverState) -> float:
     """``m_model + f_e,z / g`` [kg]."""
     return params.mass + state.estimate[2] / params.gravity
@@ -152,7 +152,7 @@ def euler_inputs(rotation: Mat3, angular_velocity_body: tuple) -> tuple:
     return eta, euler_rates3(eta[0], eta[1], angular_velocity_body)
 
 
-@jit
+@jit_inline
 def estimate_from_state(params: ObserverParams, state: ObserverState, rotation: Mat3, velocity_world: tuple,
                         angular_velocity_body: tuple, force_body: tuple, torque_body: tuple, out) -> None:  # noqa: ANN001
     """One sample from a state (``R``, velocity world, angular velocity body) and the command for it; ``out``

@@ -102,4 +102,9 @@ import numba  # noqa: E402  (after the cache folder is set)
 jit = functools.partial(numba.njit, cache=True, error_model="numpy", fastmath=False)
 """The decorator of every core function (module docstring)."""
 
+jit_inline = functools.partial(jit, inline="always")
+"""The decorator of core functions that take the packed parameter and state tuples: inlined into their caller
+(numba IR), so that the tuples' arrays are not passed across a call, with a reference-count update per array,
+at every step (measured: the plant's RK4 step 3.0 -> 1.5 us, the whole loop 8 -> 3.6 us per step)."""
+
 prange = numba.prange

@@ -12,18 +12,18 @@ from __future__ import annotations
 
 import math
 
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.odometry import publish_state
 from fsr_sim.core.plant import PlantParams, PlantState, divergence, plant_external_wrench, plant_step
 
 
-@jit
+@jit_inline
 def publish(params: PlantParams, state: PlantState, out) -> None:  # noqa: ANN001
     """The published row (19,) of the current state (``odom`` and ``wrench_truth``)."""
     publish_state(state.x, plant_external_wrench(params, state), out)
 
 
-@jit
+@jit_inline
 def advance(params: PlantParams, state: PlantState, out) -> int:  # noqa: ANN001
     """Step the plant one control period with the held command; publish the new state into ``out`` (19,)
     if it is finite. Returns the divergence code (``RUNNING``: go on)."""

@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_sim.core.disturbances import external_wrench
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.rigid_body import rigid_body_rates, rk4_combine, stage_state, state_rotation
 from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, scaled_rotor_wrench, tilted_columns
 from fsr_sim.core.so3 import mat_vec3
@@ -82,13 +82,13 @@ class PlantState(NamedTuple):
     saturation: np.ndarray  # rotor-speed saturation record (fsr_sim.core.rotors)
 
 
-@jit
+@jit_inline
 def plant_time(params: PlantParams, state: PlantState) -> float:
     """Simulated time [s] of the current state."""
     return state.status[STEP_INDEX] * params.period
 
 
-@jit
+@jit_inline
 def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
     """Cache the actuator wrench of the held command away from surfaces (constant over the period)."""
     if params.wrench_actuation:
@@ -97,7 +97,7 @@ def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
         rotor_wrench(state.columns, state.speed_sq, state.body_wrench)
 
 
-@jit
+@jit_inline
 def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, with_tilts: bool) -> bool:  # noqa: ANN001
     """Hold rotor speeds (n,) [rad/s] (and, ``with_tilts`` on a tilting vehicle, tilts (n,) [rad]) until the
     next command; speeds are clamped to the limits. True if anything saturated (recorded)."""
@@ -122,14 +122,14 @@ def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, wit
     return saturated
 
 
-@jit
+@jit_inline
 def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None:  # noqa: ANN001
     """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation)."""
     state.wrench_command[:] = wrench
     update_actuator_wrench(params, state)
 
 
-@jit
+@jit_inline
 def cut_thrust(params: PlantParams, state: PlantState) -> None:
     """Failsafe: all rotors stopped, zero wrench (tilts are kept)."""
     state.wrench_command[:] = 0.0
@@ -138,7 +138,7 @@ def cut_thrust(params: PlantParams, state: PlantState) -> None:
     update_actuator_wrench(params, state)
 
 
-@jit
+@jit_inline
 def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple:  # noqa: ANN001
     """Force world excluding gravity [N] and torque body [N m] at an RK4 stage (time ``t``, state ``x``)."""
     rotation = state_rotation(x)
@@ -159,13 +159,13 @@ def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple: 
     return (fx, fy, fz), (tx, ty, tz)
 
 
-@jit
+@jit_inline
 def _rates(params: PlantParams, state: PlantState, t: float, x, out) -> None:  # noqa: ANN001
     force, torque = stage_wrench(params, state, t, x)
     rigid_body_rates(x, params.mass, params.inertia, params.inertia_inv, force, torque, out)
 
 
-@jit
+@jit_inline
 def rk4_step(params: PlantParams, state: PlantState, t: float) -> None:
     """One classical RK4 step of ``params.dt`` from time ``t`` [s] (the quaternion renormalised)."""
     x, work = state.x, state.work
@@ -182,7 +182,7 @@ def rk4_step(params: PlantParams, state: PlantState, t: float) -> None:
     rk4_combine(x, k1, k2, k3, k4, dt)
 
 
-@jit
+@jit_inline
 def _hold_at(state: PlantState, rest_z: float) -> None:
     x = state.x
     x[2] = rest_z
@@ -190,7 +190,7 @@ def _hold_at(state: PlantState, rest_z: float) -> None:
     x[10] = x[11] = x[12] = 0.0
 
 
-@jit
+@jit_inline
 def apply_contact(params: PlantParams, state: PlantState) -> None:
     """Ground (and, when enabled, ceiling) contact after an RK4 step (module docstring)."""
     surfaces, x, status = params.surfaces, state.x, state.status
@@ -212,7 +212,7 @@ def apply_contact(params: PlantParams, state: PlantState) -> None:
             _hold_at(state, rest_z)
 
 
-@jit
+@jit_inline
 def plant_step(params: PlantParams, state: PlantState) -> None:
     """Advance one control period: ``substeps`` RK4 steps of ``dt`` with contact; count the steps in which a
     thrust ratio was held at a surface's ``max_ratio``."""
@@ -228,7 +228,7 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
     status[STEP_INDEX] += 1.0
 
 
-@jit
+@jit_inline
 def divergence(params: PlantParams, state: PlantState) -> int:
     """Why the simulation cannot go on, as a code (``RUNNING``: it can): a non-finite state, a speed or spin
     beyond ``MAX_SPEED`` / ``MAX_SPIN``, an impact faster than ``crash_speed``."""
@@ -247,7 +247,7 @@ def divergence(params: PlantParams, state: PlantState) -> int:
     return RUNNING
 
 
-@jit
+@jit_inline
 def plant_external_wrench(params: PlantParams, state: PlantState) -> tuple:
     """The true external wrench now: (force world NED [N], torque body FRD [N m])."""
     return external_wrench(params.disturbances, params.disturbance_knots, plant_time(params, state),

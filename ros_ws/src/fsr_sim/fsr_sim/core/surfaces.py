@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.so3 import Vec3
 
 MIN_DISTANCE = 1e-3  # m, floor for surface distances
@@ -57,7 +57,7 @@ class Surfaces(NamedTuple):
     top_height: float  # [m] top above the centre of mass
 
 
-@jit
+@jit_inline
 def has_thrust_effects(surfaces: Surfaces) -> bool:
     """Whether any surface changes the rotors' thrust."""
     return (surfaces.ground and surfaces.ground_effect) or (surfaces.ceiling and surfaces.ceiling_effect)
@@ -69,7 +69,7 @@ def _three_halves(x: float) -> float:
     return x * math.sqrt(x)
 
 
-@jit
+@jit_inline
 def thrust_ratios(surfaces: Surfaces, position_down: float, rotation_row2: Vec3, out) -> tuple[bool, bool]:  # noqa: ANN001
     """``T_i / T_OGE,i`` of every rotor into ``out`` (n,) for the centre's down-coordinate ``p_z`` [m] and the
     third row of ``R``; returns whether a ground / a ceiling ratio was held at its ``max_ratio``.
@@ -116,19 +116,19 @@ def thrust_ratios(surfaces: Surfaces, position_down: float, rotation_row2: Vec3,
     return ground_capped, ceiling_capped
 
 
-@jit
+@jit_inline
 def ground_rest_z(surfaces: Surfaces) -> float:
     """The centre's down-coordinate [m] with the feet on the ground."""
     return surfaces.ground_height - surfaces.contact_height
 
 
-@jit
+@jit_inline
 def ceiling_rest_z(surfaces: Surfaces) -> float:
     """The centre's down-coordinate [m] with the top at the ceiling."""
     return surfaces.ceiling_height + surfaces.top_height
 
 
-@jit
+@jit_inline
 def in_contact(surfaces: Surfaces, z: float) -> bool:
     """The contact rule: the centre's down-coordinate ``z`` [m] puts the feet within ``CONTACT_TOLERANCE`` of
     the ground, or the top within it of the ceiling (enabled surfaces only)."""
