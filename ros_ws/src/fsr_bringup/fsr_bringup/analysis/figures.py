@@ -24,6 +24,8 @@ and turns the reasons into notes. Conventions, the same in every figure:
 from __future__ import annotations
 
 import math
+import multiprocessing
+import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -419,9 +421,55 @@ def save_figure(fig: Figure, stem: Path, formats: Iterable[str], metadata: Calla
     return paths
 
 
-def make_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions | None = None
-                 ) -> tuple[list[Path], list[str]]:
-    """Draw every figure the runs allow into ``out_dir``; returns (written files, notes for skipped ones)."""
+def draw_and_save(name: str, runs: list[Run], out_dir: Path, options: FigureOptions) -> tuple[list[Path], list[str]]:
+    """Draw figure ``name`` and save it in every format; returns (written files, notes)."""
+    with matplotlib.rc_context(RC):
+        drawn = FIGURES[name](runs, options)
+        notes = list(drawn.notes)
+        if drawn.figure is None:
+            return [], [*notes, f"figure {name} left out: {drawn.reason}"]
+        return save_figure(drawn.figure, out_dir / name, options.formats,
+                           lambda fmt: figure_metadata(name, runs, fmt)), notes
+
+
+_JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, inherited by forked workers
+
+
+def _draw_in_worker(name: str) -> tuple[list[Path], list[str]]:
+    return draw_and_save(name, *_JOB)
+
+
+class FigureJob:
+    """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by forked
+    worker processes (one figure each, at most one per core) while the caller goes on (the analysis computes
+    its metrics meanwhile); otherwise here, one after the other, when :meth:`result` is called."""
+
+    def __init__(self, runs: list[Run], out_dir: Path, options: FigureOptions) -> None:
+        global _JOB
+        self.job = (runs, out_dir, options)
+        self.pool = self.pending = None
+        workers = min(len(FIGURES), len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
+        if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
+            _JOB = self.job
+            self.pool = multiprocessing.get_context("fork").Pool(workers)
+            self.pending = self.pool.map_async(_draw_in_worker, list(FIGURES), chunksize=1)
+
+    def result(self) -> tuple[list[Path], list[str]]:
+        """(written files, notes for skipped figures), in the order of :data:`FIGURES`."""
+        if self.pool is None:
+            results = [draw_and_save(name, *self.job) for name in FIGURES]
+        else:
+            try:
+                results = self.pending.get()
+            finally:
+                self.pool.close()
+                self.pool.join()
+        written = [path for paths, _ in results for path in paths]
+        return written, [note for _, notes in results for note in notes]
+
+
+def start_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions | None = None) -> FigureJob:
+    """Start drawing every figure the runs allow into ``out_dir`` (:class:`FigureJob`)."""
     if isinstance(runs, Flight):
         runs = [Run.of(runs)]
     options = options or FigureOptions()
@@ -429,14 +477,10 @@ def make_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions
     if unknown:
         raise ValueError(f"figure format(s) {', '.join(unknown)} not supported (use {', '.join(FORMATS)})")
     out_dir.mkdir(parents=True, exist_ok=True)
-    written, notes = [], []
-    with matplotlib.rc_context(RC):
-        for name, draw in FIGURES.items():
-            drawn = draw(runs, options)
-            notes.extend(drawn.notes)
-            if drawn.figure is None:
-                notes.append(f"figure {name} left out: {drawn.reason}")
-                continue
-            written += save_figure(drawn.figure, out_dir / name, options.formats,
-                                   lambda fmt, name=name: figure_metadata(name, runs, fmt))
-    return written, notes
+    return FigureJob(runs, out_dir, options)
+
+
+def make_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions | None = None
+                 ) -> tuple[list[Path], list[str]]:
+    """Draw every figure the runs allow into ``out_dir``; returns (written files, notes for skipped ones)."""
+    return start_figures(runs, out_dir, options).result()

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fsr_bringup.analysis.figures import FigureOptions, Run, make_figures
+from fsr_bringup.analysis.figures import FigureOptions, Run, start_figures
 from fsr_bringup.analysis.load import load_flight
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, flight_metrics
 from fsr_bringup.analysis.summary import comparison_summary, markdown_summary
@@ -63,15 +63,12 @@ def analyze_recordings(
     out_dir.mkdir(parents=True, exist_ok=True)
     flights = [load_flight(r, namespace) for r in opened]
     runs = [Run.of(flight, label) for flight, label in zip(flights, labels, strict=True)]
-    written: list[Path] = []
-    notes: list[str] = []
-    if figures:
-        written, notes = make_figures(runs, out_dir, options)
-    per_run = []
-    for flight in flights:
-        if len(flights) == 1:
-            flight.notes.extend(notes)
-        per_run.append(flight_metrics(flight, settle_time, settling, after))
+    drawing = start_figures(runs, out_dir, options) if figures else None  # drawn while the metrics are computed
+    per_run = [flight_metrics(flight, settle_time, settling, after) for flight in flights]
+    written, notes = drawing.result() if drawing is not None else ([], [])
+    if len(flights) == 1:  # the figures' notes after the recording's own, as if known before the metrics
+        known = len(flights[0].notes)
+        per_run[0]["notes"][known:known] = notes
     names = sorted({path.name for path in written})
     if len(flights) == 1:
         metrics = per_run[0]

@@ -116,15 +116,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="fsr-compile", description=__doc__.split("\n\n")[0].split(": ", 1)[1],
                                      epilog="exit codes: 0 done, 2 bad arguments")
     parser.parse_args(argv)
-    from fsr_sim.core.jit import numba
+    from fsr_sim.core.jit import CACHE_FOLDER, numba
 
-    start = time.perf_counter()
-    with tempfile.TemporaryDirectory() as folder:
-        tour(Path(folder))
     if numba.config.DISABLE_JIT:
         print("fsr-compile: NUMBA_DISABLE_JIT is set: nothing to compile", file=sys.stderr)
         return 0
-    print(f"fsr-compile: flight core compiled in {time.perf_counter() - start:.1f} s (cache: {numba.config.CACHE_DIR})",
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as folder:
+        tour(Path(folder))
+    print(f"fsr-compile: flight core compiled in {time.perf_counter() - start:.1f} s (cache: {CACHE_FOLDER})",
           file=sys.stderr)
     return 0
 

@@ -8,13 +8,16 @@ floats, tuples and float64 arrays), under a package's ``core/`` folder, and deco
   source under CPython (``NUMBA_DISABLE_JIT=1``: the decorator then returns the plain function) give the
   same numbers bit for bit. ``error_model="numpy"``: a division by zero gives inf/NaN instead of raising (the
   core checks its singular points itself and returns a status instead of raising);
-* cached: compiled machine code is kept in ``<cache>/<key>/`` where ``<cache>`` is ``$NUMBA_CACHE_DIR`` if
-  set, else ``$XDG_CACHE_HOME/fsr/numba`` (``~/.cache/fsr/numba``), and ``<key>`` a hash of every source
-  file under the ``core/`` folders of the installed fsr packages. numba's own cache checks only the file of
-  the function it loads, not the functions it calls from other files; with the key, any change of any core
-  file gives a fresh folder, so a stale cache can only cost a compilation, never a wrong result. The cache
-  lives outside the source tree, so a read-only or non-editable install works the same (an unwritable
-  cache folder falls back to one under the temporary directory).
+* cached: compiled machine code is kept in ``<cache>/<key>/<module>/`` where ``<cache>`` is
+  ``$FSR_NUMBA_CACHE_BASE`` (or ``$NUMBA_CACHE_DIR``) if set, else ``$XDG_CACHE_HOME/fsr/numba``
+  (``~/.cache/fsr/numba``), and ``<key>`` a hash of every source file under the ``core/`` folders of the
+  installed fsr packages (:class:`CoreCacheLocator`, placed first in numba's list of cache locators; other
+  numba code keeps numba's own). numba's own cache checks only the file of the function it loads, not the
+  functions it calls from other files; with the key, any change of any core file gives a fresh folder, so a
+  stale cache can only cost a compilation, never a wrong result. The folder depends on the sources' content,
+  not on where they are installed, so an editable install, a non-editable one and a colcon install of the
+  same code share one cache, and a read-only source tree works the same (an unwritable cache folder falls
+  back to one under the temporary directory).
 
 ``fsr-compile`` (:mod:`fsr_bringup.cli.compile_cli`, run by ``scripts/setup.sh``) compiles every entry
 point once, so that no flight and no node pays a compilation.
@@ -44,7 +47,8 @@ def core_sources() -> list[Path]:
 
 
 def core_key() -> str:
-    """Hash of the core's sources and of the Python and numba versions (the cache folder's name)."""
+    """Hash of the core's sources and of the Python version (the cache folder's name; numba checks its own
+    version in each cache entry)."""
     digest = hashlib.sha256(sys.version.encode())
     for path in core_sources():
         digest.update(path.name.encode())
@@ -62,7 +66,7 @@ def _writable(folder: Path) -> bool:
 
 
 def cache_base() -> Path:
-    """The folder that holds one keyed cache folder per core version (module docstring)."""
+    """The folder that holds one keyed cache folder per version of the core's sources (module docstring)."""
     base = os.environ.get("FSR_NUMBA_CACHE_BASE") or os.environ.get("NUMBA_CACHE_DIR")
     if base:
         return Path(base)
@@ -83,21 +87,33 @@ def cache_folder(base: Path) -> Path:
     return folder
 
 
-def _configure() -> None:
-    # Before numba is imported (its config reads the environment once). Child processes inherit the base,
-    # and each computes the key of its own installation.
-    base = cache_base()
-    os.environ["FSR_NUMBA_CACHE_BASE"] = str(base)
-    folder = str(cache_folder(base))
-    os.environ["NUMBA_CACHE_DIR"] = folder
-    import numba
+CACHE_FOLDER = cache_folder(cache_base())
 
-    numba.config.CACHE_DIR = folder
+import numba  # noqa: E402
+from numba.core import caching  # noqa: E402
 
 
-_configure()
+class CoreCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):  # noqa: SLF001
+    """numba cache locator of the core's functions: ``<cache>/<key>/<module>``, whatever the file's path (its
+    freshness stamp is numba's hash of the file's content); None for any other function."""
 
-import numba  # noqa: E402  (after the cache folder is set)
+    def __init__(self, py_func: object, py_file: str) -> None:
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._cache_path = str(CACHE_FOLDER / py_func.__module__)
+
+    def get_cache_path(self) -> str:
+        return self._cache_path
+
+    @classmethod
+    def from_function(cls, py_func: object, py_file: str) -> CoreCacheLocator | None:
+        module = getattr(py_func, "__module__", "") or ""
+        if not any(module.startswith(f"{package}.core.") for package in CORE_PACKAGES):
+            return None
+        return super().from_function(py_func, py_file)
+
+
+caching.CacheImpl._locator_classes.insert(0, CoreCacheLocator)  # noqa: SLF001
 
 jit = functools.partial(numba.njit, cache=True, error_model="numpy", fastmath=False)
 """The decorator of every core function (module docstring)."""

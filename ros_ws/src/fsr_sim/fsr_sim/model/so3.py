@@ -1,8 +1,10 @@
-"""SO(3) and Euler-angle math over whole logs (vectorised with numpy).
+"""SO(3) and Euler-angle math on arrays: whole logs (vectorised with numpy) and the Python API.
 
-The conventions and the single-sample functions (on floats, in the compiled core) are in
-:mod:`fsr_sim.core.so3`; the functions here take arrays, with a leading ``...`` when they accept stacked inputs
-(a whole log), and use the core's function for their single-sample case: one definition of each formula.
+The conventions and the single-sample functions of the per-step code (on floats, compiled) are in
+:mod:`fsr_sim.core.so3`. The functions here take arrays, with a leading ``...`` when they accept stacked
+inputs (a whole log; one sample is the same code on shape (3,) or (3, 3)); those without one call the core's
+single-sample function. Reading a scenario (initial attitude, waypoints) uses only numpy here, so that a
+process that does not fly (``fsr-analyze``, ``fsr-fly`` starting a graph) does not start numba's compiler.
 """
 
 from __future__ import annotations
@@ -12,12 +14,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from fsr_sim.core.so3 import (
     attitude_error3,
-    euler_rate_derivative_rows,
-    euler_rate_rows,
-    euler_zyx_from_rotation_rows,
     matrix_rows,
     quaternion_from_rotation_rows,
-    rotation_rows_from_euler_zyx,
     rotation_rows_from_quaternion,
 )
 
@@ -68,9 +66,6 @@ def rotation_from_euler_zyx(eta: ArrayLike) -> FloatArray:
     eta: array-like, shape (..., 3), ``[roll, pitch, yaw]`` in rad. Returns shape (..., 3, 3).
     """
     e = _as_vector3(eta, "eta")
-    if e.ndim == 1:
-        phi, theta, psi = e.tolist()
-        return np.array(rotation_rows_from_euler_zyx(phi, theta, psi))
     cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
     cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
     cps, sps = np.cos(e[..., 2]), np.sin(e[..., 2])
@@ -93,8 +88,6 @@ def euler_zyx_from_rotation(rotation: ArrayLike) -> FloatArray:
     r = np.asarray(rotation, dtype=float)
     if r.shape[-2:] != (3, 3):
         raise ValueError(f"Expected rotation matrix with shape (..., 3, 3), got array of shape {r.shape}")
-    if r.ndim == 2:
-        return np.array(euler_zyx_from_rotation_rows(matrix_rows(np.ascontiguousarray(r))))
     pitch = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
     roll = np.arctan2(r[..., 2, 1], r[..., 2, 2])
     yaw = np.arctan2(r[..., 1, 0], r[..., 0, 0])
@@ -108,8 +101,6 @@ def euler_zyx_from_rotation(rotation: ArrayLike) -> FloatArray:
 def euler_rate_matrix(eta: ArrayLike) -> FloatArray:
     """``Q(eta)`` with ``omega_body = Q(eta) eta_dot`` (SPEC §2). eta: shape (..., 3) -> (..., 3, 3)."""
     e = _as_vector3(eta, "eta")
-    if e.ndim == 1:
-        return np.array(euler_rate_rows(float(e[0]), float(e[1])))
     cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
     cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
     one, zero = np.ones_like(cph), np.zeros_like(cph)
@@ -137,8 +128,6 @@ def euler_rate_matrix_derivative(eta: ArrayLike, eta_dot: ArrayLike) -> FloatArr
     """Time derivative ``Q_dot(eta, eta_dot)`` of :func:`euler_rate_matrix`. Shapes (..., 3) -> (..., 3, 3)."""
     e = _as_vector3(eta, "eta")
     ed = _as_vector3(eta_dot, "eta_dot")
-    if e.ndim == 1 and ed.ndim == 1:
-        return np.array(euler_rate_derivative_rows(float(e[0]), float(e[1]), float(ed[0]), float(ed[1])))
     cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
     cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
     dph, dth = ed[..., 0], ed[..., 1]

@@ -302,7 +302,7 @@ class _FastMessages:
                 if not index:
                     index = builder.message_indices[channel_id] = _message_index_class()(channel_id=channel_id,
                                                                                           records=[])
-                index.records.extend(zip(times[mine].tolist(), offsets[mine].tolist(), strict=True))
+                index.records.append(np.column_stack((times[mine], offsets[mine])))  # a block of entries
             buffer.write(block[base:int(ends[stop - 1])].data)
             self.maybe_finalize()
             start = stop
@@ -326,10 +326,13 @@ def _message_index_class() -> type:
         from mcap.records import MessageIndex
 
         class PackedMessageIndex(MessageIndex):
+            """``records``: (log time, offset) pairs (one message) or (k, 2) arrays of them (a block)."""
+
             def write(self, stream: Any) -> None:
-                entries = [value for entry in self.records for value in entry]
+                entries = np.concatenate([np.asarray(entry, dtype="<u8").reshape(-1) for entry in self.records])
                 stream.start_record(_MESSAGE_INDEX_OPCODE)
-                stream.write(struct.pack(f"<HI{len(entries)}Q", self.channel_id, 8 * len(entries), *entries))
+                stream.write(struct.pack("<HI", self.channel_id, 8 * len(entries)))
+                stream.write(entries.tobytes())
                 stream.finish_record()
 
         _MESSAGE_INDEX = PackedMessageIndex
