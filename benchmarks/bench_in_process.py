@@ -1,29 +1,38 @@
-"""In-process cost per 1 kHz step (us): controller, physics and estimator alone, the full closed loop, and
-the loop with its recording.
+"""In-process cost per 1 kHz step (us): the compiled core's parts alone (controller tick, plant step, observer
+sample), the compiled closed loop, the loop with its MCAP recording, and the whole ``fly_in_process`` call
+(min and median of ``--repeat`` runs).
 
-    .venv/bin/python benchmarks/bench_in_process.py [--seconds 3]
+    .venv/bin/python benchmarks/bench_in_process.py [--seconds 3] [--repeat 3]
 
 For ex4 (geometric, wrench actuation), ex5 (Voliro, rotor actuation, with and without the null-space
-objective) and the octocopter with ground effect. The controller is timed on the states of an in-process
-flight; the physics step with the flight's commands replayed; the estimator on the flight's states and
-commands; the full loop is ``fly_in_process`` (controller, plant, estimator and the bookkeeping between
-them), without and with its MCAP recording (wall time per step, one run each: the breakdown of issue 11's
-in-process figures; ``run_all.py`` gives the min and median of the loop with recording).
+objective) and the octocopter with ground effect. The parts are timed by a compiled loop calling each one on
+the flight's first state (what it costs inside the loop, without Python); "loop" is the time spent in the
+compiled flight loop (:func:`fsr_bringup.core.flight_loop.fly_steps`), "+ recording" the whole
+``fly_in_process`` with its recording, per step (wall). ``run_all.py`` reports the loop's CPU time.
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
+from fsr_bringup.core import flight_loop
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_control.config.controller_config import controller_config
+from fsr_control.core.controller import controller_tick
 from fsr_control.flight_controller import FlightController
-from fsr_estimation.core.stamped import StampedEstimator
+from fsr_estimation.core import observer_step
+from fsr_estimation.core.observer import MomentumObserver
 from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
-from fsr_sim.model.so3 import rotation_from_quaternion
+from fsr_sim.core import lockstep
+from fsr_sim.core.jit import numba
+from fsr_sim.core.odometry import PUBLISHED_SIZE, read_odometry
+from fsr_sim.core.plant import plant_step
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "ros_ws/src/fsr_control/test/scenarios"
 CASES = {
@@ -32,55 +41,94 @@ CASES = {
     "ex5 voliro + min_peak_speed": ("ex5_voliro.yaml", ["controller.secondary_objective.type=min_peak_speed"]),
     "octocopter + ground effect": ("octo_ground_effect", []),
 }
+PART_STEPS = 20_000
 
 
-def bench(file: str, overrides: list[str], seconds: float) -> tuple[float, ...]:
-    source = SCENARIOS / file if file.endswith(".yaml") else file  # a test scenario or a built-in one
-    scenario = load_scenario(source, [*overrides, f"duration={seconds}", "estimator.enabled=true"])
-    result = fly_in_process(scenario)
-    steps = len(result.time)
-    full = result.wall_time / steps * 1e6
-    with tempfile.TemporaryDirectory() as tmp:
-        recorded = fly_in_process(scenario, Path(tmp) / "bench.mcap").wall_time / steps * 1e6
+@numba.njit  # not cached: a benchmark writes nothing next to its source
+def _ticks(params, state, row, out, n):  # noqa: ANN001, ANN202
+    position, rotation, velocity, omega = read_odometry(row)
+    for k in range(n):
+        controller_tick(params, state, k * 1e-3, position, rotation, velocity, omega, out)
+
+
+@numba.njit
+def _plant_steps(params, state, n):  # noqa: ANN001, ANN202
+    x = state.x.copy()
+    for _ in range(n):
+        state.x[:] = x  # the same state each time (no drift over the run)
+        plant_step(params, state)
+
+
+@numba.njit
+def _samples(params, state, row, out, n):  # noqa: ANN001, ANN202
+    _, rotation, velocity, omega = read_odometry(row)
+    for _ in range(n):
+        observer_step.estimate_from_state(params, state, rotation, velocity, omega, (0.0, 0.0, -11.0),
+                                          (0.0, 0.0, 0.0), out)
+
+
+def _per_step(function, *args) -> float:  # noqa: ANN001
+    function(*args, 10)
+    start = time.perf_counter()
+    function(*args, PART_STEPS)
+    return (time.perf_counter() - start) / PART_STEPS * 1e6
+
+
+def parts(scenario) -> tuple[float, float, float]:  # noqa: ANN001
+    """(controller tick, plant step, observer sample) [us], each in a compiled loop."""
     sim = simulation_config(scenario)
-    controller = FlightController(controller_config(scenario), sim.vehicle, sim.actuation,
-                                  sim.initial.position, sim.initial.rotation)
-    rotations = [rotation_from_quaternion(q) for q in result.state[:, 6:10]]
-    start = time.perf_counter()
-    for k in range(steps):
-        s = result.state[k]
-        controller.command(result.time[k], s[0:3], rotations[k], s[3:6], s[10:13])
-    control = (time.perf_counter() - start) / steps * 1e6
     plant = plant_from_config(sim)
-    start = time.perf_counter()
-    for k in range(steps - 1):
-        if sim.actuation == "rotors":
-            tilts = None if result.tilt_angles is None else result.tilt_angles[k]
-            plant.set_rotor_command(result.rotor_speeds[k], tilts)
-        else:
-            plant.set_wrench_command(result.thrust[k], result.torque_cmd[k])
-        plant.step()
-    physics = (time.perf_counter() - start) / (steps - 1) * 1e6
-    estimator = StampedEstimator(sim.vehicle.mass, sim.vehicle.inertia, 10.0, 1, sim.control_period)
-    start = time.perf_counter()
-    for k in range(steps):
-        s = result.state[k]
-        stamp = int(round(result.time[k] * 1e9))
-        estimator.add_state(stamp, rotations[k], s[3:6], s[10:13])
-        estimator.add_command(stamp, result.force_cmd[k], result.torque_cmd[k])
-    estimation = (time.perf_counter() - start) / steps * 1e6
-    return control, physics, estimation, full, recorded
+    controller = FlightController(controller_config(scenario), sim.vehicle, sim.actuation, sim.initial.position,
+                                  sim.initial.rotation)
+    row = np.zeros(PUBLISHED_SIZE)
+    lockstep.publish(plant.params, plant.core_state, row)
+    observer = MomentumObserver(sim.vehicle.mass, sim.vehicle.inertia, 10.0, 1, sim.control_period)
+    return (_per_step(_ticks, controller.params, controller.state, row, controller.output),
+            _per_step(_plant_steps, plant.params, plant.core_state),
+            _per_step(_samples, observer.params, observer.state, row, np.zeros(7)))
+
+
+def flights(scenario, repeat: int) -> tuple[list[float], list[float]]:  # noqa: ANN001
+    """(compiled loop, whole call with recording) [us per step] of ``repeat`` flights."""
+    loop_seconds = [0.0]
+    original = flight_loop.fly_steps
+
+    def timed(*args):  # noqa: ANN002, ANN202
+        start = time.perf_counter()
+        result = original(*args)
+        loop_seconds[0] += time.perf_counter() - start
+        return result
+
+    loops, recorded = [], []
+    flight_loop.fly_steps = timed
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            for _ in range(repeat):
+                loop_seconds[0] = 0.0
+                run = fly_in_process(scenario)
+                loops.append(loop_seconds[0] / len(run.time) * 1e6)
+                start = time.perf_counter()
+                fly_in_process(scenario, Path(tmp) / "bench.mcap")
+                recorded.append((time.perf_counter() - start) / len(run.time) * 1e6)
+    finally:
+        flight_loop.fly_steps = original
+    return loops, recorded
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--seconds", type=float, default=3.0, help="simulated seconds per case")
+    parser.add_argument("--seconds", type=float, default=3.0, help="simulated seconds per flight")
+    parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
-    print(f"{'case':32s} {'controller':>10s} {'physics':>8s} {'estimator':>9s} {'full loop':>9s} "
-          f"{'+ recording':>11s}   [us per 1 kHz step]")
+    print(f"{'case':30s} {'tick':>6s} {'plant':>6s} {'observer':>8s} {'loop min/med':>13s} "
+          f"{'+ recording min/med':>20s}   [us per 1 kHz step]")
     for name, (file, overrides) in CASES.items():
-        control, physics, estimation, full, recorded = bench(file, overrides, args.seconds)
-        print(f"{name:32s} {control:10.1f} {physics:8.1f} {estimation:9.1f} {full:9.1f} {recorded:11.1f}")
+        source = SCENARIOS / file if file.endswith(".yaml") else file  # a test scenario or a built-in one
+        scenario = load_scenario(source, [*overrides, f"duration={args.seconds}", "estimator.enabled=true"])
+        tick, plant, sample = parts(scenario)
+        loops, recorded = flights(scenario, args.repeat)
+        print(f"{name:30s} {tick:6.2f} {plant:6.2f} {sample:8.2f} {min(loops):6.2f}/{statistics.median(loops):6.2f} "
+              f"{min(recorded):9.2f}/{statistics.median(recorded):9.2f}")
 
 
 if __name__ == "__main__":

@@ -92,6 +92,7 @@ def fly_graph(scenario: str, duration: float | None = None, extra: list[str] | N
         command = [str(VENV_BIN / "fsr-fly"), scenario, "--quiet", "--no-analysis", "--out", f"{tmp}/run.mcap"]
         if duration is not None:
             command += ["--duration", repr(duration)]
+        command += extra or []
         start = time.monotonic()
         process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         peak: dict[int, tuple[float, str]] = {}

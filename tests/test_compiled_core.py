@@ -65,6 +65,7 @@ def test_cache_key_follows_every_core_source(tmp_path, monkeypatch):
 
     sources = jit.core_sources()
     assert {path.parent.parent.name for path in sources} == set(jit.CORE_PACKAGES)
+    assert all("@jit" in path.read_text() for path in sources if path.name != "jit.py")
     files = [tmp_path / "a.py", tmp_path / "b.py"]
     for path in files:
         path.write_text("x = 1\n")

@@ -91,6 +91,10 @@ class ControllerNode(Node):
         self.controller = FlightController(
             config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation
         )
+        # Load the compiled tick now, on a throwaway controller (numba's start-up and its cache, ~0.3 s), before
+        # subscribing: the simulator steps only once we are subscribed, so the first odom is answered at once.
+        FlightController(config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation).command(
+            0.0, sim.initial.position, sim.initial.rotation, sim.initial.velocity, sim.initial.angular_velocity)
         self.rotors = sim.actuation == "rotors"
         self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.is_tilting)
         self.publishers_by_topic = {

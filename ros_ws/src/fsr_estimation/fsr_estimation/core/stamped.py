@@ -26,7 +26,7 @@ from fsr_estimation.core.observer import MomentumObserver, _vector
 from fsr_estimation.core.observer_step import euler_inputs
 from fsr_sim.core.so3 import matrix_rows
 
-MAX_PENDING = 1000  # unpaired stamps kept per stream (about 1 s at 1 kHz)
+MAX_PENDING = 1000  # unpaired stamps kept per stream (about 1 s at 1 kHz; the node keeps a whole stream queue)
 PERIOD_TOLERANCE = 0.01  # relative deviation of a stamp difference from the control period that is accepted
 
 
@@ -71,6 +71,14 @@ class StampedEstimator:
         self._commands: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._last_stamp: int | None = None
         self._first_sample: tuple | None = None  # held until the period is known
+
+    def warm_up(self) -> None:
+        """Load the compiled observer now (numba's start-up and its cache, ~0.3 s), on a throwaway observer:
+        a node calls this before it subscribes, so that the first samples do not wait for it."""
+        mass, inertia, c0, r = self.model
+        scratch = StampedEstimator(mass, inertia, c0, r, self.control_period or 1.0 / c0)
+        scratch.add_state(0, np.eye(3), np.zeros(3), np.zeros(3))
+        scratch.add_command(0, np.zeros(3), np.zeros(3))
 
     @property
     def last_stamp(self) -> int | None:

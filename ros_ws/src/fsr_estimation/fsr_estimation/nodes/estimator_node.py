@@ -37,7 +37,7 @@ from fsr_estimation.nodes.packets import EstimatePackets
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import state_from_odometry_bytes
 from fsr_sim.ros.flight_end import FlightEnd
-from fsr_sim.ros.qos import STREAM_QOS
+from fsr_sim.ros.qos import STREAM_DEPTH, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GATHER_S = 0.005  # s between batches of inputs (the streams are 5000 deep)
@@ -57,7 +57,11 @@ class EstimatorNode(Node):
         self.warn_input = RateLimitedWarning(self.get_logger())
         self.warn_timing = RateLimitedWarning(self.get_logger())
         c = self.config
-        self.estimator = StampedEstimator(c.mass, c.inertia, c.c0, c.r, settings.control_period, self.warn_timing)
+        # Pairing keeps a whole stream queue: a backlog of one stream (after a pause) never loses samples.
+        self.estimator = StampedEstimator(c.mass, c.inertia, c.c0, c.r, settings.control_period, self.warn_timing,
+                                          max_pending=STREAM_DEPTH)
+        if self.enabled:
+            self.estimator.warm_up()  # before subscribing: the simulator steps only once we are subscribed
         self.estimates_published = 0
         self.packets = EstimatePackets()  # the bytes an in-process recording writes
         self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_estimate", STREAM_QOS)

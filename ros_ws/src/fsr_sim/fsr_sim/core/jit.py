@@ -10,14 +10,14 @@ floats, tuples and float64 arrays), under a package's ``core/`` folder, and deco
   core checks its singular points itself and returns a status instead of raising);
 * cached: compiled machine code is kept in ``<cache>/<key>/<module>/`` where ``<cache>`` is
   ``$FSR_NUMBA_CACHE_BASE`` (or ``$NUMBA_CACHE_DIR``) if set, else ``$XDG_CACHE_HOME/fsr/numba``
-  (``~/.cache/fsr/numba``), and ``<key>`` a hash of every source file under the ``core/`` folders of the
-  installed fsr packages (:class:`CoreCacheLocator`, placed first in numba's list of cache locators; other
-  numba code keeps numba's own). numba's own cache checks only the file of the function it loads, not the
-  functions it calls from other files; with the key, any change of any core file gives a fresh folder, so a
-  stale cache can only cost a compilation, never a wrong result. The folder depends on the sources' content,
-  not on where they are installed, so an editable install, a non-editable one and a colcon install of the
-  same code share one cache, and a read-only source tree works the same (an unwritable cache folder falls
-  back to one under the temporary directory).
+  (``~/.cache/fsr/numba``), and ``<key>`` a hash of every source file with compiled functions under the
+  ``core/`` folders of the installed fsr packages (:class:`CoreCacheLocator`, placed first in numba's list
+  of cache locators; other numba code keeps numba's own). numba's own cache checks only the file of the
+  function it loads, not the functions it calls from other files; with the key, any change of any core
+  file gives a fresh folder, so a stale cache can only cost a compilation, never a wrong result. The folder
+  depends on the sources' content, not on where they are installed, so an editable install, a non-editable
+  one and a colcon install of the same code share one cache, and a read-only source tree works the same
+  (an unwritable cache folder falls back to one under the temporary directory).
 
 ``fsr-compile`` (:mod:`fsr_bringup.cli.compile_cli`, run by ``scripts/setup.sh``) compiles every entry
 point once, so that no flight and no node pays a compilation.
@@ -37,12 +37,14 @@ CORE_PACKAGES = ("fsr_sim", "fsr_estimation", "fsr_control", "fsr_bringup")  # l
 
 
 def core_sources() -> list[Path]:
-    """Every ``core/*.py`` of the installed fsr packages (found without importing them)."""
+    """Every ``core/*.py`` of the installed fsr packages that compiles functions (imports this module), found
+    without importing them."""
     files: list[Path] = []
     for name in CORE_PACKAGES:
         spec = find_spec(name)
         for location in (spec.submodule_search_locations or []) if spec is not None else []:
-            files += sorted((Path(location) / "core").glob("*.py"))
+            files += [path for path in sorted((Path(location) / "core").glob("*.py"))
+                      if path.name == "jit.py" or "from fsr_sim.core.jit import" in path.read_text(encoding="utf-8")]
     return files
 
 
