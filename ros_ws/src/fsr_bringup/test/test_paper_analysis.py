@@ -154,7 +154,7 @@ def test_fly_summary_gives_the_estimator_metrics_of_fsr_estimate(ex3: Path, tmp_
     assert 0.0 < metrics["settling_time_s"]["fx"] < 1.0 and metrics["settling_time_s"]["tx"] is None
     assert all(metrics["max_error_after"][c] < 1e-6 for c in ("fx", "fy", "fz", "tz"))
     report = flight_metrics(ex3, settling="report")["external_wrench"]
-    expected_report = settling_time(t, estimate, effective, "report")  # the report's definition (SPEC §5)
+    expected_report = settling_time(t, estimate, effective, "report")  # the report's definition (docs/model.md §5)
     assert report["settling"] == "report"
     np.testing.assert_allclose([np.nan if report["settling_time_s"][c] is None else report["settling_time_s"][c]
                                 for c in channels], expected_report, rtol=1e-12, equal_nan=True)

@@ -62,11 +62,7 @@ import numpy as np
 
 from fsr_control.core import allocation as core
 from fsr_control.nullspace import null_space_gram
-from fsr_sim.model.allocation import (
-    SaturationReport,
-    static_tilting_allocation,
-    wrench_from_rotor_speed_sq,
-)
+from fsr_sim.model.allocation import FixedRotorAllocator, SaturationReport, static_tilting_allocation
 from fsr_sim.model.vehicle import Vehicle
 
 ALLOCATION_STRATEGIES = ("clamp", "priority")
@@ -93,11 +89,6 @@ def _checked_strategy(strategy: str) -> str:
     return strategy
 
 
-def producible_rows(allocation: np.ndarray) -> np.ndarray:
-    """Rows of a 6 x n allocation that are not identically zero (the axes the rotors can produce)."""
-    return np.flatnonzero(np.any(np.abs(allocation) > 1e-15, axis=1))
-
-
 def pack_allocation(vehicle: Vehicle, actuation: str, strategy: str = "priority", air_mode: bool = True,
                     objective: str = "none", exponent: int = 8, iterations: int = 3) -> core.AllocationParams:
     """The core's :class:`~fsr_control.core.allocation.AllocationParams` for ``vehicle`` (module docstring)."""
@@ -122,12 +113,11 @@ def pack_allocation(vehicle: Vehicle, actuation: str, strategy: str = "priority"
         null_basis = scipy.linalg.null_space(allocation)
     else:
         mode = core.FIXED
-        allocation = wrench_from_rotor_speed_sq(vehicle)
-        rows = producible_rows(allocation)
-        if core.FORCE_Z_ROW not in rows:
-            raise ValueError(f"the allocation rows {rows.tolist()} have no f_z row: fixed rotors without thrust")
-        inverse = np.zeros((n, 6))
-        inverse[:, rows] = np.linalg.pinv(allocation[rows])
+        allocator = FixedRotorAllocator(vehicle)
+        if core.FORCE_Z_ROW not in allocator.rows:
+            raise ValueError(f"the allocation rows {allocator.rows.tolist()} have no f_z row: fixed rotors "
+                             "without thrust")
+        allocation, inverse = allocator.allocation, allocator.inverse_6
         g = -inverse[:, core.FORCE_Z_ROW]
         low, high = vehicle.rotor_speed_min**2, vehicle.rotor_speed_max**2
         thrust_ok = bool(np.all(g > 0.0) and max(low / g) <= min(high / g))

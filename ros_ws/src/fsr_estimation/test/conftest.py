@@ -17,7 +17,7 @@ MASS = 1.5
 INERTIA = np.diag([1.2416, 1.2416, 2.4832])
 TRUTH = np.array([1.0, 1.0, 0.0, 0.0, 0.0, -0.4])
 
-# SPEC §5 (the report's Tables 3 and 4, c0 = 10): r -> (settle f_x, f_y, tau_z [s], MAE f_x, f_y, tau_z)
+# docs/model.md §5 (the report's Tables 3 and 4, c0 = 10): r -> (settle f_x, f_y, tau_z [s], MAE f_x, f_y, tau_z)
 REPORT_TABLE = {
     1: (3.751, 3.753, 2.545, 0.0077, 0.0077, 0.0040),
     2: (3.845, 3.847, 2.680, 0.0107, 0.0107, 0.0053),
@@ -43,7 +43,7 @@ REF = SimpleNamespace(
 
 @pytest.fixture(scope="session")
 def ref() -> SimpleNamespace:
-    """Reference values (SPEC §5) and paths; test modules cannot import conftest (importlib mode)."""
+    """Reference values (docs/model.md §5) and paths; test modules cannot import conftest (importlib mode)."""
     return REF
 
 

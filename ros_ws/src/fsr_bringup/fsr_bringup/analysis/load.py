@@ -2,7 +2,7 @@
 
 Times are the messages' header stamps (simulated time t_k, seconds) where the type has a header, the
 recorder's log time otherwise (``mass_estimate``; the recorder logs it at its latest simulated time).
-Messages are sorted by stamp. Frames (SPEC §4): positions and the reference in ``world_ned``, odometry
+Messages are sorted by stamp. Frames (docs/model.md §4): positions and the reference in ``world_ned``, odometry
 twist and wrenches in ``base_link_frd``. The reference (fsr_control.nodes.messages) is all world-frame:
 linear velocity and acceleration ``p_dot_d``, ``p_ddot_d`` and angular velocity ``R_d omega_d``.
 
@@ -272,7 +272,7 @@ def _wrench(recording: Recording, topic: str) -> Wrench:
 
 
 def _rotor_command(recording: Recording, topic: str) -> RotorCommand:
-    """Rotor speeds from ``rotor_i`` velocities and tilts from ``tilt_i`` positions (by name, SPEC §4)."""
+    """Rotor speeds from ``rotor_i`` velocities and tilts from ``tilt_i`` positions (by name, docs/model.md §4)."""
     stamp, c = _columns(recording, topic)
     velocity = c.numbers.get("velocity", np.empty((c.n, 0)))
     position = c.numbers.get("position", np.empty((c.n, 0)))

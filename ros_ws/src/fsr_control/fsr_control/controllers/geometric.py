@@ -1,4 +1,4 @@
-"""Geometric (SE(3)) controller for fixed-rotor multirotors (Lee et al.; report exercise 4, SPEC §3.6).
+"""Geometric (SE(3)) controller for fixed-rotor multirotors (Lee et al.; report exercise 4, docs/model.md §3.6).
 
 World NED, body FRD, ``e3 = [0, 0, 1]`` (down), ``g = 9.81``:
 

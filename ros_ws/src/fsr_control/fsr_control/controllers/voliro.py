@@ -1,4 +1,4 @@
-"""Voliro-style feedback-linearising controller for tilting-rotor vehicles (report exercise 5, SPEC §3.7).
+"""Voliro-style feedback-linearising controller for tilting-rotor vehicles (report exercise 5, docs/model.md §3.7).
 
 World NED, body FRD. The auxiliary inputs are accelerations (``A u + b = [p_ddot; w_dot]``):
 

@@ -12,7 +12,7 @@ Three actuations (:class:`AllocationParams` ``mode``):
   ``w_max`` is reallocated (:func:`tilting_desaturation`); the minimum speed and the tilt limit are clamped.
 
 The priority rules (which axis gives way first, and why the closed forms hold) are documented in
-:mod:`fsr_sim.model.desaturation` and :mod:`fsr_control.allocation`; the objective in
+:mod:`fsr_control.allocation`; the objective in
 :mod:`fsr_control.nullspace`. Every saturated command is recorded (:mod:`fsr_sim.core.rotors`), never clipped
 silently; the result's wrench is what the final command produces through the nominal allocation (what
 ``wrench_cmd`` carries) and the shortfall the demanded minus that wrench.
@@ -26,7 +26,13 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_sim.core.jit import jit, jit_inline
-from fsr_sim.core.rotors import clamped_speed, record_saturation, record_shortfall
+from fsr_sim.core.rotors import (
+    clamped_speed,
+    record_saturation,
+    record_shortfall,
+    rotor_command_from_static,
+    static_from_rotor_command,
+)
 
 WRENCH, FIXED, TILTING = 0, 1, 2
 FORCE_Z_ROW, TORQUE_X_ROW, TORQUE_Y_ROW, TORQUE_Z_ROW = 2, 3, 4, 5  # rows of the 6 x n allocation
@@ -66,6 +72,17 @@ class Actuated(NamedTuple):
     force: tuple
     torque: tuple
     saturated: bool
+
+
+@jit
+def _produced(state: AllocationState, demanded: tuple, produced, shortfall, saturated: bool) -> Actuated:  # noqa: ANN001
+    """The result of an allocation: the wrench its command produces (6,), the shortfall ``demanded - produced``
+    written into ``shortfall`` and recorded when the command saturated."""
+    for row in range(6):
+        shortfall[row] = demanded[row] - produced[row]
+    if saturated:
+        record_shortfall(state.saturation, shortfall)
+    return Actuated((produced[0], produced[1], produced[2]), (produced[3], produced[4], produced[5]), saturated)
 
 
 # ----- fixed rotors -------------------------------------------------------------------------------------
@@ -109,7 +126,7 @@ def _with_yaw(params: AllocationParams, base, tau_z: float, yaw, out) -> None:  
 @jit_inline
 def fixed_desaturation(params: AllocationParams, thrust: float, torque: tuple, scratch, out) -> bool:  # noqa: ANN001
     """Squared speeds ``u_w`` (into ``out``) inside the box ``[w_min^2, w_max^2]`` for thrust ``u_T`` [N] and a body
-    torque [N m], by priority (:mod:`fsr_sim.model.desaturation`): without air mode the thrust exact and the
+    torque [N m], by priority (:mod:`fsr_control.allocation`): without air mode the thrust exact and the
     torque scaled first; else (or when the thrust alone does not fit) roll/pitch, then thrust, then yaw.
     False when step 3 does not apply and step 2 failed (the caller then clamps rotor by rotor)."""
     n = out.shape[0]
@@ -184,12 +201,8 @@ def allocate_fixed(params: AllocationParams, state: AllocationState, time: float
         for i in range(n):
             total += allocation[row, i] * (abs(speeds[i]) * speeds[i])
         produced[row] = total
-    demanded = (force[0], force[1], force[2], torque[0], torque[1], torque[2])
-    for row in range(6):
-        shortfall[row] = demanded[row] - produced[row]
-    if saturated:
-        record_shortfall(state.saturation, shortfall)
-    return Actuated((produced[0], produced[1], produced[2]), (produced[3], produced[4], produced[5]), saturated)
+    return _produced(state, (force[0], force[1], force[2], torque[0], torque[1], torque[2]), produced, shortfall,
+                     saturated)
 
 
 # ----- tilting rotors -----------------------------------------------------------------------------------
@@ -343,18 +356,15 @@ def allocate_tilting(params: AllocationParams, state: AllocationState, time: flo
     for i in range(n):
         u_v, u_l = u[2 * i], u[2 * i + 1]
         finite = finite and math.isfinite(u_v) and math.isfinite(u_l)
-        speed_sq[i] = math.sqrt(u_v * u_v + u_l * u_l) / c_f
-        tilts[i] = math.atan2(u_l, u_v)
+        speed_sq[i], tilts[i] = rotor_command_from_static(u_v, u_l, c_f)
         speeds[i], excess[i] = clamped_speed(speed_sq[i], params.speed_min, params.speed_max)
         largest = speed_sq[i] if speed_sq[i] > largest or speed_sq[i] != speed_sq[i] else largest
     saturated = record_saturation(state.saturation, time, excess)
     if saturated and params.priority and largest > params.speed_max * params.speed_max and finite:
         tilting_desaturation(params, wrench, state.scratch, u)
         for i in range(n):
-            u_v, u_l = u[2 * i], u[2 * i + 1]
-            tilts[i] = math.atan2(u_l, u_v)
-            speeds[i] = clamped_speed(math.sqrt(u_v * u_v + u_l * u_l) / c_f, params.speed_min,
-                                      params.speed_max)[0]
+            speed_sq[i], tilts[i] = rotor_command_from_static(u[2 * i], u[2 * i + 1], c_f)
+            speeds[i] = clamped_speed(speed_sq[i], params.speed_min, params.speed_max)[0]
     limit = params.tilt_max
     for i in range(n):  # the tilt limit, NaN kept
         tilt = tilts[i]
@@ -367,15 +377,11 @@ def allocate_tilting(params: AllocationParams, state: AllocationState, time: flo
     for row in range(6):
         total = 0.0
         for i in range(n):
-            thrust = c_f * (speeds[i] * speeds[i])
-            total += allocation[row, 2 * i] * (thrust * math.cos(tilts[i]))
-            total += allocation[row, 2 * i + 1] * (thrust * math.sin(tilts[i]))
+            u_v, u_l = static_from_rotor_command(speeds[i] * speeds[i], tilts[i], c_f)
+            total += allocation[row, 2 * i] * u_v
+            total += allocation[row, 2 * i + 1] * u_l
         produced[row] = total
-    for row in range(6):
-        shortfall[row] = wrench[row] - produced[row]
-    if saturated:
-        record_shortfall(state.saturation, shortfall)
-    return Actuated((produced[0], produced[1], produced[2]), (produced[3], produced[4], produced[5]), saturated)
+    return _produced(state, wrench, produced, shortfall, saturated)
 
 
 @jit_inline

@@ -1,6 +1,6 @@
 """Angular feed-forward of a thrust-vectoring (fixed-rotor) vehicle from the flat outputs (p_d, psi_d).
 
-For perfect tracking the geometric controller's desired attitude (SPEC §3.6) is built from
+For perfect tracking the geometric controller's desired attitude (docs/model.md §3.6) is built from
 
     n = g e3 - p_ddot_d   (the specific thrust direction, world NED; ``a = -m n`` without feedback),
     z_d = n / |n|,  y_d = (z_d x x_c) / |z_d x x_c|,  x_d = y_d x z_d,  x_c = [cos psi_d, sin psi_d, 0],

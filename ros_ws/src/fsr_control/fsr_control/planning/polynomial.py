@@ -1,4 +1,4 @@
-"""7th-order (septic) polynomials in normalised time for rest-to-rest motion (SPEC §3.5).
+"""7th-order (septic) polynomials in normalised time for rest-to-rest motion (docs/model.md §3.5).
 
 A channel ``x(t)`` over ``t in [t0, t0 + T]`` is written in ``tau = (t - t0) / T``:
 

@@ -2,10 +2,10 @@
 
 Frames and units: positions world NED [m]; ``rotation`` ``R_d`` maps the desired body frame (FRD) to the
 world; ``angular_velocity`` / ``angular_acceleration`` are ``omega_d`` / ``omega_dot_d`` in the desired body
-frame [rad/s, rad/s^2] (the quantities of SPEC §3.6-3.7).
+frame [rad/s, rad/s^2] (the quantities of docs/model.md §3.6-3.7).
 
 Each segment moves the position and one angle ``theta`` with the polynomial of :mod:`polynomial`, and the
-attitude about a fixed axis ``a`` (SPEC §3.5):
+attitude about a fixed axis ``a`` (docs/model.md §3.5):
 
     R_d(t) = R_0 exp(theta(t) S(a)),   omega_d = a theta_dot,   omega_dot_d = a theta_ddot.
 

@@ -26,7 +26,7 @@ EXIT_USAGE = 2
 CHANNEL_LABELS = {"fx": "f_x", "fy": "f_y", "fz": "f_z", "tx": "tau_x", "ty": "tau_y", "tz": "tau_z"}
 
 DESCRIPTION = """\
-Momentum-based external wrench estimation (SPEC 3.8) over a flight log, for every (c0, r) pair.
+Momentum-based external wrench estimation (docs/model.md §3.8) over a flight log, for every (c0, r) pair.
 
 The estimate w_hat = [f_e; tau_e] has the force in the world NED frame [N] and the torque in Euler-angle
 (ZYX eta) coordinates [N m], as in the report; --truth is compared with w_hat in that same frame (the

@@ -1,4 +1,4 @@
-"""Filter design of the momentum observer (SPEC §3.8): ``G(s) = c0^r / (s + c0)^r`` on each channel.
+"""Filter design of the momentum observer (docs/model.md §3.8): ``G(s) = c0^r / (s + c0)^r`` on each channel.
 
 The denominator ``(s + c0)^r = s^r + d_{r-1} s^{r-1} + ... + d_0`` has ``d_j = binom(r, j) c0^(r-j)``.
 The observer realises it as a chain of ``r`` integrators with gains ``K_1 .. K_r`` defined backwards:
@@ -44,7 +44,7 @@ def denominator_coefficients(c0: float, r: int) -> np.ndarray:
 
 
 def gain_chain(c0: float, r: int) -> np.ndarray:
-    """Gains ``[K_1, ..., K_r]`` of the observer's integrator chain (SPEC §3.8), shape (r,).
+    """Gains ``[K_1, ..., K_r]`` of the observer's integrator chain (docs/model.md §3.8), shape (r,).
 
     ``K_r = d_{r-1}`` and ``K_j = d_{j-1} / (K_{j+1} ... K_r)``; ``prod(K) = c0^r``; ``r = 1`` gives ``K_1 = c0``.
     """

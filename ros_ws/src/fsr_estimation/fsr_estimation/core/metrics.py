@@ -1,4 +1,4 @@
-"""Quality of a wrench estimate against a constant true wrench (SPEC §5), vectorised over channels.
+"""Quality of a wrench estimate against a constant true wrench (docs/model.md §5), vectorised over channels.
 
 Channels are the 6 components of ``w_hat`` (``fx fy fz tx ty tz``) in whatever frame the truth is given
 in; the report compares the world force and the eta-coordinate torque with ``[1, 1, 0, 0, 0, -0.4]``.

@@ -1,4 +1,4 @@
-"""Generalised momentum and its model-predicted derivative for a whole log (SPEC §3.8), vectorised.
+"""Generalised momentum and its model-predicted derivative for a whole log (docs/model.md §3.8), vectorised.
 
 Frames and units: world NED (``+g e3`` is down), body FRD, Euler angles ZYX ``eta = [roll, pitch, yaw]``
 [rad], ``omega_body = Q(eta) eta_dot``, ``M(eta) = Q^T I_b Q``, ``C(eta, eta_dot)`` as in

@@ -1,4 +1,4 @@
-"""Momentum-based external wrench observer (SPEC §3.8, report exercise 3).
+"""Momentum-based external wrench observer (docs/model.md §3.8, report exercise 3).
 
 Discrete recursion (all states zero at k = 0), with ``K_1 .. K_r`` from
 :func:`fsr_estimation.core.filter_design.gain_chain` and ``q``, ``b`` from :mod:`fsr_estimation.core.momentum`:

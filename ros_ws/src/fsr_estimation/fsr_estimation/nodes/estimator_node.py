@@ -1,4 +1,4 @@
-"""Estimator node: momentum-based external wrench and mass estimation on the live graph (SPEC §3.8, §4).
+"""Estimator node: momentum-based external wrench and mass estimation on the live graph (docs/model.md §3.8, §4).
 
 Subscribes ``odom`` (nav_msgs/Odometry) and ``wrench_cmd`` (geometry_msgs/WrenchStamped) and hands them to
 :class:`fsr_estimation.core.stamped.StampedEstimator` (pairing by header stamp, sample-period checks and

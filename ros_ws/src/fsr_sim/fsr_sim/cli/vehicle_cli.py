@@ -5,7 +5,7 @@ Markdown by default; ``--json`` prints an object with ``mass``, ``inertia`` (3x3
 ``rotors`` (position, spin, tilt axis), ``allocation``
 (6 x n, squared rotor speeds -> body wrench, rows f_x f_y f_z tau_x tau_y tau_z), for a coplanar vehicle
 also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a tilting vehicle
-``allocation_static`` (6 x 2n, SPEC §3.2).
+``allocation_static`` (6 x 2n, docs/model.md §3.2).
 """
 
 from __future__ import annotations

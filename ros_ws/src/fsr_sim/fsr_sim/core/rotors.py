@@ -141,3 +141,17 @@ def clamped_speeds(speed_sq, low: float, high: float, speeds, excess) -> None:  
     """:func:`clamped_speed` of every element of ``speed_sq`` (1-D) into ``speeds`` and ``excess``."""
     for i in range(speed_sq.shape[0]):
         speeds[i], excess[i] = clamped_speed(speed_sq[i], low, high)
+
+
+@jit
+def rotor_command_from_static(u_v: float, u_l: float, c_f: float) -> tuple[float, float]:
+    """The report's eq. 5 for one tilting rotor: (``u_w = |(u_v, u_l)| / c_f`` [(rad/s)^2], ``alpha = atan2(u_l, u_v)``
+    [rad]) of its vertical and lateral thrust [N]."""
+    return math.sqrt(u_v * u_v + u_l * u_l) / c_f, math.atan2(u_l, u_v)
+
+
+@jit
+def static_from_rotor_command(speed_sq: float, tilt: float, c_f: float) -> tuple[float, float]:
+    """The inverse of :func:`rotor_command_from_static`: ``(c_f u_w cos(alpha), c_f u_w sin(alpha))`` [N]."""
+    thrust = c_f * speed_sq
+    return thrust * math.cos(tilt), thrust * math.sin(tilt)

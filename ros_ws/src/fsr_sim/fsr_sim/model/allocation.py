@@ -1,4 +1,4 @@
-"""Control allocation built from rotor geometry (SPEC §3.2): never a hand-typed matrix.
+"""Control allocation built from rotor geometry (docs/model.md §3.2): never a hand-typed matrix.
 
 Per rotor ``i`` with position ``p_i`` (body FRD), spin ``k_i``, axis ``z_i = Rot(a_i, alpha_i) [0,0,-1]``
 and signed squared speed ``u_w,i = |w_i| w_i`` [(rad/s)^2]:
@@ -17,8 +17,6 @@ substitution: ``u_w,i = sqrt(u_v,i^2 + u_l,i^2) / c_f``, ``alpha_i = atan2(u_l,i
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
@@ -80,26 +78,21 @@ def static_tilting_allocation(vehicle: Vehicle) -> np.ndarray:
 
 
 def rotor_commands_from_static(vehicle: Vehicle, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. 5: ``u = [u_v1, u_l1, ...]`` [N] -> (squared speeds ``u_w`` [(rad/s)^2], tilts ``alpha`` [rad])."""
+    """Eq. 5: ``u = [u_v1, u_l1, ...]`` [N] -> (squared speeds ``u_w`` [(rad/s)^2], tilts ``alpha`` [rad]), by the
+    compiled core's :func:`fsr_sim.core.rotors.rotor_command_from_static`."""
     values = np.asarray(u, dtype=float).ravel().tolist()
     if len(values) != 2 * vehicle.rotor_count:
         raise ValueError(f"u needs 2 x {vehicle.rotor_count} values, got {len(values)}")
-    # Per rotor on Python floats: one rotor's pair at a time, no numpy per-call overhead (1 kHz loop).
-    pairs = list(zip(values[0::2], values[1::2], strict=True))
-    c_f = vehicle.c_f
-    return (np.array([math.hypot(u_v, u_l) / c_f for u_v, u_l in pairs]),
-            np.array([math.atan2(u_l, u_v) for u_v, u_l in pairs]))
+    pairs = [core_rotors.rotor_command_from_static(u_v, u_l, vehicle.c_f)
+             for u_v, u_l in zip(values[0::2], values[1::2], strict=True)]
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 
 
 def static_from_rotor_commands(vehicle: Vehicle, speed_sq: np.ndarray, tilt: np.ndarray) -> np.ndarray:
     """Inverse of :func:`rotor_commands_from_static`: ``u_v = c_f u_w cos(alpha)``, ``u_l = c_f u_w sin(alpha)``."""
-    c_f = vehicle.c_f
-    u = []
-    for u_w, alpha in zip(np.asarray(speed_sq, dtype=float).tolist(), np.asarray(tilt, dtype=float).tolist(),
-                          strict=True):
-        thrust = c_f * u_w
-        u += (thrust * math.cos(alpha), thrust * math.sin(alpha))
-    return np.array(u)
+    return np.array([value for u_w, alpha in zip(np.asarray(speed_sq, dtype=float).tolist(),
+                                                np.asarray(tilt, dtype=float).tolist(), strict=True)
+                     for value in core_rotors.static_from_rotor_command(u_w, alpha, vehicle.c_f)])
 
 
 WRENCH_AXES = ("force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z")  # body FRD
@@ -203,10 +196,11 @@ def clamp_rotor_speeds(vehicle: Vehicle, speed_sq: np.ndarray) -> tuple[np.ndarr
 
 
 class FixedRotorAllocator:
-    """Wrench -> rotor speeds for fixed (untilted) rotors through the pseudo-inverse of the allocation.
+    """The pseudo-inverse allocation of fixed (untilted) rotors: wrench -> squared rotor speeds.
 
-    For a coplanar vehicle only ``[f_z, tau_x, tau_y, tau_z]`` can be produced; the pseudo-inverse of
-    that 4 x n block gives the minimum-norm ``u_w`` (exact inverse for a quadrotor).
+    For a coplanar vehicle only ``[f_z, tau_x, tau_y, tau_z]`` can be produced (:attr:`rows`); the
+    pseudo-inverse of that 4 x n block gives the minimum-norm ``u_w`` (exact inverse for a quadrotor). The
+    controller's compiled allocation (:mod:`fsr_control.core.allocation`) is packed from :attr:`inverse_6`.
     """
 
     def __init__(self, vehicle: Vehicle) -> None:
@@ -216,15 +210,15 @@ class FixedRotorAllocator:
         self.allocation = wrench_from_rotor_speed_sq(vehicle)
         self.rows = np.flatnonzero(np.any(np.abs(self.allocation) > 1e-15, axis=1))
         self.inverse = np.linalg.pinv(self.allocation[self.rows])
-        self.saturation = SaturationReport(vehicle.rotor_count)
+
+    @property
+    def inverse_6(self) -> np.ndarray:
+        """:attr:`inverse` as an n x 6 matrix over all wrench rows (zero columns for those not produced)."""
+        full = np.zeros((self.vehicle.rotor_count, 6))
+        full[:, self.rows] = self.inverse
+        return full
 
     def rotor_speed_sq(self, thrust: float, torque_body: np.ndarray) -> np.ndarray:
         """Squared speeds for a thrust ``u_T`` [N] along ``-z_b`` and a body torque [N m] (unclamped)."""
         wrench = np.array((0.0, 0.0, -thrust, torque_body[0], torque_body[1], torque_body[2]))
         return self.inverse @ wrench[self.rows]
-
-    def rotor_speeds(self, thrust: float, torque_body: np.ndarray, time: float = 0.0) -> np.ndarray:
-        """Clamped rotor speeds [rad/s]; saturation is recorded in :attr:`saturation`."""
-        speeds, excess = clamp_rotor_speeds(self.vehicle, self.rotor_speed_sq(thrust, torque_body))
-        self.saturation.record(time, excess)
-        return speeds

@@ -1,4 +1,4 @@
-"""External wrench profiles (SPEC §3.4): constant, step, sinusoid and piecewise-linear table.
+"""External wrench profiles (docs/model.md §3.4): constant, step, sinusoid and piecewise-linear table.
 
 Each profile gives a force [N] and a torque [N m], both in its ``frame`` (``world`` NED, the default, or
 ``body`` FRD), as a function of simulated time ``t`` [s]. Several profiles add up. The plant applies the

@@ -1,4 +1,4 @@
-"""Surfaces near the vehicle: ground and ceiling effect on rotor thrust, and ground contact (SPEC §3.3).
+"""Surfaces near the vehicle: ground and ceiling effect on rotor thrust, and ground contact (docs/model.md §3.3).
 
 Surfaces are horizontal planes of the NED world given by their down-coordinate ``height`` [m] (the
 ground at ``z = 0`` by default; a ceiling 3 m up is ``height: -3``). For rotor ``i`` at world position

@@ -1,4 +1,4 @@
-"""Frames and gravity: the one place where fsr states them (SPEC §2).
+"""Frames and gravity: the one place where fsr states them (docs/model.md §2).
 
 World frame NED (``world_ned``: x north, y east, z down), body frame FRD (``base_link_frd``: x forward,
 y right, z down). Gravity acts along ``+e3`` of the world frame with ``g = 9.81`` m/s^2, so the weight of

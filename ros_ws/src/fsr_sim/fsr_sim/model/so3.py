@@ -99,7 +99,7 @@ def euler_zyx_from_rotation(rotation: ArrayLike) -> FloatArray:
 
 
 def euler_rate_matrix(eta: ArrayLike) -> FloatArray:
-    """``Q(eta)`` with ``omega_body = Q(eta) eta_dot`` (SPEC §2). eta: shape (..., 3) -> (..., 3, 3)."""
+    """``Q(eta)`` with ``omega_body = Q(eta) eta_dot`` (docs/model.md §2). eta: shape (..., 3) -> (..., 3, 3)."""
     e = _as_vector3(eta, "eta")
     cph, sph = np.cos(e[..., 0]), np.sin(e[..., 0])
     cth, sth = np.cos(e[..., 1]), np.sin(e[..., 1])
@@ -149,7 +149,7 @@ def euler_mass_matrix(eta: ArrayLike, inertia: ArrayLike) -> FloatArray:
 
 
 def euler_coriolis_matrix(eta: ArrayLike, eta_dot: ArrayLike, inertia: ArrayLike) -> FloatArray:
-    """``C(eta, eta_dot) = Q^T S(Q eta_dot) I_b Q + Q^T I_b Q_dot`` (SPEC §2), shape (..., 3, 3)."""
+    """``C(eta, eta_dot) = Q^T S(Q eta_dot) I_b Q + Q^T I_b Q_dot`` (docs/model.md §2), shape (..., 3, 3)."""
     inertia = np.asarray(inertia, dtype=float)
     q = euler_rate_matrix(eta)
     q_dot = euler_rate_matrix_derivative(eta, eta_dot)

@@ -2,7 +2,7 @@
 
 Frames: rotor positions ``p_i`` are in the body frame (FRD, metres, from the centre of mass). A rotor's
 thrust acts along its axis ``z_i = Rot(a_i, alpha_i) [0, 0, -1]`` (``-z_b`` when untilted). ``spin``
-is ``k_i``: +1 counter-clockwise, -1 clockwise seen from above (SPEC §3.2).
+is ``k_i``: +1 counter-clockwise, -1 clockwise seen from above (docs/model.md §3.2).
 
 A :class:`Vehicle` is built from plain Python values (arrays are checked and copied) or read from a
 YAML file by :func:`load_vehicle` (the file format: :mod:`fsr_sim.config.vehicle_file`).

@@ -3,7 +3,7 @@
 * ``rotor_cmd`` (sensor_msgs/JointState): ``rotor_i`` velocity [rad/s], ``tilt_i`` position [rad].
 * ``wrench_cmd`` (geometry_msgs/WrenchStamped, body FRD): the plant takes ``u_T = -force.z`` [N] along
   ``-z_b`` and ``torque`` [N m]; ``force.x``/``force.y`` cannot be produced by the wrench-actuated
-  plant (SPEC §3.1) and are ignored.
+  plant (docs/model.md §3.1) and are ignored.
 
 A command holding NaN/inf (or missing a rotor) raises ``ValueError``; the node drops it with a warning so
 it never reaches the plant. The simulator reads the commands from their CDR bytes (:meth:`RotorCommandReader.

@@ -1,6 +1,6 @@
 """Lockstep bookkeeping of the simulator: which command answers which state, and how long to wait for it.
 
-Contract (SPEC §4): the simulator publishes the state stamped ``t_k`` and applies the command stamped
+Contract (docs/model.md §4): the simulator publishes the state stamped ``t_k`` and applies the command stamped
 ``t_k`` over ``[t_k, t_k + T]``. A command with an older stamp is stale (a late answer to a step that was
 already taken on the failsafe); a newer stamp cannot be an answer to anything published yet.
 

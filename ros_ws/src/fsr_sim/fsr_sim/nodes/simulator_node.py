@@ -1,4 +1,4 @@
-"""Simulator node: steps the plant in lockstep with the controller and publishes the state (SPEC §4).
+"""Simulator node: steps the plant in lockstep with the controller and publishes the state (docs/model.md §4).
 
 Publishes ``/clock`` (if ``publish_clock``), ``odom`` and ``wrench_truth`` (STREAM_QOS) and ``sim_status``
 (std_msgs/String JSON ``{"state": "running"|"finished"|"diverged"|"stopped", "reason", "sim_time",

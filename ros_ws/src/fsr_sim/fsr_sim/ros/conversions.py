@@ -1,4 +1,4 @@
-"""Message <-> numpy conversions shared by every node (frames as in SPEC §4).
+"""Message <-> numpy conversions shared by every node (frames as in docs/model.md §4).
 
 * ``nav_msgs/Odometry``: pose in ``world_ned`` (position [m], orientation body FRD -> world NED),
   twist in ``base_link_frd`` (linear velocity and angular velocity in body axes, the ROS convention).
