@@ -3,7 +3,7 @@
 #   bash scripts/setup.sh            # uses python3 (3.10-3.13, x86_64)
 #   PYTHON=python3.12 bash scripts/setup.sh
 set -euo pipefail
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+root="$(cd -P "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"  # physical: the same .venv path when called through a symlink
 python="${PYTHON:-python3}"
 venv="$root/.venv"
 if [ ! -x "$venv/bin/python" ]; then

@@ -102,9 +102,13 @@ def test_non_editable_install_runs_every_command(tmp_path, domain):
     (site / "_fsr_test_dependencies.pth").write_text(
         f"import site; site.addsitedir({sysconfig.get_path('purelib')!r})\n", encoding="utf-8"
     )
+    sources = tmp_path / "src"  # pip builds a local folder in place (build/): a copy keeps the tree clean
+    for package in PACKAGES:
+        shutil.copytree(ROOT / "ros_ws" / "src" / package, sources / package,
+                        ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
     install = run(
         [str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation", "--no-index",
-         "--ignore-installed", "--disable-pip-version-check", *(str(ROOT / "ros_ws" / "src" / p) for p in PACKAGES)],
+         "--ignore-installed", "--disable-pip-version-check", *(str(sources / p) for p in PACKAGES)],
         timeout=300, cwd=tmp_path,
     )
     assert install.returncode == 0, install.stdout + install.stderr
