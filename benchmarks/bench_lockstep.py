@@ -27,6 +27,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from fsr_sim.contract import EXIT_FAILURE
+
 
 def write_scenario(directory: Path, vehicle: str, duration: float, ground: bool) -> Path:
     scenario = {
@@ -55,17 +57,17 @@ def run_controller(vehicle: str, steps: int, out: Path) -> None:
 
     configure_environment()
     import rclpy
-    from nav_msgs.msg import Odometry
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-    from sensor_msgs.msg import JointState
 
+    from fsr_sim.contract import ODOM, ROTOR_CMD
     from fsr_sim.ros.conversions import rotor_command
-    from fsr_sim.ros.qos import STREAM_QOS
+    from fsr_sim.ros.endpoints import publisher as topic_publisher
+    from fsr_sim.ros.endpoints import subscription
 
     rclpy.init()
     node = rclpy.create_node("bench_controller")
-    publisher = node.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
-    sub = node.create_subscription(Odometry, "odom", lambda _m: None, STREAM_QOS)
+    publisher = topic_publisher(node, ROTOR_CMD)
+    sub = subscription(node, ODOM, lambda _m: None)
     wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, node.context.handle)
     command = rotor_command(0, hover_speeds(vehicle))
     received: list[float] = []  # wall time of each new state
@@ -164,7 +166,7 @@ def main() -> int:
         if sim_code != 0:
             print(sim_log.read_text(), file=sys.stderr)
             print(f"simulator exited with {sim_code}", file=sys.stderr)
-            return 1
+            return EXIT_FAILURE
         data = json.loads(timings.read_text())
         step_cost, fill_cost = in_process_step_cost(scenario, args.vehicle)
 

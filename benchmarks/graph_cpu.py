@@ -20,6 +20,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fsr_sim.contract import topic_named
+
 VENV_BIN = Path(sys.executable).parent
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 RTF = re.compile(r"real-time factor ([0-9.]+)")
@@ -46,7 +48,7 @@ class GraphRun:
     def incomplete_topics(self) -> list[str]:
         """Per-step topics of the recording that do not hold every step (``/clock`` included)."""
         steps = round(self.sim_time * 1000) + 1
-        per_step = [t for t, n in self.counts.items() if n > 2 and not t.endswith(("/goal", "/sim_status"))]
+        per_step = [t for t, n in self.counts.items() if n > 2 and (topic := topic_named(t)) and topic.per_step]
         return [t for t in per_step if self.counts[t] != steps]
 
 

@@ -35,6 +35,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from graph_cpu import fly_graph  # noqa: E402
 
+from fsr_sim.contract import (  # noqa: E402
+    BY_NAME,
+    CLOCK,
+    MASS_ESTIMATE,
+    ODOM,
+    ROTOR_CMD,
+    WRENCH_CMD,
+    WRENCH_ESTIMATE,
+    WRENCH_TRUTH,
+)
+
 ROTORS = 4
 NS = 1_000_000  # ns per 1 kHz step
 
@@ -56,35 +67,28 @@ def _templates() -> dict:
     from fsr_sim.ros import cdr_pack
 
     templates = {**StatePackets().templates, **ControllerPackets(True, ROTORS).templates,
-                 **EstimatePackets().templates, "/clock": cdr_pack.clock()}
+                 **EstimatePackets().templates, CLOCK.name: cdr_pack.clock()}
     return {topic: (template, [0.5] * template.value_count) for topic, template in templates.items()}
 
 
 def simulator(domain: int, steps: int) -> None:
-    from geometry_msgs.msg import WrenchStamped
-    from nav_msgs.msg import Odometry
-    from rosgraph_msgs.msg import Clock
-    from sensor_msgs.msg import JointState
-
     from fsr_sim.ros import cdr_read
-    from fsr_sim.ros.qos import CLOCK_QOS, STREAM_QOS
+    from fsr_sim.ros.endpoints import publisher, subscription
     from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
     node, context = _node("simulator", domain)
     packets = _templates()
-    odom = node.create_publisher(Odometry, "odom", STREAM_QOS)
-    truth = node.create_publisher(WrenchStamped, "wrench_truth", STREAM_QOS)
-    clock = node.create_publisher(Clock, "/clock", CLOCK_QOS)
-    command = node.create_subscription(JointState, "rotor_cmd", lambda _m: None, STREAM_QOS, raw=True)
+    odom, truth, clock = (publisher(node, topic) for topic in (ODOM, WRENCH_TRUTH, CLOCK))
+    command = subscription(node, ROTOR_CMD, lambda _m: None, raw=True)
     waiting = SubscriptionWaitSet(node, [command])
     while odom.get_subscription_count() < 3 or command.get_publisher_count() < 1:  # controller, estimator, recorder
         time.sleep(0.01)
     start = time.monotonic()
     for k in range(steps + 1):
         stamp = k * NS
-        for publisher, topic in ((odom, "odom"), (truth, "wrench_truth"), (clock, "/clock")):
-            template, values = packets[topic]
-            publisher.publish(template.pack(stamp, values))
+        for topic_publisher, topic in ((odom, ODOM), (truth, WRENCH_TRUTH), (clock, CLOCK)):
+            template, values = packets[topic.name]
+            topic_publisher.publish(template.pack(stamp, values))
         if k == steps:
             break
         answered = False
@@ -94,56 +98,45 @@ def simulator(domain: int, steps: int) -> None:
             if time.monotonic() - start > 600:
                 raise SystemExit("the stub controller stopped answering")
     print(f"stepped {steps} in {time.monotonic() - start:.3f} s", flush=True)
-    for publisher in (odom, truth):
-        publisher.wait_for_all_acked()
+    for topic_publisher in (odom, truth):
+        topic_publisher.wait_for_all_acked()
     node.destroy_node()
     context.try_shutdown()
 
 
 def controller(domain: int, steps: int) -> None:
-    from geometry_msgs.msg import QuaternionStamped, WrenchStamped
-    from nav_msgs.msg import Odometry
-    from sensor_msgs.msg import JointState
-    from trajectory_msgs.msg import MultiDOFJointTrajectory
-
+    from fsr_control.nodes.packets import ControllerPackets
     from fsr_sim.ros import cdr_read
-    from fsr_sim.ros.qos import STREAM_QOS
+    from fsr_sim.ros.endpoints import publisher, subscription
     from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
     node, context = _node("controller", domain)
     packets = _templates()
-    types = {"rotor_cmd": JointState, "wrench_cmd": WrenchStamped, "wrench_shortfall": WrenchStamped,
-             "reference": MultiDOFJointTrajectory, "attitude_cmd": QuaternionStamped, "wrench_desired": WrenchStamped}
-    publishers = [(node.create_publisher(kind, topic, STREAM_QOS), *packets[topic]) for topic, kind in types.items()]
-    odom = node.create_subscription(Odometry, "odom", lambda _m: None, STREAM_QOS, raw=True)
+    names = ControllerPackets(True, ROTORS).templates
+    publishers = [(publisher(node, BY_NAME[name]), *packets[name]) for name in names]
+    odom = subscription(node, ODOM, lambda _m: None, raw=True)
     waiting = SubscriptionWaitSet(node, [odom])
     answered = -1
     while answered < steps * NS:
         for _, data, _ in waiting.take_ready(1_000_000_000):
             answered = cdr_read.stamp(data)
-            for publisher, template, values in publishers:
-                publisher.publish(template.pack(answered, values))
-    for publisher, _, _ in publishers:
-        publisher.wait_for_all_acked()
+            for topic_publisher, template, values in publishers:
+                topic_publisher.publish(template.pack(answered, values))
+    for topic_publisher, _, _ in publishers:
+        topic_publisher.wait_for_all_acked()
     node.destroy_node()
     context.try_shutdown()
 
 
 def estimator(domain: int, steps: int) -> None:
-    from geometry_msgs.msg import WrenchStamped
-    from nav_msgs.msg import Odometry
-    from std_msgs.msg import Float64
-
     from fsr_sim.ros import cdr_read
-    from fsr_sim.ros.qos import STREAM_QOS
+    from fsr_sim.ros.endpoints import publisher, subscription
     from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
     node, context = _node("estimator", domain)
     packets = _templates()
-    wrench = node.create_publisher(WrenchStamped, "wrench_estimate", STREAM_QOS)
-    mass = node.create_publisher(Float64, "mass_estimate", STREAM_QOS)
-    subscriptions = [node.create_subscription(Odometry, "odom", lambda _m: None, STREAM_QOS, raw=True),
-                     node.create_subscription(WrenchStamped, "wrench_cmd", lambda _m: None, STREAM_QOS, raw=True)]
+    wrench, mass = publisher(node, WRENCH_ESTIMATE), publisher(node, MASS_ESTIMATE)
+    subscriptions = [subscription(node, topic, lambda _m: None, raw=True) for topic in (ODOM, WRENCH_CMD)]
     waiting = SubscriptionWaitSet(node, subscriptions)
     halves: dict[int, int] = {}
     last = -1
@@ -154,9 +147,9 @@ def estimator(domain: int, steps: int) -> None:
             if halves[stamp] == 2:  # both halves of the step: estimate
                 del halves[stamp]
                 last = stamp
-                for publisher, topic in ((wrench, "wrench_estimate"), (mass, "mass_estimate")):
-                    template, values = packets[topic]
-                    publisher.publish(template.pack(stamp, values))
+                for topic_publisher, topic in ((wrench, WRENCH_ESTIMATE), (mass, MASS_ESTIMATE)):
+                    template, values = packets[topic.name]
+                    topic_publisher.publish(template.pack(stamp, values))
     node.destroy_node()
     context.try_shutdown()
 

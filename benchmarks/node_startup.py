@@ -33,13 +33,14 @@ def minimal_node() -> None:
 
     configure_environment()
     import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from nav_msgs.msg import Odometry
+
+    from fsr_sim.contract import ODOM, WRENCH_CMD
+    from fsr_sim.ros.endpoints import publisher, subscription
 
     rclpy.init()
     node = rclpy.create_node("startup_probe", start_parameter_services=False)
-    node.create_publisher(WrenchStamped, "wrench_cmd", 10)
-    node.create_subscription(Odometry, "odom", lambda _message: None, 10, raw=True)
+    publisher(node, WRENCH_CMD)
+    subscription(node, ODOM, lambda _message: None, raw=True)
     print(f"{process_age():.4f}", flush=True)
     node.destroy_node()
     rclpy.try_shutdown()

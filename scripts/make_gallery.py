@@ -20,6 +20,7 @@ from fsr_bringup.analysis.figures import FIGURES, RC, FigureOptions, Run, figure
 from fsr_bringup.analysis.load import load_flight
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_sim.config.scenario import load_scenario
+from fsr_sim.contract import FINISHED
 
 GALLERY_DPI = 150
 MAX_BYTES = 150_000
@@ -39,7 +40,7 @@ def recording_for(scenario: str, source: Path | None, work: Path) -> Path:
     path = work / f"{scenario}.mcap"
     print(f"flying {scenario} in-process ...", flush=True)
     result = fly_in_process(load_scenario(scenario), recording=path)
-    if result.end_reason != "finished":
+    if result.end_reason != FINISHED:
         raise SystemExit(f"{scenario}: {result.reason}")
     return path
 

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_sim.contract import SIM_STATUS, resolve
+
 # (key, scenario, --set values): every built-in scenario as shipped, and the variants its options open.
 FLIGHTS: list[tuple[str, str, dict]] = [
     ("ex3_estimation", "ex3_estimation", {}),
@@ -47,7 +49,7 @@ def recorded_fields(path: Path) -> dict[str, np.ndarray]:
     recording = open_recording(path)
     fields = {}
     for topic in sorted(recording.topics):
-        if topic == "/sim_status":
+        if topic == resolve(SIM_STATUS.name):
             continue
         stamps, columns = stamped_columns(recording, topic)
         fields[f"{topic}/stamp"] = stamps

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from fsr_bringup.api import simulate
+from fsr_sim.contract import DIVERGED
 
 DIVERGED_M = 1.0  # m: a position error beyond this counts as a divergence
 CASES = {
@@ -45,7 +46,7 @@ def fly(name: str, c0: float, r: int) -> dict[str, float | bool | str]:
     window = (run.time >= start) & (run.time <= end)
     steady = float(error[window].max()) if window.any() else float("nan")
     peak = float(error.max())
-    diverged = run.end_reason == "diverged" or not np.isfinite(peak) or peak > DIVERGED_M
+    diverged = run.end_reason == DIVERGED or not np.isfinite(peak) or peak > DIVERGED_M
     return {"steady_m": steady, "peak_m": peak, "diverged": bool(diverged), "note": run.reason if diverged else ""}
 
 

@@ -272,4 +272,4 @@ def test_namespaces_and_latched_status_published_before_the_recorder(graph: Grap
     assert recording.raw("/uav1/sim_status")[0][0] == 250_000_000  # log time = its sim_time
     flight = load_flight(recording)
     assert flight.namespace == "/uav1" and any("several vehicles" in note for note in flight.notes)
-    assert flight.sim_status[0]["state"] == "running"
+    assert flight.sim_status[0].state == "running"

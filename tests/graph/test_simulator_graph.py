@@ -49,7 +49,7 @@ def times_and_positions(flight):
 
 def assert_finished(flight, steps, failsafe_steps=0):
     assert flight.exit_code == 0, flight.log
-    status = flight.final_status
+    status = flight.final_status.as_dict()
     assert status == {
         "state": "finished", "reason": status["reason"], "sim_time": pytest.approx(steps * 1e-3), "steps": steps,
         "failsafe_steps": failsafe_steps, "incidents": 1 if failsafe_steps else 0,
@@ -160,7 +160,7 @@ def test_timeout_applies_failsafe_and_goes_on(ros_graph, scenario_file, failsafe
     sim = start_simulator(ros_graph, path)
     flight = ros_graph.run_controller(sim, rotor_answer(speeds, until=0.1), commands)  # silent from t = 0.1 s
     assert_finished(flight, 400, failsafe_steps=300)  # steps 100..399 on the failsafe, one incident
-    assert flight.final_status["longest_wait_s"] >= 0.4  # the first missed step waited the whole timeout
+    assert flight.final_status.longest_wait_s >= 0.4  # the first missed step waited the whole timeout
     assert "did not answer step 100 (t = 0.1000 s)" in flight.log
     assert f"failsafe '{failsafe}'" in flight.log and "/graph_test" in flight.log
     t, p = times_and_positions(flight)
@@ -206,8 +206,8 @@ def test_crash_into_the_ground_is_divergence_exit_3(ros_graph, scenario_file):
     flight = ros_graph.run_controller(sim, rotor_answer(np.zeros(4)), commands)
     assert flight.exit_code == 3, flight.log
     status = flight.final_status
-    assert status["state"] == "diverged" and "crashed into the ground" in status["reason"]
-    assert 0.05 < status["sim_time"] < 0.2 and status["steps"] == round(status["sim_time"] * 1e3)
+    assert status.state == "diverged" and "crashed into the ground" in status.reason
+    assert 0.05 < status.sim_time < 0.2 and status.steps == round(status.sim_time * 1e3)
     assert "simulation diverged" in flight.log
 
 
@@ -224,8 +224,8 @@ def test_crash_into_the_ceiling_is_divergence_exit_3_after_a_cap_warning(ros_gra
     flight = ros_graph.run_controller(sim, rotor_answer(speeds), commands)
     assert flight.exit_code == 3, flight.log
     status = flight.final_status
-    assert status["state"] == "diverged" and "crashed into the ceiling" in status["reason"]
-    assert 0.05 < status["sim_time"] < 0.2 and status["steps"] == round(status["sim_time"] * 1e3)
+    assert status.state == "diverged" and "crashed into the ceiling" in status.reason
+    assert 0.05 < status.sim_time < 0.2 and status.steps == round(status.sim_time * 1e3)
     _, p = times_and_positions(flight)
     assert p[:, 2].min() >= Z0 - 1.0 + 0.1 - 1e-9  # never through the ceiling
     assert len(re.findall(r"ceiling effect at its cap \(thrust ratio 1\.01 = max_ratio\)", flight.log)) == 1
@@ -278,9 +278,9 @@ def test_sigterm_mid_flight_stops_cleanly(ros_graph, scenario_file):
     flight = ros_graph.run_controller(sim, answer, commands)
     assert flight.exit_code == 0, flight.log
     status = flight.final_status
-    assert status["state"] == "stopped" and status["reason"] == "received SIGTERM"
-    assert 0.3 <= status["sim_time"] < 10.0
-    assert flight.statuses[0]["state"] == "running"
+    assert status.state == "stopped" and status.reason == "received SIGTERM"
+    assert 0.3 <= status.sim_time < 10.0
+    assert flight.statuses[0].state == "running"
 
 
 def test_startup_timeout_without_controller_exit_1(ros_graph, scenario_file):

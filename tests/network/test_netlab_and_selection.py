@@ -9,7 +9,6 @@ import pytest
 
 from fsr_bringup.runner.remote import expected_node_paths, parse_node_selection
 from fsr_bringup.testing.netns import NetLab, unavailable_reason
-from fsr_sim.ros.flight_end import parse_status
 
 FLEET = ["recorder", "uav1/estimator", "uav1/controller", "uav1/simulator", "uav2/controller", "uav2/simulator"]
 
@@ -27,11 +26,6 @@ def test_roles_select_every_vehicle_and_process_names_one():
 def test_expected_node_paths_use_ros_node_names():
     assert expected_node_paths(["recorder", "uav1/controller", "simulator"]) == {
         "/fsr_recorder": "recorder", "/uav1/controller": "uav1/controller", "/simulator": "simulator"}
-
-
-def test_status_parsing_tolerates_bad_json():
-    assert parse_status('{"state": "finished", "failsafe_steps": 3}')["failsafe_steps"] == 3
-    assert parse_status("not json") == {} and parse_status("[1, 2]") == {}
 
 
 def namespaces() -> set[str]:

@@ -14,6 +14,7 @@ from fsr_bringup.analysis.load import hold, load_flight
 from fsr_bringup.analysis.metrics import flight_metrics
 from fsr_bringup.analysis.run import analyze_recording
 from fsr_bringup.cli.analyze_cli import main as analyze_main
+from fsr_sim.contract import SimStatus
 from fsr_sim.recording.cdr_columns import decode_columns
 from fsr_sim.recording.reader import open_recording
 from fsr_sim.recording.writer import RecordingWriter
@@ -60,7 +61,7 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
     np.testing.assert_allclose(m["thrust_ratio"]["ground"], EXPECTED["ground_ratio"], rtol=1e-9)
     assert m["thrust_ratio"]["ceiling"] == [1.0, 1.0]
     assert m["commanded_thrust_N"]["peak"] == pytest.approx(12.5)
-    assert m["sim_status"] == {"state": "finished", "reason": "duration reached", "sim_time": 2.0, "steps": STEPS}
+    assert m["sim_status"] == SimStatus("finished", "duration reached", 2.0, STEPS).as_dict()
     assert m["steps"] == STEPS and m["duration_s"] == pytest.approx(2.0) and m["odom_messages"] == STEPS + 1
     assert m["message_counts"]["/odom"] == STEPS + 1 and m["message_counts"]["/sim_status"] == 2
     assert m["truncated"] is False and m["scenario"] == "synthetic_flight" and m["notes"] == []
@@ -164,15 +165,16 @@ def test_a_flight_stopped_by_a_signal_is_summarised_as_interrupted() -> None:
     from fsr_bringup.analysis.metrics import interrupted_at
     from fsr_bringup.analysis.summary import markdown_summary
 
-    stopped = {"state": "stopped", "reason": "received SIGINT", "sim_time": 5.123, "steps": 5123}
+    stopped = SimStatus("stopped", "received SIGINT", 5.123, 5123)
     assert interrupted_at(stopped) == pytest.approx(5.123)
     for other in (
-        {"state": "finished", "reason": "reached the scenario duration 10 s", "sim_time": 10.0, "steps": 10000},
-        {"state": "diverged", "reason": "crashed into the ceiling", "sim_time": 2.0, "steps": 2000},
-        {"state": "stopped", "reason": "start-up failed: no rotor_cmd", "sim_time": 0.0, "steps": 0},
+        SimStatus("finished", "reached the scenario duration 10 s", 10.0, 10000),
+        SimStatus("diverged", "crashed into the ceiling", 2.0, 2000),
+        SimStatus("stopped", "start-up failed: no rotor_cmd", 0.0, 0),
         None,
     ):
         assert interrupted_at(other) is None
-    summary = markdown_summary({"scenario": "x", "sim_status": stopped, "interrupted_at_s": 5.123})
+    summary = markdown_summary({"scenario": "x", "sim_status": stopped.as_dict(), "interrupted_at_s": 5.123})
     assert "| end state | **interrupted at t = 5.123 s** (received SIGINT) |" in summary
-    assert "interrupted" not in markdown_summary({"scenario": "x", "sim_status": {"state": "finished", "reason": "r"}})
+    finished = SimStatus("finished", "r", 1.0, 1000).as_dict()
+    assert "interrupted" not in markdown_summary({"scenario": "x", "sim_status": finished})

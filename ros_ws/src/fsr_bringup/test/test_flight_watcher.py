@@ -17,6 +17,7 @@ from fsr_bringup.runner import watcher as watcher_module
 from fsr_bringup.runner.domains import fixed_domain
 from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
 from fsr_bringup.runner.watcher import FlightWatcher, watcher_command
+from fsr_sim.contract import DIVERGED, FINISHED, RUNNING, SimStatus
 
 
 def event(**fields: object) -> str:
@@ -35,12 +36,13 @@ def test_progress_gives_simulated_time_and_stepping_rate():
 def test_final_statuses_need_every_vehicle():
     watcher = FlightWatcher(["/uav1", "/uav2"])
     assert not watcher.started() and watcher.final_statuses() is None
-    watcher.feed(event(status="/uav1", value={"state": "finished", "sim_time": 2.0}))
-    watcher.feed(event(status="/uav2", value={"state": "running"}))
+    finished = SimStatus(FINISHED, "duration", 2.0, 2000)
+    watcher.feed(event(status="/uav1", value=finished.as_dict()))
+    watcher.feed(event(status="/uav2", value=SimStatus(RUNNING, "", 0.5, 500).as_dict()))
     assert watcher.started() and watcher.final_statuses() is None
-    watcher.feed(event(status="/uav2", value={"state": "diverged", "reason": "crash"}))
-    assert watcher.final_statuses() == {"/uav1": {"state": "finished", "sim_time": 2.0},
-                                        "/uav2": {"state": "diverged", "reason": "crash"}}
+    diverged = SimStatus(DIVERGED, "crash", 1.0, 1000)
+    watcher.feed(event(status="/uav2", value=diverged.as_dict()))
+    assert watcher.final_statuses() == {"/uav1": finished, "/uav2": diverged}
 
 
 def test_missing_nodes_unknown_until_the_first_list():
@@ -78,7 +80,8 @@ HUNG_WATCHER = textwrap.dedent('''
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # as stuck as a deadlocked DDS teardown
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     print(json.dumps({"progress": 0.9, "at": time.monotonic()}), flush=True)
-    print(json.dumps({"status": "", "value": {"state": "finished", "sim_time": 1.0, "steps": 1000}}), flush=True)
+    status = {"state": "finished", "reason": "", "sim_time": 1.0, "steps": 1000}
+    print(json.dumps({"status": "", "value": status}), flush=True)
     time.sleep(600)
 ''')
 
@@ -100,7 +103,8 @@ def test_a_watcher_stuck_at_exit_does_not_hold_the_run(tmp_path, monkeypatch):
 
 FINAL_STATUS_WATCHER = textwrap.dedent('''
     import json, sys, time
-    print(json.dumps({"status": "", "value": {"state": sys.argv[1], "sim_time": 1.0}}), flush=True)
+    status = {"state": sys.argv[1], "reason": "", "sim_time": 1.0, "steps": 1000}
+    print(json.dumps({"status": "", "value": status}), flush=True)
     time.sleep(600)
 ''')
 

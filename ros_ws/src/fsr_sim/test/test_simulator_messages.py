@@ -45,10 +45,10 @@ def test_rotor_reader_refuses_missing_rotor():
         RotorCommandReader(4, tilting=False).read(rotor_command(0, [1.0, 2.0, 3.0]))
 
 
-def test_wrench_command_thrust_is_minus_force_z():
-    thrust, torque = wrench_command(wrench_stamped(0, np.array((0.0, 0.0, -11.0)), np.array((1.0, 2.0, 3.0))))
-    assert thrust == 11.0
-    np.testing.assert_array_equal(torque, [1.0, 2.0, 3.0])
+def test_wrench_command_is_the_whole_body_wrench():
+    """Every component reaches the plant: the in-process loop applies the controller's wrench as it is."""
+    wrench = wrench_command(wrench_stamped(0, np.array((0.5, -0.25, -11.0)), np.array((1.0, 2.0, 3.0))))
+    np.testing.assert_array_equal(wrench, [0.5, -0.25, -11.0, 1.0, 2.0, 3.0])
     with pytest.raises(ValueError, match="NaN or inf"):
         wrench_command(wrench_stamped(0, np.array((math.nan, 0.0, -11.0)), np.zeros(3)))
 
@@ -147,8 +147,7 @@ def test_commands_read_from_cdr_bytes_equal_the_message_path(tilting):
             assert np.array_equal(got[0], expected[0])
             assert (got[1] is None) == (expected[1] is None) and (got[1] is None or np.array_equal(got[1], expected[1]))
         wrench = wrench_stamped(5, rng.normal(size=3), rng.normal(size=3))
-        thrust, torque = wrench_command_raw(serialize_message(wrench))
-        assert (thrust, torque.tolist()) == (wrench_command(wrench)[0], wrench_command(wrench)[1].tolist())
+        assert wrench_command_raw(serialize_message(wrench)).tolist() == wrench_command(wrench).tolist()
     bad = rotor_command(0, np.array([1.0, math.nan, 1.0, 1.0]), np.zeros(4) if tilting else None)
     with pytest.raises(ValueError):
         reader.read_raw(serialize_message(bad))

@@ -40,6 +40,7 @@ from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, th
 from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
 from fsr_bringup.analysis.load import Flight
 from fsr_bringup.analysis.metrics import tracking_errors
+from fsr_sim.contract import REFERENCE, WRENCH_CMD
 from fsr_sim.model.so3 import euler_zyx_from_rotation
 
 ONE_COLUMN_IN = 3.5  # in, one journal column
@@ -214,8 +215,8 @@ def pose_figure(runs: list[Run], options: FigureOptions) -> Drawn:
             _plot(axes[i, 1], odom.t, rpy[:, i], color=_colour(index), label=run.label)
     for i, (name, angle) in enumerate(zip(AXES, ("roll", "pitch", "yaw"), strict=True)):
         if ref is not None:
-            _plot(axes[i, 0], ref.t, ref.position[:, i], label="reference", **TRUTH)
-            _plot(axes[i, 1], ref.t, ref_rpy[:, i], label="reference", **TRUTH)
+            _plot(axes[i, 0], ref.t, ref.position[:, i], label=REFERENCE.name, **TRUTH)
+            _plot(axes[i, 1], ref.t, ref_rpy[:, i], label=REFERENCE.name, **TRUTH)
         _label(axes[i, 0], f"p_{name}", "m", "world NED")
         _label(axes[i, 1], angle, "deg", "ZYX Euler")
     _finish(fig, axes, "pose vs reference", options)
@@ -392,7 +393,7 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
 FIGURES: dict[str, Callable[[list[Run], FigureOptions], Drawn]] = {
     "pose": pose_figure,
     "errors": errors_figure,
-    "wrench_cmd": wrench_command_figure,
+    WRENCH_CMD.name: wrench_command_figure,
     "rotors": rotors_figure,
     "external_wrench": external_wrench_figure,
     "mass": mass_figure,

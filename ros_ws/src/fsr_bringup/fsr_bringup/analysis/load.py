@@ -12,7 +12,6 @@ absent or that cannot be decoded.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,13 +22,33 @@ from fsr_control.config.controller_config import controller_config
 from fsr_estimation.config.estimator_config import EstimatorConfig, estimator_config
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
+from fsr_sim.contract import (
+    ATTITUDE_CMD,
+    CLOCK,
+    MASS_ESTIMATE,
+    ODOM,
+    REFERENCE,
+    ROTOR,
+    ROTOR_CMD,
+    SIM_STATUS,
+    TILT,
+    WRENCH_CMD,
+    WRENCH_DESIRED,
+    WRENCH_ESTIMATE,
+    WRENCH_SHORTFALL,
+    WRENCH_TRUTH,
+    SimStatus,
+    parse_joint,
+    recorded_topics,
+    resolve,
+    rotor_joint,
+)
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.recording.cdr_columns import Columns, LayoutError, stamped_columns
 from fsr_sim.recording.reader import Recording, open_recording
-from fsr_sim.recording.topics import FLIGHT_TOPICS
 
 NS_PER_S = 1_000_000_000
-STANDARD_TOPICS = tuple(FLIGHT_TOPICS)
+STANDARD_TOPICS = tuple(recorded_topics())
 
 
 @dataclass
@@ -109,7 +128,7 @@ class Flight:
     wrench_estimate: Wrench | None = None
     rotor_cmd: RotorCommand | None = None
     mass_estimate: Scalar | None = None
-    sim_status: list[dict] = field(default_factory=list)
+    sim_status: list[SimStatus] = field(default_factory=list)
     message_counts: dict[str, int] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
 
@@ -129,7 +148,8 @@ def hold(stamp_ns: np.ndarray, values: np.ndarray, target_ns: np.ndarray) -> np.
 
 def detect_namespace(recording: Recording) -> tuple[str, str | None]:
     """The vehicle namespace to analyse (``/`` or ``/uav1``) and a note when there was a choice."""
-    candidates = sorted(topic[: -len("/odom")] or "/" for topic in recording.topics if topic.endswith("/odom"))
+    suffix = "/" + ODOM.name
+    candidates = sorted(topic[: -len(suffix)] or "/" for topic in recording.topics if topic.endswith(suffix))
     if not candidates or "/" in candidates:
         return "/", None
     note = None
@@ -153,16 +173,16 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     flight.compensation_mode, flight.compensation = _compensation(recording, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
-    for topic in sorted({*recording.topics, *(_topic(namespace, name) for name in ("/clock", *STANDARD_TOPICS))}):
+    for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
         flight.message_counts[topic] = recording.count(topic)
-    loaders = {
-        "odom": _odometry, "reference": _reference, "wrench_truth": _wrench, "wrench_cmd": _wrench,
-        "wrench_shortfall": _wrench,
-        "wrench_estimate": _wrench, "rotor_cmd": _rotor_command, "mass_estimate": _scalar,
-        "attitude_cmd": _attitude, "wrench_desired": _wrench,
+    loaders = {  # topic -> its decoder; the Flight attribute has the topic's name
+        ODOM: _odometry, REFERENCE: _reference, WRENCH_TRUTH: _wrench, WRENCH_CMD: _wrench,
+        WRENCH_SHORTFALL: _wrench, WRENCH_ESTIMATE: _wrench, ROTOR_CMD: _rotor_command, MASS_ESTIMATE: _scalar,
+        ATTITUDE_CMD: _attitude, WRENCH_DESIRED: _wrench,
     }
-    for name, loader in loaders.items():
-        topic = _topic(namespace, name)
+    for contract_topic, loader in loaders.items():
+        name = contract_topic.name
+        topic = resolve(name, namespace)
         if not recording.has(topic) or recording.count(topic) == 0:
             notes.append(f"no messages on {topic}")
             continue
@@ -170,18 +190,12 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
             setattr(flight, name, loader(recording, topic))
         except (LayoutError, KeyError, ValueError) as error:
             notes.append(f"cannot decode {topic}: {error}")
-    status_topic = _topic(namespace, "sim_status")
+    status_topic = resolve(SIM_STATUS.name, namespace)
     if recording.has(status_topic):
         flight.sim_status = _statuses(recording, status_topic, notes)
     else:
         notes.append(f"no messages on {status_topic}")
     return flight
-
-
-def _topic(namespace: str, name: str) -> str:
-    if name.startswith("/"):
-        return name
-    return f"{namespace.rstrip('/')}/{name}"
 
 
 def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig | None, str, EstimatorConfig | None]:
@@ -277,10 +291,10 @@ def _rotor_command(recording: Recording, topic: str) -> RotorCommand:
     velocity = c.numbers.get("velocity", np.empty((c.n, 0)))
     position = c.numbers.get("position", np.empty((c.n, 0)))
     names = [c.strings[key] for key in sorted(c.strings, key=_name_index) if key.startswith("name.")]
-    speeds = _by_name(names, velocity, "rotor_", c.n)
-    tilts = _by_name(names, position, "tilt_", c.n)
+    speeds = _by_name(names, velocity, ROTOR, c.n)
+    tilts = _by_name(names, position, TILT, c.n)
     if speeds.shape[1] == 0:
-        raise ValueError("no 'rotor_i' joints in the rotor command")
+        raise ValueError(f"no '{rotor_joint(0)}', '{rotor_joint(1)}', ... joints in the rotor command")
     return RotorCommand(stamp, stamp / NS_PER_S, speeds, tilts if tilts.shape[1] else None)
 
 
@@ -288,21 +302,19 @@ def _name_index(key: str) -> int:
     return int(key.split(".")[1]) if key.count(".") == 1 and key.split(".")[1].isdigit() else -1
 
 
-def _by_name(names: list[np.ndarray], values: np.ndarray, prefix: str, n: int) -> np.ndarray:
-    """Columns of ``values`` for joints ``prefix1, prefix2, ...`` (names may differ between messages)."""
-    count = 0
-    for column in names:
-        for name in set(column) - {None}:
-            if name.startswith(prefix) and name[len(prefix) :].isdigit():
-                count = max(count, int(name[len(prefix) :]))
+def _by_name(names: list[np.ndarray], values: np.ndarray, kind: str, n: int) -> np.ndarray:
+    """Columns of ``values`` for the joints of ``kind`` (contract.ROTOR or TILT), in index order (names may differ
+    between messages)."""
+    indices = [{name: joint[1] for name in set(column) - {None}
+                if (joint := parse_joint(name)) is not None and joint[0] == kind} for column in names]
+    count = max((index + 1 for found in indices for index in found.values()), default=0)
     out = np.full((n, count), np.nan)
-    for j, column in enumerate(names):
+    for j, (column, found) in enumerate(zip(names, indices, strict=True)):
         if j >= values.shape[1]:
             break
-        for name in set(column) - {None}:
-            if name.startswith(prefix) and name[len(prefix) :].isdigit():
-                rows = column == name
-                out[rows, int(name[len(prefix) :]) - 1] = values[rows, j]
+        for name, index in found.items():
+            rows = column == name
+            out[rows, index] = values[rows, j]
     return out
 
 
@@ -311,16 +323,13 @@ def _scalar(recording: Recording, topic: str) -> Scalar:
     return Scalar(stamp, stamp / NS_PER_S, c.get("data").astype(float))
 
 
-def _statuses(recording: Recording, topic: str, notes: list[str]) -> list[dict]:
-    """The ``sim_status`` JSON messages (few: one per state change), with their log time ``log_time_s``."""
+def _statuses(recording: Recording, topic: str, notes: list[str]) -> list[SimStatus]:
+    """The ``sim_status`` messages (few: one per state change), in order."""
     statuses = []
-    for log_time, msg in recording.messages(topic):
-        try:
-            status = json.loads(msg.data)
-        except (json.JSONDecodeError, TypeError):
-            notes.append(f"{topic}: a message is not JSON: {str(msg.data)[:60]!r}")
-            continue
-        if isinstance(status, dict):
-            status["log_time_s"] = log_time / NS_PER_S
+    for _log_time, msg in recording.messages(topic):
+        status = SimStatus.from_json(msg.data)
+        if status is None:
+            notes.append(f"{topic}: a message is not a status: {str(msg.data)[:60]!r}")
+        else:
             statuses.append(status)
     return statuses

@@ -44,6 +44,7 @@ from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import Flight, hold, load_flight
 from fsr_estimation.core import metrics as estimator_metrics
 from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
+from fsr_sim.contract import ATTITUDE_CMD, REFERENCE, SIM_STATUS, STOPPED, WRENCH_SHORTFALL, SimStatus
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
 from fsr_sim.model.environment import contact_mask
 from fsr_sim.model.so3 import relative_rotation_angles
@@ -283,13 +284,12 @@ def surface_caps(flight: Flight, t: np.ndarray, ground: np.ndarray, ceiling: np.
     return caps
 
 
-def interrupted_at(status: dict[str, Any] | None) -> float | None:
+def interrupted_at(status: SimStatus | None) -> float | None:
     """Simulated time [s] at which a signal stopped the flight (final ``sim_status`` ``stopped`` with reason
     ``received SIGINT`` / ``SIGTERM``), or None for a flight that ended on its own (or never started)."""
-    if not status or status.get("state") != "stopped" or not str(status.get("reason", "")).startswith("received "):
+    if status is None or status.state != STOPPED or not str(status.reason).startswith("received "):
         return None
-    sim_time = status.get("sim_time")
-    return float(sim_time) if isinstance(sim_time, int | float) else None
+    return float(status.sim_time)
 
 
 def flight_metrics(
@@ -311,13 +311,10 @@ def flight_metrics(
         "truncated": flight.truncated,
         "duration_s": float(odom.t[-1] - odom.t[0]) if odom is not None else None,
         "end_time_s": float(odom.t[-1]) if odom is not None else None,
-        "steps": int(status["steps"]) if status and isinstance(status.get("steps"), int) else None,
+        "steps": int(status.steps) if status is not None and isinstance(status.steps, int) else None,
         "odom_messages": len(odom.t) if odom is not None else 0,
         "message_counts": dict(flight.message_counts),
-        "sim_status": (
-            {key: status.get(key) for key in ("state", "reason", "sim_time", "steps", "failsafe_steps", "incidents",
-                                              "late_commands") if key in status} if status else None
-        ),
+        SIM_STATUS.name: None if status is None else status.as_dict(),
         "interrupted_at_s": interrupted_at(status),
     }
     errors = tracking_errors(flight)
@@ -329,7 +326,7 @@ def flight_metrics(
             "position_error_m": error_summary(errors.t, errors.position),
             "velocity_error_m_s": error_summary(errors.t, errors.velocity),
             "attitude_error_deg": error_summary(errors.t, errors.attitude_deg),
-            "attitude_vs": "attitude_cmd" if errors.attitude_commanded else "reference",
+            "attitude_vs": ATTITUDE_CMD.name if errors.attitude_commanded else REFERENCE.name,
             "attitude_vs_reference_deg": error_summary(errors.t, errors.attitude_reference_deg),
             "angular_velocity_error_rad_s": error_summary(errors.t, errors.angular_velocity),
         }
@@ -344,9 +341,9 @@ def flight_metrics(
     metrics["saturation"] = saturation(flight)
     if metrics["saturation"] is None:
         notes.append("saturation skipped: rotor_cmd or scenario missing")
-    metrics["wrench_shortfall"] = wrench_shortfall(flight)
+    metrics[WRENCH_SHORTFALL.name] = wrench_shortfall(flight)
     metrics["compensation"] = compensation(flight)
-    if metrics["wrench_shortfall"] is None:
+    if metrics[WRENCH_SHORTFALL.name] is None:
         notes.append("wrench shortfall skipped: wrench_shortfall missing")
     if errors is not None and not errors.attitude_commanded:
         notes.append("no attitude_cmd: attitude error measured against the planner's attitude R_d")

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from fsr_sim.contract import ATTITUDE_CMD, SIM_STATUS, WRENCH_SHORTFALL, SimStatus
+
 CHANNEL_LABELS = {"fx": "f_x", "fy": "f_y", "fz": "f_z", "tx": "tau_x", "ty": "tau_y", "tz": "tau_z"}
 
 
@@ -32,19 +34,20 @@ def _channels(values: dict | None, digits: int = 3) -> str:
 def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
     """(quantity, value) rows of one run's metrics, in a fixed order."""
     rows: list[tuple[str, str]] = []
-    status = metrics.get("sim_status")
-    end = f"{status.get('state')} ({status.get('reason')})" if status else "n/a"
-    if metrics.get("interrupted_at_s") is not None:
-        end = f"**interrupted at t = {metrics['interrupted_at_s']:.3f} s** ({status.get('reason')})"
+    status = SimStatus.from_dict(metrics.get(SIM_STATUS.name))
+    end = f"{status.state} ({status.reason})" if status else "n/a"
+    if metrics.get("interrupted_at_s") is not None and status:
+        end = f"**interrupted at t = {metrics['interrupted_at_s']:.3f} s** ({status.reason})"
     rows.append(("end state", end + (" - **truncated recording**" if metrics.get("truncated") else "")))
     rows.append(("duration [s] / steps", f"{_num(metrics.get('duration_s'))} / {_num(metrics.get('steps'))}"))
-    if status and status.get("failsafe_steps"):  # the controller missed steps (killed, hung, link down)
-        rows.append(("lockstep failsafe", f"**{status['failsafe_steps']} steps** on the failsafe in "
-                                          f"{status.get('incidents', '?')} incident(s), "
-                                          f"{status.get('late_commands', 0)} late command(s) ignored"))
+    if status and status.failsafe_steps:  # the controller missed steps (killed, hung, link down)
+        rows.append(("lockstep failsafe", f"**{status.failsafe_steps} steps** on the failsafe in "
+                                          f"{status.incidents} incident(s), "
+                                          f"{status.late_commands} late command(s) ignored"))
     tracking = metrics.get("tracking")
     if tracking:
-        against = "R_c, commanded" if tracking.get("attitude_vs") == "attitude_cmd" else "R_d, planner"
+        commanded = tracking.get("attitude_vs") == ATTITUDE_CMD.name
+        against = "R_c, commanded" if commanded else "R_d, planner"
         for key, label in (
             ("position_error_m", "position error [m]"),
             ("attitude_error_deg", f"attitude error vs {against} [deg]"),
@@ -52,7 +55,7 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
             ("velocity_error_m_s", "velocity error [m/s]"),
         ):
             item = tracking.get(key)
-            if item is None or (key == "attitude_vs_reference_deg" and tracking.get("attitude_vs") != "attitude_cmd"):
+            if item is None or (key == "attitude_vs_reference_deg" and not commanded):
                 continue
             rows.append((
                 f"{label} final / peak (at t) / RMS",
@@ -79,7 +82,7 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
                     f"late estimates {compensation['late_estimates']}; off in contact: "
                     f"{_num(compensation['contact_steps'])} states")
         rows.append(("disturbance compensation", text))
-    shortfall = metrics.get("wrench_shortfall")
+    shortfall = metrics.get(WRENCH_SHORTFALL.name)
     if shortfall:
         gave_way = [
             f"{axis} {item['steps']} steps (max {_num(item['max_shortfall'])} at {_num(item['max_time_s'], 2)} s)"

@@ -15,10 +15,8 @@ import sys
 from pathlib import Path
 
 from fsr_sim.cli.arguments import ArgumentParser
+from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_OK
 
-EXIT_OK = 0
-EXIT_WRITE_ERROR = 1
-EXIT_BAD_INPUT = 2
 SETTLING_CHOICES = ("standard", "report")  # fsr_estimation.core.metrics.SETTLING_DEFINITIONS (imported lazily)
 
 
@@ -86,10 +84,10 @@ def main(argv: list[str] | None = None) -> int:
                                     args.settling, args.after)
     except (RecordingError, ValueError) as error:
         print(f"fsr-analyze: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return EXIT_CONFIG_ERROR
     except OSError as error:
         print(f"fsr-analyze: error: cannot write to {out}: {error.strerror or error}", file=sys.stderr)
-        return EXIT_WRITE_ERROR
+        return EXIT_FAILURE
     print(result.summary)
     print(f"fsr-analyze: wrote {result.metrics_path}, {result.summary_path} and {len(result.figures)} figure files "
           f"in {out}")

@@ -35,8 +35,8 @@ from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.config.validation import ConfigError, builtin_names
+from fsr_sim.contract import EXIT_CONFIG_ERROR
 
-EXIT_CONFIG_ERROR = 2
 REMOTE_STARTUP_TIMEOUT = 300.0  # s: with --nodes the other hosts' nodes may be started by hand, later
 
 

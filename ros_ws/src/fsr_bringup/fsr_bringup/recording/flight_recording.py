@@ -19,24 +19,13 @@ as soon as it is flown.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-TOPIC_TYPES = {
-    "/odom": "nav_msgs/msg/Odometry",
-    "/wrench_truth": "geometry_msgs/msg/WrenchStamped",
-    "/rotor_cmd": "sensor_msgs/msg/JointState",
-    "/wrench_cmd": "geometry_msgs/msg/WrenchStamped",
-    "/wrench_shortfall": "geometry_msgs/msg/WrenchStamped",
-    "/reference": "trajectory_msgs/msg/MultiDOFJointTrajectory",
-    "/attitude_cmd": "geometry_msgs/msg/QuaternionStamped",
-    "/wrench_desired": "geometry_msgs/msg/WrenchStamped",
-    "/wrench_estimate": "geometry_msgs/msg/WrenchStamped",
-    "/mass_estimate": "std_msgs/msg/Float64",
-    "/sim_status": "std_msgs/msg/String",
-}
+from fsr_sim.contract import MASS_ESTIMATE, ODOM, SIM_STATUS, WRENCH_ESTIMATE, WRENCH_TRUTH, SimStatus, recorded_topics
+
+TOPIC_TYPES = {"/" + name: type_name for name, type_name in recorded_topics().items()}
 BLOCK_STEPS = 1000  # steps packed and written at once
 
 
@@ -65,10 +54,12 @@ class FlightRecorder:
 
         for start in range(0, len(stamps_ns), BLOCK_STEPS):
             block = slice(start, start + BLOCK_STEPS)
-            columns = [("/odom", published[block, :ODOM_SIZE]), ("/wrench_truth", published[block, ODOM_SIZE:])]
+            columns = [("/" + ODOM.name, published[block, :ODOM_SIZE]),
+                       ("/" + WRENCH_TRUTH.name, published[block, ODOM_SIZE:])]
             columns += [("/" + topic, values) for topic, values in self.controller_packets.values(control[block])]
             if estimates is not None:
-                columns += [("/wrench_estimate", estimates[block, :6]), ("/mass_estimate", estimates[block, 6:])]
+                columns += [("/" + WRENCH_ESTIMATE.name, estimates[block, :6]),
+                            ("/" + MASS_ESTIMATE.name, estimates[block, 6:])]
             stamps = stamps_ns[block]
             for topic, _ in columns:
                 self._register(topic)
@@ -84,9 +75,10 @@ class FlightRecorder:
         """A ``sim_status`` message as the simulator publishes it."""
         from fsr_sim.ros import cdr_pack
 
-        text = json.dumps({"state": state, "reason": reason, "sim_time": stamp_ns * 1e-9, "steps": steps})
-        self._register("/sim_status")
-        self.writer.write_batch([("/sim_status", cdr_pack.string(text))], stamp_ns)
+        text = SimStatus(state, reason, stamp_ns * 1e-9, steps).to_json()
+        topic = "/" + SIM_STATUS.name
+        self._register(topic)
+        self.writer.write_batch([(topic, cdr_pack.string(text))], stamp_ns)
 
     def close(self) -> None:
         """Finish the file."""

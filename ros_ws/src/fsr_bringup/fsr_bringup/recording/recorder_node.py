@@ -5,10 +5,10 @@
 
 Subscribes up front (so nothing published after the simulator's handshake is missed), without
 deserialising (``raw=True``), to ``/clock`` and, under each namespace (default: the node's own, so
-``-r __ns:=/uav1`` works), to ``odom``, ``wrench_truth``, ``rotor_cmd``, ``wrench_cmd``, ``wrench_shortfall``,
-``reference``, ``attitude_cmd``, ``wrench_desired``, ``goal``, ``wrench_estimate``, ``mass_estimate`` and
-``sim_status``. Messages are taken in batches from a wait set (no executor callback per message: a 1 kHz
-lockstep graph publishes ~10 k messages/s) and written in arrival order.
+``-r __ns:=/uav1`` works), to every topic :mod:`fsr_sim.contract` marks as recorded (``odom``, ``rotor_cmd``,
+..., ``sim_status``), each with the contract's QoS and a deep queue. Messages are taken in batches from a
+wait set (no executor callback per message: a 1 kHz lockstep graph publishes ~10 k messages/s) and written
+in arrival order.
 
 Times: ``log_time`` is the simulated time of the message: its header stamp (``/clock``: the clock value;
 ``sim_status``: its ``sim_time``); messages without a stamp (``mass_estimate``) get the latest simulated
@@ -25,8 +25,8 @@ exit 0. A path that cannot be written: one line naming it and the reason, exit 1
 
 Draining at shutdown: once a namespace's simulator has ended (final ``sim_status``: ``finished``,
 ``diverged`` or ``stopped``, whose ``sim_time`` is the stamp ``t_K`` of its last state), the recorder knows
-what to expect: every stamped stream of that namespace that has started (``odom``, ``wrench_truth``,
-``rotor_cmd``, ``wrench_cmd``, ``reference``, ``wrench_estimate``) up to ``t_K``. It keeps taking until
+what to expect: every per-step stamped stream of that namespace that has started
+(:func:`fsr_sim.contract.stamped_streams`) up to ``t_K``. It keeps taking until
 each has (in-order reliable streams: the last stamp reached means nothing before it is missing), at most
 ``DRAIN_STALL_S`` without a message or ``DRAIN_FINAL_MAX_S`` in all, and names a stream that falls short.
 Without a final status (the flight still runs) it stops after ``DRAIN_QUIET_S`` without a message
@@ -40,14 +40,22 @@ graph has gone quiet (:class:`fsr_sim.ros.flight_end.FlightEndRule`).
 from __future__ import annotations
 
 import argparse
-import json
 import struct
 import sys
 import time
 from pathlib import Path
 
 from fsr_sim.cli.arguments import ArgumentParser
-from fsr_sim.recording.topics import CLOCK_TOPIC, FLIGHT_TOPICS
+from fsr_sim.contract import (
+    BY_NAME,
+    CLOCK,
+    SIM_STATUS,
+    STAMP_TOLERANCE_NS,
+    SimStatus,
+    recorded_topics,
+    stamped_streams,
+    topic_named,
+)
 from fsr_sim.recording.writer import RecordingWriter
 from fsr_sim.ros.runtime import (
     EXIT_CONFIG_ERROR,
@@ -58,8 +66,7 @@ from fsr_sim.ros.runtime import (
     signal_deadline,
 )
 
-STANDARD_TOPICS = FLIGHT_TOPICS
-STATUS_TYPE = "std_msgs/msg/String"
+STANDARD_TOPICS = recorded_topics()
 CHUNK_SIZE = 64 * 1024  # bytes: ~70 ms of a 1 kHz graph per chunk
 FLUSH_PERIOD = 0.5  # s of wall time between flushes: at most this much is lost to a SIGKILL
 BATCH_GATHER_S = 0.01  # s between batches while messages flow (~100 steps of a 1 kHz graph per batch)
@@ -68,8 +75,7 @@ DRAIN_QUIET_S = 0.2  # at shutdown, stop taking after this long without a messag
 DRAIN_MAX_S = 1.0
 DRAIN_STALL_S = 2.0  # with a final sim_status: give up on a stream after this long without a message
 DRAIN_FINAL_MAX_S = 15.0
-DRAINED_TOPICS = ("odom", "wrench_truth", "rotor_cmd", "wrench_cmd", "reference", "wrench_estimate")
-STAMP_TOLERANCE_NS = 1000  # sim_time is a float of seconds
+DRAINED_TOPICS = stamped_streams()
 SIGNAL_DRAIN_S = 0.8  # s after SIGINT/SIGTERM: stop taking then, whatever is still arriving
 _STAMP = struct.Struct("<iI")
 
@@ -100,7 +106,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 def topic_list(namespaces: list[str], extra: list[str]) -> list[tuple[str, str]]:
     """(topic name, type) to subscribe to; relative names are resolved by the node (its namespace)."""
     prefixes = ["/" + ns.strip("/") + "/" if ns.strip("/") else "/" for ns in namespaces] or [""]
-    topics: dict[str, str] = {CLOCK_TOPIC[0]: CLOCK_TOPIC[1]}
+    topics: dict[str, str] = {CLOCK.name: CLOCK.type}
     extras: list[tuple[str, str]] = []
     for item in extra:
         name, sep, type_name = item.rpartition(":")
@@ -134,10 +140,10 @@ def status_time_ns(data: bytes) -> int | None:
     """``sim_time`` [ns] of a ``sim_status`` message (std_msgs/String CDR: uint32 length, then JSON text)."""
     try:
         (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
-        status = json.loads(data[8 : 8 + length].rstrip(b"\0"))
-        return int(round(float(status["sim_time"]) * 1e9))
-    except (ValueError, KeyError, TypeError, IndexError, struct.error):
+    except (IndexError, struct.error):
         return None
+    status = SimStatus.from_json(data[8 : 8 + length].rstrip(b"\0"))
+    return None if status is None else status.stamp_ns
 
 
 def status_text(data: bytes) -> str | None:
@@ -164,19 +170,19 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
 
     from fsr_sim.ros.flight_end import FlightEndRule
     from fsr_sim.ros.message_schema import message_class
-    from fsr_sim.ros.qos import CLOCK_QOS, GOAL_QOS, LATCHED_QOS, STREAM_DEPTH, STREAM_QOS
+    from fsr_sim.ros.qos import STREAM_DEPTH, STREAM_QOS, qos_of
     from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
-    # The recorder needs every sample, so its reader queues are deep whatever the publisher's depth;
-    # reliability and durability stay those of fsr_sim.ros.qos so that the QoS matches.
-    clock_qos = QoSProfile(
-        reliability=CLOCK_QOS.reliability, durability=CLOCK_QOS.durability, history=CLOCK_QOS.history,
-        depth=STREAM_DEPTH,
-    )
-    status_qos = QoSProfile(
-        reliability=LATCHED_QOS.reliability, durability=LATCHED_QOS.durability, history=LATCHED_QOS.history,
-        depth=100,
-    )
+    def reader_qos(name: str, type_name: str) -> QoSProfile:
+        """The contract's QoS of a topic (a ``--topic`` outside it: a stream's), with a deep queue whatever the
+        publisher's depth (the recorder needs every sample); reliability and durability match the publisher's."""
+        topic = topic_named(name)
+        profile = qos_of(topic) if topic is not None and topic.type == type_name else STREAM_QOS
+        return QoSProfile(reliability=profile.reliability, durability=profile.durability, history=profile.history,
+                          depth=max(profile.depth, STREAM_DEPTH))
+
+    def is_status(name: str, type_name: str) -> bool:
+        return name.rsplit("/", 1)[-1] == SIM_STATUS.name and type_name == SIM_STATUS.type
 
     class Recorder(Node):
         """Subscriptions drained from one wait set into the MCAP writer."""
@@ -195,17 +201,12 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
             self.drained: dict[str, str] = {}  # topic -> namespace, for the streams awaited at shutdown
             for name, type_name in topics:
                 cls = message_class(type_name)
-                qos = clock_qos if name == CLOCK_TOPIC[0] else STREAM_QOS
-                if name.rsplit("/", 1)[-1] == "goal":
-                    qos = GOAL_QOS
-                if type_name == STATUS_TYPE and name.rsplit("/", 1)[-1] == "sim_status":
-                    qos = status_qos
-                sub = self.create_subscription(cls, name, lambda *_: None, qos, raw=True)
+                sub = self.create_subscription(cls, name, lambda *_: None, reader_qos(name, type_name), raw=True)
                 topic = sub.topic_name
                 writer.add_topic(topic, type_name)
-                self.entries.append((sub, topic, starts_with_stamp(cls), name.endswith("sim_status")))
+                self.entries.append((sub, topic, starts_with_stamp(cls), is_status(name, type_name)))
                 namespace, _, base = topic.rpartition("/")
-                if base in DRAINED_TOPICS and type_name == STANDARD_TOPICS[base]:
+                if base in DRAINED_TOPICS and type_name == BY_NAME[base].type:
                     self.drained[topic] = namespace
             self.wait_set = SubscriptionWaitSet(self, [entry[0] for entry in self.entries])
             status_topics = [topic for _sub, topic, _stamped, status in self.entries if status]

@@ -28,13 +28,17 @@ from pathlib import Path
 
 from fsr_bringup.runner.domains import DomainLease
 from fsr_bringup.runner.processes import NodeProcess, ProcessGroup, describe_exit, executable
-from fsr_sim.ros.runtime import (
+from fsr_sim.contract import (
+    DIVERGED,
     EXIT_DIVERGED,
     EXIT_FAILURE,
     EXIT_INTERRUPTED,
-    TEARDOWN_HUNG_SIGNAL,
-    configure_environment,
+    EXIT_OK,
+    FINISHED,
+    STOPPED,
+    SimStatus,
 )
+from fsr_sim.ros.runtime import TEARDOWN_HUNG_SIGNAL, configure_environment
 
 EXIT_NODE_FAILED = EXIT_FAILURE
 TEARDOWN_HUNG = -TEARDOWN_HUNG_SIGNAL  # returncode of a node that its watchdog ended after its work was done
@@ -199,7 +203,7 @@ def fly_graph(
     start = time.monotonic()
     failures: list[str] = []
     notes: list[str] = []
-    remote_end: dict[str, dict] | None = None
+    remote_end: dict[str, SimStatus] | None = None
     try:
         for name, command in commands:
             if name in local:
@@ -259,22 +263,22 @@ def fly_graph(
             notes.append(teardown_hung_note(recorder))  # the file was closed before the teardown
         else:
             failures.append(f"recorder failed while closing the file ({describe_exit(recorder.returncode)})")
-    exit_code = EXIT_NODE_FAILED if failures else 0
+    exit_code = EXIT_NODE_FAILED if failures else EXIT_OK
     for namespace, status in (remote_end or {}).items():  # the simulators ran on another host
         where = f"{namespace}/simulator" if namespace else "simulator"
-        sim_time = max(sim_time, float(status.get("sim_time", 0.0)))
-        if status.get("state") == "diverged":
-            failures.append(f"{where} (remote): the flight diverged: {status.get('reason', '')}")
+        sim_time = max(sim_time, float(status.sim_time))
+        if status.state == DIVERGED:
+            failures.append(f"{where} (remote): the flight diverged: {status.reason}")
             exit_code = EXIT_DIVERGED
-        elif status.get("state") == "stopped":
-            failures.append(f"{where} (remote) stopped: {status.get('reason', '')}")
+        elif status.state == STOPPED:
+            failures.append(f"{where} (remote) stopped: {status.reason}")
             exit_code = exit_code if exit_code == EXIT_DIVERGED else EXIT_NODE_FAILED
     for name, namespace in simulators.items():
         code = group.get(name).returncode
         state = watcher.state(namespace)
-        if code == TEARDOWN_HUNG and state in ("finished", "diverged"):  # its final status was published
+        if code == TEARDOWN_HUNG and state in (FINISHED, DIVERGED):  # its final status was published
             notes.append(teardown_hung_note(group.get(name)))
-            code = EXIT_DIVERGED if state == "diverged" else 0
+            code = EXIT_DIVERGED if state == DIVERGED else EXIT_OK
         if code == EXIT_DIVERGED:
             failures.append(f"{name}: the flight diverged (see {group.get(name).log_path} for the reason)")
             exit_code = EXIT_DIVERGED

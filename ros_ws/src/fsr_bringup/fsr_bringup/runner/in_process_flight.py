@@ -23,10 +23,11 @@ from fsr_control.core import controller as control_layout
 from fsr_control.core.flatness import ATTITUDE_ERRORS
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
+from fsr_sim.contract import DIVERGED, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK, FINISHED, RUNNING, STOPPED
 from fsr_sim.core.odometry import ODOM_QUATERNION, PUBLISHED_SIZE, TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.model.plant import divergence_reason
 from fsr_sim.model.so3 import rotations_from_quaternions
-from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_INTERRUPTED, process_age
+from fsr_sim.ros.runtime import process_age
 
 CHUNK_STEPS = 1000  # steps per call of the compiled loop (signals and the recording are handled in between)
 
@@ -81,7 +82,7 @@ class FlightRun:
     mass_estimate: np.ndarray | None
     saturation: dict[str, Any]
     tilt_saturation: dict[str, Any]
-    end_reason: str  # "finished" | "diverged"
+    end_reason: str  # the final sim_status state: finished, diverged or stopped (fsr_sim.contract)
     reason: str
     wall_time: float
     rotation_commanded: np.ndarray | None = None
@@ -101,7 +102,7 @@ class FlightRun:
     def exit_code(self) -> int:
         if self.interrupted:
             return EXIT_INTERRUPTED
-        return EXIT_DIVERGED if self.end_reason == "diverged" else 0
+        return EXIT_DIVERGED if self.end_reason == DIVERGED else EXIT_OK
 
     @property
     def real_time_factor(self) -> float:
@@ -187,7 +188,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         from fsr_bringup.recording.flight_recording import FlightRecorder
 
         recorder = FlightRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.is_tilting)
-    end_reason, reason, interrupted = "finished", f"reached the scenario duration {sim.duration:g} s", False
+    end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
     startup = process_age()
@@ -195,7 +196,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     count = 0  # steps flown and recorded (rows 0..count-1)
     try:
         if recorder is not None:
-            recorder.status(0, "running", "", 0)
+            recorder.status(0, RUNNING, "", 0)
         outcome = flight_loop.GOING_ON
         while outcome == flight_loop.GOING_ON:
             signal_name = stop() if stop is not None else None
@@ -212,12 +213,12 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
                                      control[count:flown], estimates[count:flown] if estimation.enabled else None)
             count = flown
             if outcome == flight_loop.DIVERGED:
-                end_reason, reason = "diverged", divergence_reason(detail, plant.params, plant.core_state)
+                end_reason, reason = DIVERGED, divergence_reason(detail, plant.params, plant.core_state)
             elif outcome == flight_loop.CONTROLLER_FAILED:
-                end_reason, reason = "diverged", f"no command at t = {k * period_ns * 1e-9:.4f} s: " \
-                                                 f"{ATTITUDE_ERRORS[detail]}"
+                end_reason, reason = DIVERGED, f"no command at t = {k * period_ns * 1e-9:.4f} s: " \
+                                               f"{ATTITUDE_ERRORS[detail]}"
     except KeyboardInterrupt as stopped:  # Ctrl-C (fsr-fly also turns SIGTERM into one)
-        end_reason, reason, interrupted = "stopped", f"received {getattr(stopped, 'signal_name', 'SIGINT')}", True
+        end_reason, reason, interrupted = STOPPED, f"received {getattr(stopped, 'signal_name', 'SIGINT')}", True
     finally:
         if recorder is not None:
             try:
@@ -243,7 +244,7 @@ def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, co
     def columns(at: int, width: int = 3) -> np.ndarray:
         return control[:, at:at + width].copy()
 
-    failures = {"diverged": [f"flight diverged: {reason}"], "stopped": [f"flight interrupted ({reason})"]}
+    failures = {DIVERGED: [f"flight diverged: {reason}"], STOPPED: [f"flight interrupted ({reason})"]}
     c = control_layout
     return FlightRun(
         time=np.arange(count, dtype=np.int64) * period_ns * 1e-9, state=state,

@@ -12,7 +12,7 @@ import json
 import sys
 import threading
 
-from fsr_sim.ros.flight_end import FINAL_STATES
+from fsr_sim.contract import SimStatus
 
 WATCHER_PROCESS = "flight_watcher"  # its name among the run's processes (log: <logs>/flight_watcher.log)
 
@@ -33,7 +33,7 @@ class FlightWatcher:
         self.sim_time = 0.0
         self.first: tuple[float, float] | None = None  # (wall monotonic [s], sim time [s]) of the first progress
         self.last: tuple[float, float] | None = None
-        self.statuses: dict[str, dict] = {}
+        self.statuses: dict[str, SimStatus | None] = {}  # None: a message that was not a status
         self.node_paths: set[str] | None = None  # None until the first list arrived
         self.lock = threading.Lock()
         self.changed = threading.Event()
@@ -57,8 +57,7 @@ class FlightWatcher:
                         self.first = (now, sim_time)
                     self.last = (now, sim_time)
                 elif "status" in event:
-                    value = event.get("value")
-                    self.statuses[str(event["status"])] = value if isinstance(value, dict) else {}
+                    self.statuses[str(event["status"])] = SimStatus.from_dict(event.get("value"))
                 elif "nodes" in event:
                     self.node_paths = {str(path) for path in event["nodes"]}
                 else:
@@ -81,17 +80,17 @@ class FlightWatcher:
                 return float("nan")
             return (self.last[1] - self.first[1]) / (self.last[0] - self.first[0])
 
-    def final_statuses(self) -> dict[str, dict] | None:
+    def final_statuses(self) -> dict[str, SimStatus] | None:
         """Every vehicle's final ``sim_status`` once all of them ended, else None."""
         with self.lock:
-            if all(self.statuses.get(ns, {}).get("state") in FINAL_STATES for ns in self.namespaces):
-                return {ns: self.statuses[ns] for ns in self.namespaces}
-            return None
+            finals = {ns: self.statuses.get(ns) for ns in self.namespaces}
+            return finals if all(status is not None and status.final for status in finals.values()) else None
 
     def state(self, namespace: str) -> str | None:
         """The ``state`` of the vehicle's last ``sim_status`` (None before the first)."""
         with self.lock:
-            return self.statuses.get(namespace, {}).get("state")
+            status = self.statuses.get(namespace)
+            return None if status is None else status.state
 
     def started(self) -> bool:
         """True once every simulator reported a status (``running`` or a final one)."""

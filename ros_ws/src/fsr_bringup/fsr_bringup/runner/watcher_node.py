@@ -29,7 +29,7 @@ import json
 import sys
 import time
 
-from fsr_sim.ros.flight_end import parse_status
+from fsr_sim.contract import SIM_PROGRESS, SIM_STATUS, SimStatus, resolve
 
 NODE_NAME = "fsr_fly_watcher"
 NODE_LIST_PERIOD = 1.0  # s between two lists of the graph's nodes
@@ -54,28 +54,26 @@ def emit(event: dict) -> None:
 def make_watcher(namespaces: list[str]) -> object:
     """The watcher node (rclpy is imported only here, after run_node configured the environment)."""
     from rclpy.node import Node
-    from rosgraph_msgs.msg import Clock
-    from std_msgs.msg import String
 
-    from fsr_sim.ros.qos import LATCHED_QOS, PROGRESS_QOS
+    from fsr_sim.ros.message_schema import message_class
+    from fsr_sim.ros.qos import qos_of
 
     class FlightWatcherNode(Node):
         def __init__(self) -> None:
             super().__init__(NODE_NAME, start_parameter_services=False)
-            first = namespaces[0].strip("/")
-            self.create_subscription(Clock, f"/{first}/sim_progress" if first else "/sim_progress",
-                                     self._on_progress, PROGRESS_QOS)
+            self.create_subscription(message_class(SIM_PROGRESS.type), resolve(SIM_PROGRESS.name, namespaces[0]),
+                                     self._on_progress, qos_of(SIM_PROGRESS))
             for namespace in namespaces:
-                topic = f"{namespace.rstrip('/')}/sim_status" if namespace else "/sim_status"
-                self.create_subscription(String, topic, lambda msg, ns=namespace: self._on_status(ns, msg.data),
-                                         LATCHED_QOS)
+                self.create_subscription(message_class(SIM_STATUS.type), resolve(SIM_STATUS.name, namespace),
+                                         lambda msg, ns=namespace: self._on_status(ns, msg.data), qos_of(SIM_STATUS))
             self.create_timer(NODE_LIST_PERIOD, self._list_nodes)
 
-        def _on_progress(self, msg: Clock) -> None:
+        def _on_progress(self, msg: object) -> None:  # rosgraph_msgs/Clock
             emit({"progress": msg.clock.sec + msg.clock.nanosec * 1e-9, "at": time.monotonic()})
 
         def _on_status(self, namespace: str, data: str) -> None:
-            emit({"status": namespace, "value": parse_status(data)})
+            status = SimStatus.from_json(data)
+            emit({"status": namespace, "value": None if status is None else status.as_dict()})
 
         def _list_nodes(self) -> None:
             emit({"nodes": [f"{ns.rstrip('/')}/{name}" for name, ns in self.get_node_names_and_namespaces()]})

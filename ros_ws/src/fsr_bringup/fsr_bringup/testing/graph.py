@@ -20,7 +20,6 @@ Only processes started through :meth:`GraphHarness.start` are ever signalled or 
 from __future__ import annotations
 
 import copy
-import json
 import os
 import signal
 import subprocess
@@ -34,7 +33,7 @@ import yaml
 
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
 from fsr_bringup.runner.processes import _die_with_parent
-from fsr_sim.ros.flight_end import FINAL_STATES
+from fsr_sim.contract import ODOM, SIM_STATUS, SimStatus
 from fsr_sim.ros.runtime import configure_environment
 
 # A small scenario to start from: the exercise-4 quadrotor hovering 10 m up, no ground, 0.5 s.
@@ -97,13 +96,13 @@ class Flight:
     """What :meth:`GraphHarness.run_controller` saw: every odom (in order), the statuses, the exit code."""
 
     odoms: list[Any]
-    statuses: list[dict[str, Any]]
+    statuses: list[SimStatus | None]  # None: a message that is not a status
     exit_code: int | None
     log: str
 
     @property
-    def final_status(self) -> dict[str, Any] | None:
-        finals = [s for s in self.statuses if s.get("state") in FINAL_STATES]
+    def final_status(self) -> SimStatus | None:
+        finals = [s for s in self.statuses if s is not None and s.final]
         return finals[-1] if finals else None
 
     def odom_stamps_ns(self) -> list[int]:
@@ -254,8 +253,8 @@ class GraphHarness:
         process: subprocess.Popen,
         answer: Callable[[Any], Any],
         command_publisher: Any,
-        odom_topic: str = "odom",
-        status_topic: str = "sim_status",
+        odom_topic: str = ODOM.name,
+        status_topic: str = SIM_STATUS.name,
         timeout: float = 20.0,
     ) -> Flight:
         """Act as the lockstep controller of a simulator process until it exits.
@@ -265,10 +264,8 @@ class GraphHarness:
         the simulator starts its handshake (create ``command_publisher`` before calling this; the odom
         subscription is created here at once). Returns every odom and status seen and the exit code.
         """
-        from nav_msgs.msg import Odometry
-        from std_msgs.msg import String
-
-        from fsr_sim.ros.qos import LATCHED_QOS
+        from fsr_sim.ros.message_schema import message_class
+        from fsr_sim.ros.qos import qos_of
 
         def respond(odom: Any) -> None:
             reply = answer(odom)
@@ -277,8 +274,8 @@ class GraphHarness:
             for msg in reply if isinstance(reply, (list, tuple)) else (reply,):
                 command_publisher.publish(msg)
 
-        odoms = self.subscribe(odom_topic, Odometry, callback=respond)
-        statuses = self.subscribe(status_topic, String, LATCHED_QOS)
+        odoms = self.subscribe(odom_topic, message_class(ODOM.type), callback=respond)
+        statuses = self.subscribe(status_topic, message_class(SIM_STATUS.type), qos_of(SIM_STATUS))
         try:
             deadline = time.monotonic() + timeout
             while process.poll() is None and time.monotonic() < deadline:
@@ -288,7 +285,7 @@ class GraphHarness:
             self._drain(lambda: len(odoms) + len(statuses))
             return Flight(
                 odoms=list(odoms.messages),
-                statuses=[json.loads(m.data) for m in statuses.messages],
+                statuses=[SimStatus.from_json(m.data) for m in statuses.messages],
                 exit_code=process.returncode,
                 log=self.log(process),
             )

@@ -28,12 +28,8 @@ import copy
 import sys
 import time
 
-from geometry_msgs.msg import PoseStamped, QuaternionStamped, WrenchStamped
-from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
-from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from fsr_control.config.controller_config import controller_config
 from fsr_control.flight_controller import FlightController, seconds_from_ns
@@ -41,10 +37,11 @@ from fsr_control.nodes.messages import goal_from_message
 from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
+from fsr_sim.contract import BY_NAME, GOAL, ODOM
 from fsr_sim.model.allocation import WRENCH_AXES
 from fsr_sim.ros.conversions import odometry_state_from_bytes
+from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.flight_end import FlightEnd
-from fsr_sim.ros.qos import GOAL_QOS, STREAM_QOS
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GAIN_PARAMETERS = ("k_p", "k_v", "k_d", "k_r", "k_w")
@@ -97,18 +94,10 @@ class ControllerNode(Node):
             0.0, sim.initial.position, sim.initial.rotation, sim.initial.velocity, sim.initial.angular_velocity)
         self.rotors = sim.actuation == "rotors"
         self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.is_tilting)
-        self.publishers_by_topic = {
-            "wrench_cmd": self.create_publisher(WrenchStamped, "wrench_cmd", STREAM_QOS),
-            "reference": self.create_publisher(MultiDOFJointTrajectory, "reference", STREAM_QOS),
-            "wrench_shortfall": self.create_publisher(WrenchStamped, "wrench_shortfall", STREAM_QOS),
-            "attitude_cmd": self.create_publisher(QuaternionStamped, "attitude_cmd", STREAM_QOS),
-            "wrench_desired": self.create_publisher(WrenchStamped, "wrench_desired", STREAM_QOS),
-        }
-        if self.rotors:
-            self.publishers_by_topic["rotor_cmd"] = self.create_publisher(JointState, "rotor_cmd", STREAM_QOS)
-        odom = self.create_subscription(Odometry, "odom", self.on_odom, STREAM_QOS, raw=True)
+        self.publishers_by_topic = {name: publisher(self, BY_NAME[name]) for name in self.packets.templates}
+        odom = subscription(self, ODOM, self.on_odom, raw=True)
         self.hot_subscriptions = [(odom, self.on_odom)]
-        self.create_subscription(PoseStamped, "goal", self.on_goal, GOAL_QOS)
+        subscription(self, GOAL, self.on_goal)
         self.flight_end = FlightEnd(self, exit_on_finish)
         self.stop_flag: object = None  # run_node's StopFlag: bounds the drain after a signal
         self.answered_ns: int | None = None  # stamp of the last odom handled
@@ -147,7 +136,7 @@ class ControllerNode(Node):
         self.callback_seconds += time.perf_counter() - start
         self.callbacks += 1
 
-    def on_goal(self, msg: PoseStamped) -> None:
+    def on_goal(self, msg: object) -> None:  # geometry_msgs/PoseStamped
         try:
             position, rotation = goal_from_message(msg)
             self.controller.set_goal(position, rotation)

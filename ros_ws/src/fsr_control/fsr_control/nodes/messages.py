@@ -27,16 +27,25 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectory
 
 from fsr_control.flight_controller import ControlOutput
 from fsr_control.planning.trajectory import Reference
+from fsr_sim.contract import (
+    ATTITUDE_CMD,
+    GOAL,
+    REFERENCE,
+    ROTOR_CMD,
+    WRENCH_CMD,
+    WRENCH_DESIRED,
+    WRENCH_SHORTFALL,
+)
 from fsr_sim.model.so3 import quaternion_from_rotation, rotation_from_quaternion
-from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME, rotor_command, time_from_ns, wrench_stamped
+from fsr_sim.ros.conversions import rotor_command, time_from_ns, wrench_stamped
 
 
 def reference_message(stamp_ns: int, reference: Reference) -> MultiDOFJointTrajectory:
     """The one-point trajectory message of a :class:`Reference` (see the module docstring)."""
     msg = MultiDOFJointTrajectory()
     msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = WORLD_FRAME
-    msg.joint_names = [BODY_FRAME]
+    msg.header.frame_id = REFERENCE.frame
+    msg.joint_names = [REFERENCE.child_frame]
     transform = Transform()
     transform.translation.x, transform.translation.y, transform.translation.z = reference.position.tolist()
     q = quaternion_from_rotation(reference.rotation).tolist()
@@ -63,13 +72,13 @@ def controller_messages(stamp_ns: int, output: ControlOutput, rotors: bool) -> l
     flight writes them."""
     messages: list[tuple[str, Any]] = []
     if rotors:
-        messages.append(("rotor_cmd", rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles)))
-    messages.append(("wrench_cmd", wrench_stamped(stamp_ns, output.force_body, output.torque_body)))
+        messages.append((ROTOR_CMD.name, rotor_command(stamp_ns, output.rotor_speeds, output.tilt_angles)))
+    messages.append((WRENCH_CMD.name, wrench_stamped(stamp_ns, output.force_body, output.torque_body)))
     if output.shortfall is not None:
-        messages.append(("wrench_shortfall", wrench_stamped(stamp_ns, output.shortfall[:3], output.shortfall[3:])))
-    messages.append(("reference", reference_message(stamp_ns, output.reference)))
-    messages.append(("attitude_cmd", attitude_command_message(stamp_ns, output.rotation_cmd)))
-    messages.append(("wrench_desired", wrench_stamped(stamp_ns, output.force_desired, output.torque_desired)))
+        messages.append((WRENCH_SHORTFALL.name, wrench_stamped(stamp_ns, output.shortfall[:3], output.shortfall[3:])))
+    messages.append((REFERENCE.name, reference_message(stamp_ns, output.reference)))
+    messages.append((ATTITUDE_CMD.name, attitude_command_message(stamp_ns, output.rotation_cmd)))
+    messages.append((WRENCH_DESIRED.name, wrench_stamped(stamp_ns, output.force_desired, output.torque_desired)))
     return messages
 
 
@@ -77,7 +86,7 @@ def attitude_command_message(stamp_ns: int, rotation: np.ndarray) -> QuaternionS
     """``attitude_cmd``: the commanded attitude ``R_c`` (body FRD -> world NED) as a unit quaternion, ``w >= 0``."""
     msg = QuaternionStamped()
     msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = WORLD_FRAME
+    msg.header.frame_id = ATTITUDE_CMD.frame
     x, y, z, w = quaternion_from_rotation(np.asarray(rotation, dtype=float)).tolist()
     if w < 0.0:
         x, y, z, w = -x, -y, -z, -w
@@ -95,12 +104,13 @@ def goal_from_message(msg: PoseStamped) -> tuple[np.ndarray, np.ndarray]:
         holds NaN/inf, or the orientation is a zero quaternion.
     """
     frame = msg.header.frame_id
-    if frame not in ("", WORLD_FRAME):
-        raise ValueError(f"goal frame_id is {frame!r}, expected {WORLD_FRAME!r} (or empty); no transform is applied")
+    if frame not in ("", GOAL.frame):
+        raise ValueError(f"{GOAL.name} frame_id is {frame!r}, expected {GOAL.frame!r} (or empty); no transform is "
+                         "applied")
     p, o = msg.pose.position, msg.pose.orientation
     values = (p.x, p.y, p.z, o.x, o.y, o.z, o.w)
     if not all(math.isfinite(v) for v in values):
-        raise ValueError("goal holds NaN or inf")
+        raise ValueError(f"{GOAL.name} holds NaN or inf")
     if o.x * o.x + o.y * o.y + o.z * o.z + o.w * o.w < 1e-12:
-        raise ValueError("goal orientation is a zero quaternion")
+        raise ValueError(f"{GOAL.name} orientation is a zero quaternion")
     return np.array((p.x, p.y, p.z)), rotation_from_quaternion((o.x, o.y, o.z, o.w))

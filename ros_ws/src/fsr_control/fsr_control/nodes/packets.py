@@ -13,10 +13,16 @@ from __future__ import annotations
 import numpy as np
 
 from fsr_control.core import controller as core
+from fsr_sim.contract import (
+    ATTITUDE_CMD,
+    REFERENCE,
+    ROTOR_CMD,
+    WRENCH_CMD,
+    WRENCH_DESIRED,
+    WRENCH_SHORTFALL,
+    joint_names,
+)
 from fsr_sim.ros import cdr_pack
-
-WORLD_FRAME = "world_ned"
-BODY_FRAME = "base_link_frd"
 
 
 class ControllerPackets:
@@ -28,19 +34,15 @@ class ControllerPackets:
         self.rotors = rotors
         self.rotor_count = rotor_count
         self.tilting = tilting
-        names = [f"rotor_{i + 1}" for i in range(rotor_count)]
-        if tilting:
-            names += [f"tilt_{i + 1}" for i in range(rotor_count)]
+        names = joint_names(rotor_count, tilting)
         count = len(names)
-        self._rotor = cdr_pack.joint_state(BODY_FRAME, names, count, count) if rotors else None
-        self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
-        self._reference = cdr_pack.trajectory_point(WORLD_FRAME, BODY_FRAME)
-        self._attitude = cdr_pack.quaternion_stamped(WORLD_FRAME)
         self.templates: dict[str, cdr_pack.StampedDoubles] = {  # topic (relative) -> its payload's template
-            "wrench_cmd": self._wrench, "wrench_shortfall": self._wrench, "reference": self._reference,
-            "attitude_cmd": self._attitude, "wrench_desired": self._wrench}
-        if self._rotor is not None:
-            self.templates["rotor_cmd"] = self._rotor
+            topic.name: cdr_pack.wrench_stamped(topic.frame)
+            for topic in (WRENCH_CMD, WRENCH_SHORTFALL, WRENCH_DESIRED)}
+        self.templates[REFERENCE.name] = cdr_pack.trajectory_point(REFERENCE.frame, REFERENCE.child_frame)
+        self.templates[ATTITUDE_CMD.name] = cdr_pack.quaternion_stamped(ATTITUDE_CMD.frame)
+        if rotors:
+            self.templates[ROTOR_CMD.name] = cdr_pack.joint_state(ROTOR_CMD.frame, names, count, count)
 
     def pack(self, stamp_ns: int, row: np.ndarray) -> list[tuple[str, bytes]]:
         """Everything the controller publishes for the state stamped ``stamp_ns`` [ns], in publication order."""
@@ -57,13 +59,13 @@ class ControllerPackets:
             zeros = np.zeros_like(speeds)
             if self.tilting:
                 tilts = rows[..., core.ROTOR_SPEEDS + n:core.ROTOR_SPEEDS + 2 * n]
-                published.append(("rotor_cmd", np.concatenate((zeros, tilts, speeds, zeros), axis=-1)))
+                published.append((ROTOR_CMD.name, np.concatenate((zeros, tilts, speeds, zeros), axis=-1)))
             else:
-                published.append(("rotor_cmd", np.concatenate((zeros, speeds), axis=-1)))
-        published.append(("wrench_cmd", rows[..., core.FORCE:core.FORCE + 6]))
-        published.append(("wrench_shortfall", rows[..., core.SHORTFALL:core.SHORTFALL + 6]))
-        published.append(("reference", rows[..., core.REFERENCE_POSITION:
-                                            core.REFERENCE_POSITION + core.REFERENCE_MESSAGE_SIZE]))
-        published.append(("attitude_cmd", rows[..., core.COMMANDED_QUATERNION:core.COMMANDED_QUATERNION + 4]))
-        published.append(("wrench_desired", rows[..., core.DESIRED_FORCE:core.DESIRED_FORCE + 6]))
+                published.append((ROTOR_CMD.name, np.concatenate((zeros, speeds), axis=-1)))
+        published.append((WRENCH_CMD.name, rows[..., core.FORCE:core.FORCE + 6]))
+        published.append((WRENCH_SHORTFALL.name, rows[..., core.SHORTFALL:core.SHORTFALL + 6]))
+        published.append((REFERENCE.name, rows[..., core.REFERENCE_POSITION:
+                                               core.REFERENCE_POSITION + core.REFERENCE_MESSAGE_SIZE]))
+        published.append((ATTITUDE_CMD.name, rows[..., core.COMMANDED_QUATERNION:core.COMMANDED_QUATERNION + 4]))
+        published.append((WRENCH_DESIRED.name, rows[..., core.DESIRED_FORCE:core.DESIRED_FORCE + 6]))
         return published

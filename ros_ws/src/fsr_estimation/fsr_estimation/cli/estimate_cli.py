@@ -21,8 +21,8 @@ import numpy as np
 from fsr_estimation.core.metrics import CHANNELS, SETTLING_DEFINITIONS, SweepResult, sweep
 from fsr_estimation.core.observer import ObserverModel
 from fsr_estimation.io.flight_log import CSV_COLUMNS_HELP, FlightLog, FlightLogError, load_flight_log
+from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 
-EXIT_USAGE = 2
 CHANNEL_LABELS = {"fx": "f_x", "fy": "f_y", "fz": "f_z", "tx": "tau_x", "ty": "tau_y", "tz": "tau_z"}
 
 DESCRIPTION = """\
@@ -206,8 +206,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(run(args), end="")
     except (UsageError, FlightLogError) as error:
         print(f"fsr-estimate: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    return 0
+        return EXIT_CONFIG_ERROR
+    return EXIT_OK
 
 
 if __name__ == "__main__":

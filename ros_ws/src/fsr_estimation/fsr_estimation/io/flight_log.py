@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from fsr_sim.contract import ODOM, WRENCH_CMD, resolve
 from fsr_sim.model.so3 import (
     euler_rate_matrix,
     euler_rates,
@@ -43,8 +44,8 @@ CSV_COLUMNS_HELP = (
     "either thrust [N] (fixed rotors, body force [0, 0, -thrust]) or fx, fy, fz [N] (body FRD force); "
     "tx, ty, tz [N m] (body FRD torque)."
 )
-ODOM_TOPIC = "odom"
-WRENCH_TOPIC = "wrench_cmd"
+ODOM_TOPIC = ODOM.name
+WRENCH_TOPIC = WRENCH_CMD.name
 
 
 class FlightLogError(ValueError):
@@ -280,11 +281,12 @@ def write_mcap(log: FlightLog, path: str | Path, metadata: dict[str, dict[str, s
     info = {"fsr_flight_log": {"source": Path(log.source).name, "samples": str(len(log))}}
     info.update(metadata or {})
     with RecordingWriter(path, metadata=info) as writer:
-        writer.add_topic("/odom", "nav_msgs/msg/Odometry")
-        writer.add_topic("/wrench_cmd", "geometry_msgs/msg/WrenchStamped")
+        odom_topic, wrench_topic = resolve(ODOM.name), resolve(WRENCH_CMD.name)
+        writer.add_topic(odom_topic, ODOM.type)
+        writer.add_topic(wrench_topic, WRENCH_CMD.type)
         for k, stamp in enumerate(stamps):
             stamp = int(stamp)
             odom = odometry_from_state(stamp, position[k], rotation[k], log.velocity_world[k], omega_body[k])
-            writer.write_message("/odom", odom, stamp)
-            writer.write_message("/wrench_cmd", wrench_stamped(stamp, log.force_body[k], log.torque_body[k]), stamp)
+            writer.write_message(odom_topic, odom, stamp)
+            writer.write_message(wrench_topic, wrench_stamped(stamp, log.force_body[k], log.torque_body[k]), stamp)
     return Path(path)

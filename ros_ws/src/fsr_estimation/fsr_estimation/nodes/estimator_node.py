@@ -24,20 +24,19 @@ import sys
 from collections.abc import Callable
 
 import numpy as np
-from geometry_msgs.msg import WrenchStamped
-from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
-from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
+from fsr_sim.contract import MASS_ESTIMATE, ODOM, WRENCH_CMD, WRENCH_ESTIMATE
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import state_from_odometry_bytes
+from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.flight_end import FlightEnd
-from fsr_sim.ros.qos import STREAM_DEPTH, STREAM_QOS
+from fsr_sim.ros.qos import STREAM_DEPTH
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GATHER_S = 0.005  # s between batches of inputs (the streams are 5000 deep)
@@ -64,10 +63,10 @@ class EstimatorNode(Node):
             self.estimator.warm_up()  # before subscribing: the simulator steps only once we are subscribed
         self.estimates_published = 0
         self.packets = EstimatePackets()  # the bytes an in-process recording writes
-        self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_estimate", STREAM_QOS)
-        self.mass_pub = self.create_publisher(Float64, "mass_estimate", STREAM_QOS)
-        odom = self.create_subscription(Odometry, "odom", self._on_odom, STREAM_QOS, raw=True)
-        wrench = self.create_subscription(WrenchStamped, "wrench_cmd", self._on_wrench, STREAM_QOS, raw=True)
+        self.wrench_pub = publisher(self, WRENCH_ESTIMATE)
+        self.mass_pub = publisher(self, MASS_ESTIMATE)
+        odom = subscription(self, ODOM, self._on_odom, raw=True)
+        wrench = subscription(self, WRENCH_CMD, self._on_wrench, raw=True)
         self.hot_subscriptions = [(odom, self._on_odom), (wrench, self._on_wrench)]
         self.hot_gather_s = GATHER_S  # nobody waits for the estimates step by step: take them in batches
         self.create_service(Trigger, "~/reset", self._on_reset)
@@ -117,8 +116,8 @@ class EstimatorNode(Node):
             return
         if estimate is None:
             return
-        for publisher, packet in zip((self.wrench_pub, self.mass_pub), self.packets.pack(estimate), strict=True):
-            publisher.publish(packet)
+        for topic_publisher, packet in zip((self.wrench_pub, self.mass_pub), self.packets.pack(estimate), strict=True):
+            topic_publisher.publish(packet)
         self.estimates_published += 1
 
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:

@@ -5,18 +5,17 @@ writes them): ``wrench_estimate`` (WrenchStamped, ``base_link_frd``, the pair's 
 from __future__ import annotations
 
 from fsr_estimation.core.stamped import Estimate
+from fsr_sim.contract import MASS_ESTIMATE, WRENCH_ESTIMATE
 from fsr_sim.ros import cdr_pack
-
-BODY_FRAME = "base_link_frd"
 
 
 class EstimatePackets:
     """Packs an :class:`Estimate` into the CDR payloads of ``wrench_estimate`` and ``mass_estimate``."""
 
     def __init__(self) -> None:
-        self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
+        self._wrench = cdr_pack.wrench_stamped(WRENCH_ESTIMATE.frame)
         self._mass = cdr_pack.float64()
-        self.templates = {"wrench_estimate": self._wrench, "mass_estimate": self._mass}  # topic -> template
+        self.templates = {WRENCH_ESTIMATE.name: self._wrench, MASS_ESTIMATE.name: self._mass}  # topic -> template
 
     def pack(self, estimate: Estimate) -> tuple[bytes, bytes]:
         wrench, mass = self.values(estimate)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import NoReturn
 
+from fsr_sim.contract import EXIT_CONFIG_ERROR
+
 
 class ArgumentParser(argparse.ArgumentParser):
     """``argparse.ArgumentParser`` whose errors are one line naming the argument, not the full usage.
@@ -15,4 +17,4 @@ class ArgumentParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         one_line = " ".join(message.split())
-        self.exit(2, f"{self.prog}: error: {one_line} (see {self.prog} --help)\n")
+        self.exit(EXIT_CONFIG_ERROR, f"{self.prog}: error: {one_line} (see {self.prog} --help)\n")

@@ -17,6 +17,7 @@ import numpy as np
 
 from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.validation import ConfigError, builtin_names
+from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 from fsr_sim.model.allocation import (
     octocopter_allocation_4x8,
     static_tilting_allocation,
@@ -120,12 +121,12 @@ def main(argv: list[str] | None = None) -> int:
         vehicle = load_vehicle(args.vehicle)
     except ConfigError as error:
         print(f"fsr-vehicle: error: {error}", file=sys.stderr)
-        return 2
+        return EXIT_CONFIG_ERROR
     if args.json:
         print(json.dumps(vehicle_summary(vehicle), indent=2))
     else:
         print(vehicle_markdown(vehicle), end="")
-    return 0
+    return EXIT_OK
 
 
 if __name__ == "__main__":

@@ -1,9 +1,9 @@
 """Decoding and checking the commands the simulator receives (per step, so kept lean).
 
 * ``rotor_cmd`` (sensor_msgs/JointState): ``rotor_i`` velocity [rad/s], ``tilt_i`` position [rad].
-* ``wrench_cmd`` (geometry_msgs/WrenchStamped, body FRD): the plant takes ``u_T = -force.z`` [N] along
-  ``-z_b`` and ``torque`` [N m]; ``force.x``/``force.y`` cannot be produced by the wrench-actuated
-  plant (docs/model.md §3.1) and are ignored.
+* ``wrench_cmd`` (geometry_msgs/WrenchStamped, body FRD): the wrench-actuated plant applies the body force
+  [N] and torque [N m] as they are (docs/model.md §3.1), as the in-process loop does with the controller's
+  wrench; a thrust-only controller sends ``force = [0, 0, -u_T]``.
 
 A command holding NaN/inf (or missing a rotor) raises ``ValueError``; the node drops it with a warning so
 it never reaches the plant. The simulator reads the commands from their CDR bytes (:meth:`RotorCommandReader.
@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from fsr_sim.contract import ROTOR_CMD, WRENCH_CMD, joint_names
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import rotor_command_arrays
 
@@ -25,10 +26,9 @@ class RotorCommandReader:
 
     def __init__(self, rotor_count: int, tilting: bool) -> None:
         self.rotor_count = rotor_count
-        names = [f"rotor_{i + 1}" for i in range(rotor_count)]
-        self._plain_names = names
-        self._tilt_names = names + [f"tilt_{i + 1}" for i in range(rotor_count)] if tilting else None
-        self._plain_reader = cdr_read.JointStateReader(names)
+        self._plain_names = joint_names(rotor_count, tilting=False)
+        self._tilt_names = joint_names(rotor_count, tilting=True) if tilting else None
+        self._plain_reader = cdr_read.JointStateReader(self._plain_names)
         self._tilt_reader = cdr_read.JointStateReader(self._tilt_names) if tilting else None
 
     def read_raw(self, data: bytes) -> tuple[np.ndarray, np.ndarray | None]:
@@ -66,23 +66,23 @@ class RotorCommandReader:
 def _finite(speeds: np.ndarray, tilts: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
     """``(speeds, tilts)`` as they are; ValueError if any value is NaN or inf."""
     if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
-        raise ValueError("rotor_cmd holds NaN or inf")
+        raise ValueError(f"{ROTOR_CMD.name} holds NaN or inf")
     return speeds, tilts
 
 
-def wrench_command(msg: object) -> tuple[float, np.ndarray]:
-    """``WrenchStamped`` (body FRD) -> (thrust ``u_T = -f_z`` [N], torque body [N m]); ValueError if not finite."""
+def wrench_command(msg: object) -> np.ndarray:
+    """``WrenchStamped`` (body FRD) -> body wrench (6,): force [N], torque [N m]; ValueError if not finite."""
     f, t = msg.wrench.force, msg.wrench.torque
-    return _thrust_and_torque((f.x, f.y, f.z, t.x, t.y, t.z))
+    return _finite_wrench((f.x, f.y, f.z, t.x, t.y, t.z))
 
 
-def wrench_command_raw(data: bytes) -> tuple[float, np.ndarray]:
+def wrench_command_raw(data: bytes) -> np.ndarray:
     """:func:`wrench_command` of a message's CDR bytes."""
-    return _thrust_and_torque(cdr_read.wrench_stamped(data)[1])
+    return _finite_wrench(cdr_read.wrench_stamped(data)[1])
 
 
-def _thrust_and_torque(wrench: tuple[float, ...]) -> tuple[float, np.ndarray]:
-    """(``-f_z``, torque) of (force xyz, torque xyz); ValueError if any value is NaN or inf."""
+def _finite_wrench(wrench: tuple[float, ...]) -> np.ndarray:
+    """(force xyz, torque xyz) as an array; ValueError if any value is NaN or inf."""
     if not all(map(math.isfinite, wrench)):
-        raise ValueError("wrench_cmd holds NaN or inf")
-    return -wrench[2], np.array(wrench[3:6])
+        raise ValueError(f"{WRENCH_CMD.name} holds NaN or inf")
+    return np.array(wrench[:6], dtype=float)

@@ -1,9 +1,9 @@
 """Simulator node: steps the plant in lockstep with the controller and publishes the state (docs/model.md §4).
 
-Publishes ``/clock`` (if ``publish_clock``), ``odom`` and ``wrench_truth`` (STREAM_QOS) and ``sim_status``
-(std_msgs/String JSON ``{"state": "running"|"finished"|"diverged"|"stopped", "reason", "sim_time",
-"steps", "failsafe_steps", "incidents", "late_commands", "longest_wait_s"}``, LATCHED_QOS; also published
-when the controller stops answering and when it answers again); subscribes ``rotor_cmd``
+Publishes ``/clock`` (if ``publish_clock``), ``odom``, ``wrench_truth`` and ``sim_status`` (a
+:class:`fsr_sim.contract.SimStatus` as JSON: ``running``, then ``finished``, ``diverged`` or ``stopped``; also
+published when the controller stops answering and when it answers again), each with its QoS of
+:mod:`fsr_sim.contract`; subscribes ``rotor_cmd``
 (sensor_msgs/JointState) or, with ``actuation: wrench``, ``wrench_cmd`` (geometry_msgs/WrenchStamped).
 Parameters: :mod:`fsr_sim.nodes.simulator_params`.
 
@@ -36,7 +36,6 @@ every ``/clock`` message.
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 
@@ -44,10 +43,23 @@ import numpy as np
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.duration import Duration
 from rclpy.node import Node
-from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from fsr_sim.config.scenario import plant_from_config
+from fsr_sim.contract import (
+    CLOCK,
+    DIVERGED,
+    FINISHED,
+    ODOM,
+    ROTOR_CMD,
+    RUNNING,
+    SIM_PROGRESS,
+    SIM_STATUS,
+    STOPPED,
+    WRENCH_CMD,
+    WRENCH_TRUTH,
+    SimStatus,
+)
 from fsr_sim.core import lockstep
 from fsr_sim.core.odometry import PUBLISHED_SIZE
 from fsr_sim.core.plant import RUNNING as PLANT_RUNNING
@@ -64,7 +76,7 @@ from fsr_sim.nodes.lockstep import (
 from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
 from fsr_sim.nodes.state_packets import StatePackets
 from fsr_sim.ros import cdr_read
-from fsr_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, PROGRESS_QOS, STREAM_QOS
+from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node, signal_deadline
 from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
@@ -76,7 +88,7 @@ ACK_TIMEOUT = 2.0  # s: bound on waiting for subscribers to acknowledge the last
 ACK_SLICE = 0.05  # s per wait_for_all_acked call
 SIGNAL_ACK_LIMIT = 1.0  # s after SIGINT/SIGTERM: the same bound when stopped by a signal
 
-HANDSHAKE, FIRST_COMMAND, RUNNING, DONE = "handshake", "first_command", "running", "done"
+HANDSHAKE, FIRST_COMMAND, STEPPING, DONE = "handshake", "first_command", "stepping", "done"  # the node's phases
 
 
 class SimulatorNode(Node):
@@ -94,18 +106,14 @@ class SimulatorNode(Node):
         vehicle = self.config.plant_vehicle
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.is_tilting)
 
-        self.command_topic = "wrench_cmd" if self.config.actuation == "wrench" else "rotor_cmd"
-        command_type = self._command_type()
-        from geometry_msgs.msg import WrenchStamped
-        from nav_msgs.msg import Odometry
-
-        self.odom_pub = self.create_publisher(Odometry, "odom", STREAM_QOS)
-        self.wrench_pub = self.create_publisher(WrenchStamped, "wrench_truth", STREAM_QOS)
-        self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS) if self.params.publish_clock else None
-        self.progress_pub = self.create_publisher(Clock, "sim_progress", PROGRESS_QOS)
-        self.status_pub = self.create_publisher(String, "sim_status", LATCHED_QOS)
-        self.command_sub = self.create_subscription(command_type, self.command_topic, _unused, STREAM_QOS,
-                                                    raw=True)  # commands are read from their CDR bytes
+        command = WRENCH_CMD if self.config.actuation == "wrench" else ROTOR_CMD
+        self.command_topic = command.name
+        self.odom_pub = publisher(self, ODOM)
+        self.wrench_pub = publisher(self, WRENCH_TRUTH)
+        self.clock_pub = publisher(self, CLOCK) if self.params.publish_clock else None
+        self.progress_pub = publisher(self, SIM_PROGRESS)
+        self.status_pub = publisher(self, SIM_STATUS)
+        self.command_sub = subscription(self, command, _unused, raw=True)  # commands are read from their CDR bytes
         self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
         self.phase = HANDSHAKE
@@ -132,15 +140,6 @@ class SimulatorNode(Node):
             f"{self.params.wait_for_subscribers} odom subscriber(s) and a {self.command_topic} publisher"
         )
 
-    def _command_type(self) -> type:
-        if self.config.actuation == "wrench":
-            from geometry_msgs.msg import WrenchStamped
-
-            return WrenchStamped
-        from sensor_msgs.msg import JointState
-
-        return JointState
-
     # ----- run_node hooks ---------------------------------------------------------------------------
     def done(self) -> bool:
         return self.phase == DONE
@@ -152,10 +151,10 @@ class SimulatorNode(Node):
             self._handshake()
         elif self.phase == FIRST_COMMAND:
             self._first_command(stop)
-        elif self.phase == RUNNING:
+        elif self.phase == STEPPING:
             step = self._lockstep_step if self.config.lockstep else self._free_step
             batch_end = time.monotonic() + BATCH_WALL
-            while self.phase == RUNNING and not stop and time.monotonic() < batch_end:
+            while self.phase == STEPPING and not stop and time.monotonic() < batch_end:
                 step(stop)
 
     def close(self) -> None:
@@ -163,7 +162,7 @@ class SimulatorNode(Node):
         if self.final_state is None:
             signal_name = getattr(self.stop_flag, "signal_name", None)
             reason = f"received {signal_name}" if signal_name else "stopped before the end of the flight"
-            self._finish("stopped", reason, self.exit_code)
+            self._finish(STOPPED, reason, self.exit_code)
         start = time.monotonic()
         for pub in (self.odom_pub, self.wrench_pub, self.status_pub):
             while not pub.wait_for_all_acked(Duration(nanoseconds=int(ACK_SLICE * 1e9))):
@@ -184,7 +183,7 @@ class SimulatorNode(Node):
                 f"graph ready: {subscribers} odom subscriber(s) and {publishers} {self.command_topic} publisher(s);"
                 " sending the initial state"
             )
-            self._publish_status("running", "")
+            self._publish_status(RUNNING, "")
             self._publish_state()
             self.phase = FIRST_COMMAND
             return
@@ -201,7 +200,7 @@ class SimulatorNode(Node):
         expected = self.messages.stamp_ns
         if self._take_commands(expected, WAIT_SLICE):
             self.have_command = True
-            self.phase = RUNNING
+            self.phase = STEPPING
             self.wall_start = time.monotonic()
             self._refresh_controller_name()
             self.get_logger().info(f"controller {self.controller_name} answered the initial state: stepping")
@@ -226,7 +225,7 @@ class SimulatorNode(Node):
 
     def _fail_startup(self, reason: str) -> None:
         self.get_logger().error(f"start-up failed: {reason}")
-        self._finish("stopped", f"start-up failed: {reason}", EXIT_FAILURE)
+        self._finish(STOPPED, f"start-up failed: {reason}", EXIT_FAILURE)
 
     # ----- stepping ---------------------------------------------------------------------------------
     def _lockstep_step(self, stop: object) -> None:
@@ -243,7 +242,7 @@ class SimulatorNode(Node):
                         f"{self.command_topic}: the controller answers again at {self._where()} "
                         f"({self.command_wait.missed_steps} step(s) on the failsafe so far)"
                     )
-                    self._publish_status("running", "controller back in the loop")
+                    self._publish_status(RUNNING, "controller back in the loop")
             else:
                 self._on_missed(self.command_sub.get_publisher_count())
         self._advance()
@@ -286,7 +285,7 @@ class SimulatorNode(Node):
         elif event == "publisher_back":
             self.get_logger().info(f"{self.command_topic} has a publisher again at {self._where()}")
         if event in ("timeout", "gone"):  # an incident: in the latched status until the next one
-            self._publish_status("running", f"failsafe '{failsafe}': controller not answering ({event})")
+            self._publish_status(RUNNING, f"failsafe '{failsafe}': controller not answering ({event})")
         if failsafe == "cut":
             self.plant.cut_thrust()
 
@@ -321,11 +320,11 @@ class SimulatorNode(Node):
             if bool(np.isfinite(plant.state_vector).all()):
                 self._send_state()
             self.get_logger().error(f"simulation diverged at t = {plant.time:.4f} s: {reason}")
-            self._finish("diverged", reason, EXIT_DIVERGED)
+            self._finish(DIVERGED, reason, EXIT_DIVERGED)
             return
         self._send_state()
         if plant.step_index >= self.config.step_count:
-            self._finish("finished", f"reached the scenario duration {self.config.duration:g} s", EXIT_OK)
+            self._finish(FINISHED, f"reached the scenario duration {self.config.duration:g} s", EXIT_OK)
 
     def _warn_surface_cap(self) -> None:
         """Warn once per surface when its thrust ratio first reaches ``max_ratio`` (outside the model)."""
@@ -377,8 +376,8 @@ class SimulatorNode(Node):
         """Apply one command (CDR bytes) to the plant; NaN/inf or malformed -> dropped with a warning, False."""
         try:
             if self.config.actuation == "wrench":
-                thrust, torque = wrench_command_raw(data)
-                self.plant.set_wrench_command(thrust, torque)
+                wrench = wrench_command_raw(data)
+                self.plant.set_wrench(wrench[:3], wrench[3:])
                 return True
             speeds, tilts = self.rotor_reader.read_raw(data)
         except ValueError as error:
@@ -406,10 +405,9 @@ class SimulatorNode(Node):
             self.progress_pub.publish(messages.clock)
 
     def _publish_status(self, state: str, reason: str) -> None:
-        status = {"state": state, "reason": reason, "sim_time": self.plant.time, "steps": self.plant.step_index,
-                  "failsafe_steps": self.command_wait.missed_steps, "incidents": self.command_wait.incidents,
-                  "late_commands": self.stale_commands, "longest_wait_s": round(self.longest_wait, 6)}
-        self.status_pub.publish(String(data=json.dumps(status)))
+        status = SimStatus(state, reason, self.plant.time, self.plant.step_index, self.command_wait.missed_steps,
+                           self.command_wait.incidents, self.stale_commands, round(self.longest_wait, 6))
+        self.status_pub.publish(String(data=status.to_json()))
 
     def _finish(self, state: str, reason: str, exit_code: int) -> None:
         self.final_state = state

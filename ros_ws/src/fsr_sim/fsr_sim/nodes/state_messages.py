@@ -19,9 +19,9 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
+from fsr_sim.contract import ODOM, WRENCH_TRUTH
 from fsr_sim.model.odometry import published_row
 from fsr_sim.model.plant import Plant
-from fsr_sim.ros.conversions import BODY_FRAME, WORLD_FRAME
 
 NS_PER_S = 1_000_000_000
 
@@ -32,10 +32,10 @@ class StateMessages:
     def __init__(self, plant: Plant | None = None) -> None:
         self.plant = plant
         self.odom = Odometry()
-        self.odom.header.frame_id = WORLD_FRAME
-        self.odom.child_frame_id = BODY_FRAME
+        self.odom.header.frame_id = ODOM.frame
+        self.odom.child_frame_id = ODOM.child_frame
         self.wrench = WrenchStamped()
-        self.wrench.header.frame_id = BODY_FRAME
+        self.wrench.header.frame_id = WRENCH_TRUTH.frame
         self.clock = Clock()
         self.has_disturbances = plant is not None and bool(plant.disturbances)
         self.stamp_ns = -1

@@ -10,12 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsr_sim.contract import ODOM, WRENCH_TRUTH
 from fsr_sim.core.odometry import ODOM_SIZE
 from fsr_sim.model.odometry import published_row
 from fsr_sim.ros import cdr_pack
-
-WORLD_FRAME = "world_ned"
-BODY_FRAME = "base_link_frd"
 
 
 class StatePackets:
@@ -23,10 +21,10 @@ class StatePackets:
     the CDR payloads of ``odom``, ``wrench_truth`` and ``/clock``."""
 
     def __init__(self) -> None:
-        self._odom = cdr_pack.odometry(WORLD_FRAME, BODY_FRAME)
-        self._wrench = cdr_pack.wrench_stamped(BODY_FRAME)
+        self._odom = cdr_pack.odometry(ODOM.frame, ODOM.child_frame)
+        self._wrench = cdr_pack.wrench_stamped(WRENCH_TRUTH.frame)
         self._clock = cdr_pack.clock()
-        self.templates = {"odom": self._odom, "wrench_truth": self._wrench}  # topic (relative) -> template
+        self.templates = {ODOM.name: self._odom, WRENCH_TRUTH.name: self._wrench}  # topic (relative) -> template
         self.odom = self.wrench = self.clock = b""
         self.stamp_ns = -1
 

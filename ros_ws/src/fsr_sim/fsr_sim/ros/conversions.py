@@ -17,14 +17,12 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
+from fsr_sim.contract import BODY_FRAME, ODOM, ROTOR_CMD, joint_names, rotor_joint, tilt_joint
 from fsr_sim.core.odometry import read_odometry
 from fsr_sim.core.so3 import Mat3, Vec3
 from fsr_sim.model.odometry import odometry_values_ok, state_from_odometry_values
 from fsr_sim.model.so3 import quaternion_from_rotation
 from fsr_sim.ros import cdr_read
-
-WORLD_FRAME = "world_ned"
-BODY_FRAME = "base_link_frd"
 
 
 def time_from_ns(stamp_ns: int) -> Time:
@@ -42,8 +40,8 @@ def odometry_from_state(
     """Fill an Odometry (reused if given): twist.linear is ``R^T v_world`` (body axes)."""
     msg = Odometry() if msg is None else msg
     msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = WORLD_FRAME
-    msg.child_frame_id = BODY_FRAME
+    msg.header.frame_id = ODOM.frame
+    msg.child_frame_id = ODOM.child_frame
     pose = msg.pose.pose
     pose.position.x, pose.position.y, pose.position.z = (float(v) for v in position)
     q = quaternion_from_rotation(rotation)
@@ -108,16 +106,14 @@ def rotor_command(stamp_ns: int, speeds: np.ndarray, tilts: np.ndarray | None = 
     """JointState with ``rotor_i`` (velocity, rad/s) and, for tilting vehicles, ``tilt_i`` (position, rad)."""
     msg = JointState()
     msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = BODY_FRAME
+    msg.header.frame_id = ROTOR_CMD.frame
     n = len(speeds)
-    names = [f"rotor_{i + 1}" for i in range(n)]
     velocities = [float(v) for v in speeds]
     positions = [0.0] * n
     if tilts is not None:
-        names += [f"tilt_{i + 1}" for i in range(n)]
         velocities += [0.0] * n
         positions += [float(v) for v in tilts]
-    msg.name = names
+    msg.name = joint_names(n, tilting=tilts is not None)
     msg.velocity = velocities
     msg.position = positions
     return msg
@@ -128,18 +124,18 @@ def rotor_command_arrays(msg: JointState, rotor_count: int) -> tuple[np.ndarray,
     index = {name: i for i, name in enumerate(msg.name)}
     speeds = np.empty(rotor_count)
     for i in range(rotor_count):
-        j = index.get(f"rotor_{i + 1}")
+        j = index.get(rotor_joint(i))
         if j is None or j >= len(msg.velocity):
-            raise ValueError(f"rotor_cmd has no velocity for 'rotor_{i + 1}' (names: {list(msg.name)})")
+            raise ValueError(f"{ROTOR_CMD.name} has no velocity for '{rotor_joint(i)}' (names: {list(msg.name)})")
         speeds[i] = msg.velocity[j]
     tilts = None
-    if "tilt_1" in index:
+    if tilt_joint(0) in index:
         tilts = np.empty(rotor_count)
         for i in range(rotor_count):
-            j = index.get(f"tilt_{i + 1}")
+            j = index.get(tilt_joint(i))
             if j is None or j >= len(msg.position):
-                raise ValueError(f"rotor_cmd has no position for 'tilt_{i + 1}'")
+                raise ValueError(f"{ROTOR_CMD.name} has no position for '{tilt_joint(i)}'")
             tilts[i] = msg.position[j]
     if not np.all(np.isfinite(speeds)) or (tilts is not None and not np.all(np.isfinite(tilts))):
-        raise ValueError("rotor_cmd holds NaN or inf")
+        raise ValueError(f"{ROTOR_CMD.name} holds NaN or inf")
     return speeds, tilts

@@ -25,17 +25,18 @@ message up to ``t_K``:
 
 all of it within ``SIGNAL_DRAIN_S`` of the signal (the node's ``stop_flag``, set by ``run_node``).
 
-Stamps are integer nanoseconds; ``t_K`` is ``round(sim_time * 1e9)``, matched within ``STAMP_TOLERANCE_NS``.
+Stamps are integer nanoseconds; ``t_K`` is ``round(sim_time * 1e9)``, matched within ``STAMP_TOLERANCE_NS``
+(the topic, its states and the tolerance: :mod:`fsr_sim.contract`).
 """
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
-FINAL_STATES = ("finished", "diverged", "stopped")
+from fsr_sim.contract import SIM_STATUS, STAMP_TOLERANCE_NS, SimStatus
+
 QUIET_S = 0.1  # s without a message, once every producer has gone
 LINGER_S = 1.5  # s without a message while some producer still runs
 STATUS_GRACE_S = 0.3  # s to wait for a final sim_status when stopped
@@ -43,37 +44,24 @@ DRAIN_QUIET_S = 1.0  # s without progress after which the drain gives up
 DRAIN_MAX_S = 10.0  # s: bound on the whole drain
 ACK_TIMEOUT_S = 2.0  # s: bound on waiting for subscribers to acknowledge
 SIGNAL_DRAIN_S = 1.2  # s after a signal: the drain ends then at the latest
-STAMP_TOLERANCE_NS = 1000  # sim_time is a float of seconds; steps are >= 1 us apart
 
 
-def parse_status(text: str) -> dict:
-    """A ``sim_status`` JSON text as a dict (``{}`` if it is not a JSON object)."""
-    try:
-        status = json.loads(text)
-    except ValueError:
-        return {}
-    return status if isinstance(status, dict) else {}
-
-
-def _final_status(text: str) -> dict | None:
-    status = parse_status(text)
-    return status if status.get("state") in FINAL_STATES else None
+def _final_status(text: str) -> SimStatus | None:
+    status = SimStatus.from_json(text)
+    return status if status is not None and status.final else None
 
 
 def final_state(text: str) -> str | None:
     """The final state of a ``sim_status`` JSON text (``finished``, ``diverged``, ``stopped``), else None."""
     status = _final_status(text)
-    return None if status is None else status["state"]
+    return None if status is None else status.state
 
 
 def final_stamp_ns(text: str) -> int | None:
     """Stamp [ns] of the last published state from a final ``sim_status`` JSON text; None while ``running``
     (or the text is not a status)."""
     status = _final_status(text)
-    try:
-        return None if status is None else int(round(float(status["sim_time"]) * 1e9))
-    except (KeyError, TypeError, ValueError):
-        return None
+    return None if status is None else status.stamp_ns
 
 
 class FlightEndRule:
@@ -125,12 +113,13 @@ class FlightEnd:
                  linger: float = LINGER_S) -> None:
         from std_msgs.msg import String
 
-        from fsr_sim.ros.qos import LATCHED_QOS
+        from fsr_sim.ros.qos import qos_of
 
         self.node = node
         self.exit_on_finish = exit_on_finish
         self.final_ns: int | None = None
-        self.subscription = node.create_subscription(String, "sim_status", self._on_status, LATCHED_QOS)
+        self.subscription = node.create_subscription(String, SIM_STATUS.name, self._on_status,
+                                                     qos_of(SIM_STATUS))
         self.topic = self.subscription.topic_name
         self.rule = FlightEndRule([self.topic], quiet, linger)
         self.reported = False

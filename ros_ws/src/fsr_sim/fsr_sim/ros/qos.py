@@ -11,6 +11,8 @@ best-effort clock subscription matches it).
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from fsr_sim.contract import Topic
+
 STREAM_DEPTH = 5000  # messages: about 5 s of a 1 kHz stream
 
 STREAM_QOS = QoSProfile(
@@ -53,3 +55,11 @@ LATCHED_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     depth=1,
 )
+
+_PROFILES = {"STREAM": STREAM_QOS, "GOAL": GOAL_QOS, "CLOCK": CLOCK_QOS, "PROGRESS": PROGRESS_QOS,
+             "LATCHED": LATCHED_QOS}
+
+
+def qos_of(topic: Topic) -> QoSProfile:
+    """The profile a contract topic is published and subscribed with (:attr:`fsr_sim.contract.Topic.qos`)."""
+    return _PROFILES[topic.qos]

@@ -34,12 +34,14 @@ import time
 from collections.abc import Callable
 from importlib import resources
 
-# Exit codes of every fsr command and node (one place): fsr-fly passes the simulator's on.
-EXIT_OK = 0
-EXIT_FAILURE = 1  # a node failed (or a file could not be written)
-EXIT_CONFIG_ERROR = 2  # invalid scenario, parameter or argument; nothing was started
-EXIT_DIVERGED = 3  # the flight diverged (NaN state, beyond physical bounds, crash)
-EXIT_INTERRUPTED = 130  # fsr-fly stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention)
+from fsr_sim.contract import (  # noqa: F401 - the exit codes are the contract's, re-exported for the nodes
+    EXIT_CONFIG_ERROR,
+    EXIT_DIVERGED,
+    EXIT_FAILURE,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+)
+
 # A node whose rcl/DDS teardown hung after its work was done (files closed, acks waited for) is ended by this
 # signal from its own watchdog (TeardownWatchdog): the runner tells it from a failure by the exit status.
 TEARDOWN_HUNG_SIGNAL = signal.SIGALRM
