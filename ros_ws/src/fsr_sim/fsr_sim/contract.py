@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass, fields
+from typing import Any
 
 # ----- frames (docs/model.md §2) ---------------------------------------------------------------------------
 WORLD_FRAME = "world_ned"  # x north, y east, z down
@@ -215,14 +216,19 @@ EXIT_CODES = {EXIT_OK: "done", EXIT_FAILURE: "a node failed or a file could not 
 
 
 # ----- the thrust convention (docs/model.md §2) -------------------------------------------------------------
-def thrust_of(force_z: float) -> float:
-    """``u_T = -f_z`` [N]: the thrust along ``-z_b`` of a body force's z component."""
+def thrust_of(force_z: Any) -> Any:
+    """``u_T = -f_z`` [N]: the thrust along ``-z_b`` of a body force's z component (a float or an array)."""
     return -force_z
+
+
+def force_z_of(thrust: Any) -> Any:
+    """``f_z = -u_T`` [N]: the body force's z component of a thrust along ``-z_b`` (a float or an array)."""
+    return -thrust
 
 
 def body_force_of_thrust(thrust: float) -> tuple[float, float, float]:
     """``f_b = [0, 0, -u_T]`` [N] of a thrust along ``-z_b``."""
-    return (0.0, 0.0, -thrust)
+    return (0.0, 0.0, force_z_of(float(thrust)))
 
 
 if __name__ == "__main__":

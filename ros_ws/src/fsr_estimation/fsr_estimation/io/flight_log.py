@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fsr_sim.contract import ODOM, WRENCH_CMD, resolve
+from fsr_sim.contract import ODOM, WRENCH_CMD, force_z_of, resolve
 from fsr_sim.model.so3 import (
     euler_rate_matrix,
     euler_rates,
@@ -111,7 +111,7 @@ def body_force_from_thrust(thrust: ArrayLike) -> np.ndarray:
     """Fixed rotors: total thrust ``u_T`` [N] (N,) along ``-z_b`` -> body force ``[0, 0, -u_T]`` (N, 3)."""
     u = np.asarray(thrust, dtype=float).reshape(-1)
     force = np.zeros((len(u), 3))
-    force[:, 2] = -u
+    force[:, 2] = force_z_of(u)
     return force
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsr_sim.contract import body_force_of_thrust
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.model.vehicle import Vehicle
 
@@ -220,5 +221,5 @@ class FixedRotorAllocator:
 
     def rotor_speed_sq(self, thrust: float, torque_body: np.ndarray) -> np.ndarray:
         """Squared speeds for a thrust ``u_T`` [N] along ``-z_b`` and a body torque [N m] (unclamped)."""
-        wrench = np.array((0.0, 0.0, -thrust, torque_body[0], torque_body[1], torque_body[2]))
+        wrench = np.array((*body_force_of_thrust(thrust), *torque_body[:3]))
         return self.inverse @ wrench[self.rows]

@@ -35,6 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
+from fsr_sim.contract import body_force_of_thrust, thrust_of
 from fsr_sim.core import plant as core
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.core.rigid_body import STATE_SIZE
@@ -323,12 +324,12 @@ class Plant:
 
     def set_wrench_command(self, thrust: float, torque_body: ArrayLike) -> None:
         """Apply ``u_T`` [N] along ``-z_b`` and ``tau_b`` [N m]: :meth:`set_wrench` with ``f_b = -u_T e3``."""
-        self.set_wrench((0.0, 0.0, -float(thrust)), torque_body)
+        self.set_wrench(body_force_of_thrust(thrust), torque_body)
 
     @property
     def thrust(self) -> float:
         """``u_T = -f_z`` [N] of the commanded body wrench (``actuation: wrench``)."""
-        return -float(self.core_state.wrench_command[2])
+        return thrust_of(float(self.core_state.wrench_command[2]))
 
     def cut_thrust(self) -> None:
         """Failsafe: all rotors stopped / zero wrench."""
