@@ -100,7 +100,7 @@ def test_namespace_moves_every_topic_but_clock(ros_graph, scenario_file):
 @pytest.mark.parametrize("vehicle", ["quadrotor_ex4", "octocopter", "tilting_quadrotor_ex5"])
 def test_rotor_hover_stays_put(ros_graph, scenario_file, vehicle):
     speeds, v = hover_speeds(vehicle)
-    tilts = np.zeros(v.rotor_count) if v.is_tilting else None
+    tilts = np.zeros(v.rotor_count) if v.has_servos else None
     path = scenario_file(vehicle=vehicle, duration=0.3, initial_state={"attitude_rpy_deg": [0, 0, 30]})
     commands = ros_graph.publisher("rotor_cmd", JointState)
     sim = start_simulator(ros_graph, path)

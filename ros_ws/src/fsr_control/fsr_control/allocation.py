@@ -104,7 +104,7 @@ def pack_allocation(vehicle: Vehicle, actuation: str, strategy: str = "priority"
     null_basis = np.zeros((2 * n, 0))
     if actuation == "wrench":
         mode, allocation, inverse = core.WRENCH, np.zeros((6, n)), np.zeros((n, 6))
-    elif vehicle.is_tilting:
+    elif vehicle.has_servos:
         import scipy.linalg  # here, not at the top: fixed-rotor controllers and fsr-fly never need it
 
         mode = core.TILTING
@@ -112,6 +112,9 @@ def pack_allocation(vehicle: Vehicle, actuation: str, strategy: str = "priority"
         inverse = np.linalg.pinv(allocation)
         null_basis = scipy.linalg.null_space(allocation)
     else:
+        if vehicle.fully_actuated and strategy == "priority":
+            raise ValueError(f"'{vehicle.name}' is fully actuated with fixed rotors: its commands are clamped rotor by "
+                             "rotor (allocation 'clamp'); the priority rules are for thrust-and-torque vehicles")
         mode = core.FIXED
         allocator = FixedRotorAllocator(vehicle)
         if core.FORCE_Z_ROW not in allocator.rows:
@@ -188,8 +191,8 @@ class FixedRotorActuation(Actuation):
     docstring)."""
 
     def __init__(self, vehicle: Vehicle, strategy: str = "priority", air_mode: bool = True) -> None:
-        if vehicle.is_tilting:
-            raise ValueError(f"FixedRotorActuation needs fixed rotors; '{vehicle.name}' tilts")
+        if vehicle.has_servos:
+            raise ValueError(f"FixedRotorActuation needs fixed rotors; '{vehicle.name}' has rotors on servos")
         super().__init__(vehicle, pack_allocation(vehicle, "rotors", strategy, air_mode))
 
     def desaturated(self, thrust: float, torque_body: tuple[float, float, float]) -> np.ndarray | None:
@@ -206,8 +209,8 @@ class TiltingActuation(Actuation):
 
     def __init__(self, vehicle: Vehicle, strategy: str = "priority", objective: str = "none", exponent: int = 8,
                  iterations: int = 3) -> None:
-        if not vehicle.is_tilting:
-            raise ValueError(f"TiltingActuation needs tilting rotors; '{vehicle.name}' has fixed rotors")
+        if not vehicle.has_servos:
+            raise ValueError(f"TiltingActuation needs rotors on servos; '{vehicle.name}' has fixed rotors")
         super().__init__(vehicle, pack_allocation(vehicle, "rotors", strategy, True, objective, exponent, iterations))
 
     @classmethod
@@ -240,6 +243,6 @@ def make_actuation(vehicle: Vehicle, actuation: str, strategy: str = "priority",
     """The actuation for a vehicle and ``actuation`` (``rotors`` | ``wrench``)."""
     if actuation == "wrench":
         return WrenchActuation(vehicle)
-    if vehicle.is_tilting:
+    if vehicle.has_servos:
         return TiltingActuation(vehicle, strategy, objective, exponent, iterations)
     return FixedRotorActuation(vehicle, strategy, air_mode)

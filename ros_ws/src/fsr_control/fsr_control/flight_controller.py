@@ -126,8 +126,8 @@ class FlightController:
         self.vehicle = vehicle
         self.actuation = actuation
         self.law = make_control_law(config, vehicle)
-        if vehicle.is_tilting and actuation != "rotors":
-            raise ValueError("a tilting-rotor vehicle needs 'actuation: rotors' (its wrench is 6-D)")
+        if vehicle.fully_actuated and actuation != "rotors":
+            raise ValueError("a fully actuated vehicle needs 'actuation: rotors' (its wrench is allocated to them)")
         objective = config.secondary_objective
         self.actuator = make_actuation(vehicle, actuation, config.allocation, config.air_mode, objective.type,
                                        objective.exponent, objective.iterations)
@@ -136,7 +136,7 @@ class FlightController:
         compensation = ((self.compensator.params, self.compensator.state) if self.compensator is not None
                         else pack_compensation(None, vehicle))
         self.rotors = actuation == "rotors"
-        self.tilting = self.rotors and vehicle.is_tilting
+        self.tilting = self.rotors and vehicle.has_servos
         self.output = np.zeros(core.output_size(vehicle.rotor_count))  # the last tick's output row
         self.state = core.ControllerState(self.law.memory, self.actuator.state, compensation[1],
                                           np.zeros((DERIVATIVES, CHANNELS)))
@@ -163,7 +163,7 @@ class FlightController:
 
     def _plan(self, position: np.ndarray, rotation: np.ndarray, time: float) -> None:
         self.trajectory = Trajectory(
-            self.config.waypoints, position, rotation, full_attitude=self.vehicle.is_tilting, start_time=time
+            self.config.waypoints, position, rotation, full_attitude=self.vehicle.fully_actuated, start_time=time
         )
         if self._pending_goal is not None:
             goal_position, goal_rotation, duration = self._pending_goal
@@ -226,13 +226,13 @@ class FlightController:
             raise ValueError(f"goal needs position (3,) and rotation (3, 3), got {position.shape}, {rotation.shape}")
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
             raise ValueError("goal holds NaN or inf")
-        if not self.vehicle.is_tilting:
+        if not self.vehicle.fully_actuated:
             # Only yaw is commandable: the body z axis of a level goal is the world's down axis.
             tilt = math.acos(max(-1.0, min(1.0, float(rotation[2, 2]))))
             if tilt > ROLL_PITCH_TOLERANCE:
                 raise ValueError(
-                    f"goal attitude is tilted by {math.degrees(tilt):.3f} deg; the fixed-rotor vehicle "
-                    f"'{self.vehicle.name}' accepts only yaw goals (roll = pitch = 0)"
+                    f"goal attitude is tilted by {math.degrees(tilt):.3f} deg; '{self.vehicle.name}' is not fully "
+                    "actuated: it accepts only yaw goals (roll = pitch = 0)"
                 )
         duration = self.config.goal_duration if duration is None else float(duration)
         if not duration > 0.0:

@@ -64,9 +64,9 @@ def test_voliro_hover_at_any_attitude_is_the_weight_in_the_body_frame():
 
 
 def test_laws_refuse_the_wrong_vehicle():
-    with pytest.raises(ValueError, match="fixed rotors"):
+    with pytest.raises(ValueError, match="is fully actuated"):
         GeometricController(load_vehicle("tilting_quadrotor_ex5"), GEOMETRIC_GAINS)
-    with pytest.raises(ValueError, match="tilting rotors"):
+    with pytest.raises(ValueError, match="needs a fully actuated vehicle"):
         VoliroController(load_vehicle("quadrotor_ex4"), VOLIRO_GAINS)
 
 

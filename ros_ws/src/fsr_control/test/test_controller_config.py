@@ -56,7 +56,7 @@ def test_full_matrix_gain_accepted(tmp_path):
         ({"gains": {"k_p": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]}}, "controller.gains.k_p", "symmetric"),
         ({"gains": {"k_P": [1, 1, 1]}}, "controller.gains.k_P", "did you mean 'k_p'"),
         ({"gains": {"k_d": [1, 1, 1]}}, "controller.gains.k_d", "unknown key"),  # voliro's name
-        ({"type": "voliro"}, "controller.type", "tilting"),
+        ({"type": "voliro"}, "controller.type", "needs a fully actuated vehicle"),
         ({"type": "pid"}, "controller.type", "must be one of"),
         ({"angular_feedforward": "report"}, "controller.angular_feedforward", "unknown key"),
         ({"gain": {}}, "controller.gain", "did you mean 'gains'"),

@@ -27,7 +27,7 @@ def test_packets_equal_the_message_objects(file, overrides):
     controller = FlightController(controller_config(scenario), sim.vehicle, sim.actuation, sim.initial.position,
                                   sim.initial.rotation)
     rotors = sim.actuation == "rotors"
-    packets = ControllerPackets(rotors, sim.vehicle.rotor_count, sim.vehicle.is_tilting)
+    packets = ControllerPackets(rotors, sim.vehicle.rotor_count, sim.vehicle.has_servos)
     rng = np.random.default_rng(5)
     for k in range(60):
         stamp = k * 1_000_000

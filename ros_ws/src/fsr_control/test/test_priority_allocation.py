@@ -17,7 +17,7 @@ SCENARIOS = Path(__file__).parent / "scenarios"
 
 def both(name: str, secondary: str = "none"):
     vehicle = load_vehicle(name)
-    if vehicle.is_tilting:
+    if vehicle.has_servos:
         return vehicle, [TiltingActuation.with_objective(vehicle, secondary, strategy=s) for s in ("clamp", "priority")]
     return vehicle, [FixedRotorActuation(vehicle, s) for s in ("clamp", "priority")]
 

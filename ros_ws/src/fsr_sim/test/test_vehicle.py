@@ -9,10 +9,10 @@ from fsr_sim.model.vehicle import load_vehicle
 def test_builtin_vehicles_load():
     assert builtin_names("vehicles") == ["octocopter", "quadrotor_ex4", "tilting_quadrotor_ex5"]
     octo = load_vehicle("octocopter")
-    assert octo.rotor_count == 8 and not octo.is_tilting
+    assert octo.rotor_count == 8 and not octo.has_servos
     np.testing.assert_array_equal(octo.spins, [-1, 1, -1, 1, -1, 1, -1, 1])
     ex5 = load_vehicle("tilting_quadrotor_ex5")
-    assert ex5.is_tilting and ex5.mass == 1.32
+    assert ex5.has_servos and ex5.mass == 1.32
     np.testing.assert_allclose(ex5.tilt_axes, ex5.positions / 0.45, atol=1e-15)
     np.testing.assert_allclose(load_vehicle("quadrotor_ex4").inertia, np.diag((1.2416, 1.2416, 2.4832)))
 

@@ -84,7 +84,7 @@ def actuator_wrench(config: SimulationConfig, speeds: np.ndarray, tilts: np.ndar
     """
     plant = plant_from_config(config)
     speeds = np.ascontiguousarray(np.nan_to_num(np.asarray(speeds, dtype=float)))
-    with_tilts = tilts is not None and config.plant_vehicle.is_tilting
+    with_tilts = tilts is not None and config.plant_vehicle.has_servos
     tilt_values = np.ascontiguousarray(np.nan_to_num(np.asarray(tilts, dtype=float))) if with_tilts else speeds
     force, torque = np.zeros((len(speeds), 3)), np.zeros((len(speeds), 3))
     actuator_wrench_log(plant.params, plant.core_state, speeds, tilt_values, with_tilts,

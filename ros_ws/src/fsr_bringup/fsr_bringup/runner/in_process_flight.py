@@ -187,7 +187,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     if recording is not None:
         from fsr_bringup.recording.flight_recording import FlightRecorder
 
-        recorder = FlightRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.is_tilting)
+        recorder = FlightRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
@@ -228,7 +228,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     wall = time.perf_counter() - start
     return flight_run(scenario, states[:count], published[:count], control[:count],
                       estimates[:count] if estimation.enabled else None, controller, rotors,
-                      rotors and sim.vehicle.is_tilting, period_ns, end_reason, reason, wall, interrupted, startup)
+                      rotors and sim.vehicle.has_servos, period_ns, end_reason, reason, wall, interrupted, startup)
 
 
 def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, control: np.ndarray,

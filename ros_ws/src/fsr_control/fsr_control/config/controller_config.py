@@ -92,10 +92,10 @@ def _waypoints(section: Section, vehicle: Vehicle) -> list[Waypoint]:
         rotation = None
         if entry.has("attitude_rpy_deg"):
             rpy = entry.vector("attitude_rpy_deg", 3)
-            if not vehicle.is_tilting and np.any(np.abs(rpy[:2]) > 1e-9):
+            if not vehicle.fully_actuated and np.any(np.abs(rpy[:2]) > 1e-9):
                 raise entry.error(
                     "attitude_rpy_deg",
-                    f"roll and pitch must be 0 for the fixed-rotor vehicle '{vehicle.name}' (only yaw can be "
+                    f"roll and pitch must be 0 for '{vehicle.name}', which is not fully actuated (only yaw can be "
                     f"commanded), got {rpy.tolist()}",
                 )
             rotation = rotation_from_euler_zyx(np.deg2rad(rpy))
@@ -132,19 +132,24 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     vehicle = load_vehicle_for(scenario)
     actuation = scenario.data.get("actuation", "rotors")
     controller = scenario.section("controller")
-    default_type = "voliro" if vehicle.is_tilting else "geometric"
+    default_type = "voliro" if vehicle.fully_actuated else "geometric"
     controller_type = controller.string("type", default_type, choices=CONTROLLER_TYPES)
-    if controller_type == "voliro" and not vehicle.is_tilting:
-        raise controller.error("type", f"voliro needs a tilting-rotor vehicle; '{vehicle.name}' has fixed rotors "
-                                       "(use geometric)")
-    if controller_type == "geometric" and vehicle.is_tilting:
-        raise controller.error("type", f"geometric is for fixed-rotor vehicles; '{vehicle.name}' has tilting "
-                                       "rotors (use voliro)")
+    if controller_type == "voliro" and not vehicle.fully_actuated:
+        raise controller.error("type", f"voliro needs a fully actuated vehicle (rotors on servos or canted); "
+                                       f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
+    if controller_type == "geometric" and vehicle.fully_actuated:
+        raise controller.error("type", f"geometric is for vehicles with thrust along -z_b; '{vehicle.name}' is "
+                                       "fully actuated (use voliro)")
     if controller_type == "voliro" and actuation == "wrench":
-        raise controller.error("type", "voliro commands a full 6-D wrench; it needs 'actuation: rotors' "
-                                       "(wrench actuation applies only u_T along -z_b and tau_b)")
+        raise controller.error("type", "voliro allocates its 6-D wrench to the rotors: it needs 'actuation: "
+                                       "rotors'")
     gains = _gains(controller.section("gains"), controller_type)
-    allocation = controller.string("allocation", DEFAULT_ALLOCATION, choices=ALLOCATION_STRATEGIES)
+    canted = vehicle.fully_actuated and not vehicle.has_servos  # fixed rotors: clamped rotor by rotor
+    allocation = controller.string("allocation", "clamp" if canted else DEFAULT_ALLOCATION,
+                                   choices=ALLOCATION_STRATEGIES)
+    if canted and allocation == "priority":
+        raise controller.error("allocation", f"'{vehicle.name}' is fully actuated with fixed rotors: only 'clamp' "
+                                             "(the priority rules are for thrust-and-torque vehicles)")
     air_mode = controller.boolean("air_mode", True)
     feedforward = "consistent"
     secondary = SecondaryObjectiveConfig()

@@ -63,6 +63,7 @@ class GeometricController(CompiledLaw):
     """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray]) -> None:
-        if vehicle.is_tilting:
-            raise ValueError(f"the geometric controller needs fixed rotors; '{vehicle.name}' tilts")
+        if vehicle.fully_actuated:
+            raise ValueError(f"the geometric controller is for vehicles that produce thrust along -z_b and a torque; "
+                             f"'{vehicle.name}' is fully actuated (use voliro)")
         super().__init__(pack_law(vehicle, gains, voliro=False))

@@ -58,8 +58,9 @@ class VoliroController(CompiledLaw):
     """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforward: str = "consistent") -> None:
-        if not vehicle.is_tilting:
-            raise ValueError(f"the voliro controller needs tilting rotors; '{vehicle.name}' has fixed rotors")
+        if not vehicle.fully_actuated:
+            raise ValueError(f"the voliro controller needs a fully actuated vehicle (rotors on servos or canted); "
+                             f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
         if angular_feedforward not in ANGULAR_FEEDFORWARDS:
             raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
         super().__init__(pack_law(vehicle, gains, voliro=True, angular_feedforward=angular_feedforward))

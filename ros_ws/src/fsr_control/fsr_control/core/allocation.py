@@ -5,8 +5,9 @@ Three actuations (:class:`AllocationParams` ``mode``):
 
 * ``WRENCH``: thrust ``u_T = -f_z`` and ``tau_b`` go to the plant as they are (``f_x``, ``f_y`` are a shortfall);
 * ``FIXED``: ``u_w = G^+ [f; tau]`` (rows of the allocation the rotors can produce: the exact inverse for a
-  quadrotor, the minimum-norm pseudo-inverse for the octocopter), speeds ``sqrt(u_w)`` clamped; with
-  ``priority`` a command beyond the limits is reallocated (:func:`fixed_desaturation`);
+  quadrotor, the minimum-norm pseudo-inverse for the octocopter, all six for canted rotors), speeds
+  ``sqrt(u_w)`` clamped; with ``priority`` (thrust-and-torque vehicles) a command beyond the limits is
+  reallocated (:func:`fixed_desaturation`);
 * ``TILTING``: ``u = G_s^+ [f; tau] (+ N z, the secondary objective)`` then eq. 5 of the report,
   ``u_w,i = |(u_v,i, u_l,i)| / c_f``, ``alpha_i = atan2(u_l,i, u_v,i)``; with ``priority`` a command beyond
   ``w_max`` is reallocated (:func:`tilting_desaturation`); the minimum speed and the tilt limit are clamped.
@@ -177,10 +178,11 @@ def fixed_desaturation(params: AllocationParams, thrust: float, torque: tuple, s
 @jit_inline
 def allocate_fixed(params: AllocationParams, state: AllocationState, time: float, force: tuple, torque: tuple,
                    speeds, shortfall) -> Actuated:  # noqa: ANN001
-    """Rotor speeds [rad/s] (into ``speeds``) for a body force (only ``f_z = -u_T`` [N] is used) and torque."""
+    """Rotor speeds [rad/s] (into ``speeds``) for a body force [N] and torque [N m] (the rows the rotors cannot
+    produce have zero columns in ``G^+``: coplanar rotors use only ``f_z = -u_T`` of the force)."""
     n = speeds.shape[0]
     inverse = params.inverse
-    wrench = (0.0, 0.0, force[2], torque[0], torque[1], torque[2])
+    wrench = (force[0], force[1], force[2], torque[0], torque[1], torque[2])
     excess, speed_sq = state.scratch[4, :n], state.scratch[5, :n]
     for i in range(n):
         u = 0.0

@@ -93,7 +93,7 @@ class ControllerNode(Node):
         FlightController(config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation).command(
             0.0, sim.initial.position, sim.initial.rotation, sim.initial.velocity, sim.initial.angular_velocity)
         self.rotors = sim.actuation == "rotors"
-        self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.is_tilting)
+        self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.has_servos)
         self.publishers_by_topic = {name: publisher(self, BY_NAME[name]) for name in self.packets.templates}
         odom = subscription(self, ODOM, self.on_odom, raw=True)
         self.hot_subscriptions = [(odom, self.on_odom)]

@@ -37,6 +37,7 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
                 "index": i + 1,
                 "position": vehicle.positions[i].tolist(),
                 "spin": int(vehicle.spins[i]),
+                "axis": vehicle.thrust_axes[i].tolist(),
                 "tilt_axis": None if vehicle.tilt_axes is None else vehicle.tilt_axes[i].tolist(),
             }
         )
@@ -52,15 +53,16 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
         "contact_height": vehicle.contact_height,
         "rotor_speed_min": vehicle.rotor_speed_min,
         "rotor_speed_max": vehicle.rotor_speed_max,
-        "hover_rotor_speed": float(np.sqrt(vehicle.weight / (vehicle.rotor_count * vehicle.c_f))),
+        "hover_rotor_speed": float(np.sqrt(vehicle.weight / (vehicle.c_f * np.sum(-vehicle.thrust_axes[:, 2])))),
         "rotors": rotors,
+        "fully_actuated": vehicle.fully_actuated,
         "allocation_rows": list(WRENCH_ROWS),
         "allocation": wrench_from_rotor_speed_sq(vehicle).tolist(),
     }
-    if vehicle.is_tilting:
+    if vehicle.has_servos:
         summary["tilt_angle_max"] = vehicle.tilt_angle_max
         summary["allocation_static"] = static_tilting_allocation(vehicle).tolist()
-    else:
+    elif not vehicle.fully_actuated:
         summary["allocation_4xn"] = octocopter_allocation_4x8(vehicle).tolist()
     return summary
 
@@ -90,21 +92,23 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
         f"| contact height (feet below the CoM) | {vehicle.contact_height} m |",
         f"| rotor speed | {vehicle.rotor_speed_min} .. {vehicle.rotor_speed_max} rad/s |",
         f"| hover rotor speed | {s['hover_rotor_speed']:.1f} rad/s |",
+        f"| fully actuated | {'yes' if vehicle.fully_actuated else 'no'} |",
         "",
-        "| rotor | position [m] | spin k_i | tilt axis |",
-        "|---|---|---|---|",
+        "| rotor | position [m] | spin k_i | thrust axis | tilt axis |",
+        "|---|---|---|---|---|",
     ]
     for rotor in s["rotors"]:
         axis = "-" if rotor["tilt_axis"] is None else np.round(rotor["tilt_axis"], 4).tolist()
-        out.append(f"| {rotor['index']} | {np.round(rotor['position'], 4).tolist()} | {rotor['spin']:+d} | {axis} |")
+        out.append(f"| {rotor['index']} | {np.round(rotor['position'], 4).tolist()} | {rotor['spin']:+d} | "
+                   f"{np.round(rotor['axis'], 4).tolist()} | {axis} |")
     n = vehicle.rotor_count
     out += ["", "Allocation (body wrench from squared rotor speeds u_w,i):", ""]
     out.append(_markdown_matrix(np.array(s["allocation"]), WRENCH_ROWS, [f"u_w{i + 1}" for i in range(n)]))
-    if vehicle.is_tilting:
+    if vehicle.has_servos:
         columns = [f"u_{kind}{i + 1}" for i in range(n) for kind in ("v", "l")]
         out += ["", "Static allocation (body wrench from u = [u_v1, u_l1, ...], N):", ""]
         out.append(_markdown_matrix(np.array(s["allocation_static"]), WRENCH_ROWS, columns))
-    else:
+    elif not vehicle.fully_actuated:
         out += ["", "G_q (rows f_z, tau_x, tau_y, tau_z):", ""]
         out.append(
             _markdown_matrix(np.array(s["allocation_4xn"]), WRENCH_ROWS[2:], [f"u_w{i + 1}" for i in range(n)])

@@ -3,9 +3,11 @@
 A file gives ``name``, ``mass`` [kg], ``inertia`` (3 numbers or 3x3) [kg m^2], ``c_f``, ``c_m``,
 ``rotor_radius`` [m], ``rotor_speed_min``/``rotor_speed_max`` [rad/s], optional ``tilt_angle_max_deg``,
 ``contact_height`` and ``top_height`` [m], and either a ``layout`` (``count`` rotors on a circle of radius
-``arm_length``, rotor ``i`` at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW, optional
-``tilting: true`` for a tilt axis along each arm) or an explicit ``rotors`` list of
-``{position, spin, tilt_axis}``.
+``arm_length``, rotor ``i`` at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW;
+optional ``cant_deg``: each rotor's thrust axis turned about its arm by ``+cant``, ``-cant``, ... alternately
+(a fully actuated "tilted-arm" multirotor); optional ``tilting: true`` for a servo tilt axis along each arm)
+or an explicit ``rotors`` list of ``{position, spin, axis, tilt_axis}`` (``axis``: the fixed thrust axis,
+default ``[0, 0, -1]``; ``tilt_axis``: the servo's, normal to ``axis``).
 """
 
 from __future__ import annotations
@@ -54,9 +56,9 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
     if root.has("layout") == root.has("rotors"):
         raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
     if root.has("layout"):
-        positions, spins, tilt_axes = _rotors_from_layout(root.section("layout"))
+        positions, spins, thrust_axes, tilt_axes = _rotors_from_layout(root.section("layout"))
     else:
-        positions, spins, tilt_axes = _rotors_from_list(root.raw("rotors"), source)
+        positions, spins, thrust_axes, tilt_axes = _rotors_from_list(root.raw("rotors"), source)
     root.reject_unknown()
 
     try:
@@ -76,17 +78,23 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
             contact_height=contact_height,
             top_height=top_height,
             description=description,
+            thrust_axes=thrust_axes,
         )
-    except InvalidValueError as error:  # a check of the model itself (e.g. tilt axes out of the x-y plane)
-        key = {"tilt_axes": "rotors.tilt_axis", "positions": "rotors.position"}.get(error.name, error.name)
+    except InvalidValueError as error:  # a check of the model itself (e.g. a tilt axis along the thrust axis)
+        key = {"tilt_axes": "rotors.tilt_axis", "positions": "rotors.position",
+               "thrust_axes": "rotors.axis"}.get(error.name, error.name)
         raise ConfigError(key, error.reason, source) from None
 
 
-def _rotors_from_layout(layout: Section) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+Rotors = tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]  # positions, spins, thrust, tilt axes
+
+
+def _rotors_from_layout(layout: Section) -> Rotors:
     count = layout.integer("count", minimum=3)
     arm = layout.number("arm_length", strictly_positive=True)
     first = np.deg2rad(layout.number("first_angle_deg", 0.0))
     first_spin = layout.string("first_spin", "cw", choices=("cw", "ccw"))
+    cant = np.deg2rad(layout.number("cant_deg", 0.0, minimum=-90.0, maximum=90.0))
     tilting = layout.boolean("tilting", False)
     layout.reject_unknown()
     angles = first + 2.0 * np.pi * np.arange(count) / count
@@ -94,13 +102,18 @@ def _rotors_from_layout(layout: Section) -> tuple[np.ndarray, np.ndarray, np.nda
     radial[np.abs(radial) < 1e-12] = 0.0  # exact zeros where cos/sin of multiples of 90 deg are 0
     sign = -1.0 if first_spin == "cw" else 1.0
     spins = sign * (-1.0) ** np.arange(count)  # k_i = (-1)^i with rotor 1 CW
-    return arm * radial, spins, (radial.copy() if tilting else None)
+    thrust_axes = None
+    if cant != 0.0:  # -e3 turned about the arm r_i by +-cant: cos(c) (-e3) + sin(c) (r_i x -e3)
+        signed = cant * (-1.0) ** np.arange(count)
+        lateral = np.cross(radial, (0.0, 0.0, -1.0))
+        thrust_axes = np.sin(signed)[:, None] * lateral + np.cos(signed)[:, None] * np.array((0.0, 0.0, -1.0))
+    return arm * radial, spins, thrust_axes, (radial.copy() if tilting else None)
 
 
-def _rotors_from_list(value: Any, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def _rotors_from_list(value: Any, source: str) -> Rotors:
     if not isinstance(value, list) or len(value) < 3:
         raise ConfigError("rotors", "must be a list of at least 3 rotors", source)
-    positions, spins, axes = [], [], []
+    positions, spins, axes, thrust_axes = [], [], [], []
     for index, entry in enumerate(value):
         rotor = Section(entry, f"rotors[{index}]", source)
         positions.append(rotor.vector("position", 3))
@@ -108,6 +121,12 @@ def _rotors_from_list(value: Any, source: str) -> tuple[np.ndarray, np.ndarray, 
         if spin not in (-1, 1):
             raise rotor.error("spin", f"must be +1 (CCW) or -1 (CW), got {spin}")
         spins.append(float(spin))
+        thrust_axis = rotor.raw("axis")
+        if thrust_axis is not None:
+            thrust_axis = checked_array(thrust_axis, (3,), rotor.key("axis"), source)
+            if np.linalg.norm(thrust_axis) < 1e-9:
+                raise rotor.error("axis", "must be a non-zero vector")
+        thrust_axes.append((0.0, 0.0, -1.0) if thrust_axis is None else thrust_axis)
         axis = rotor.raw("tilt_axis")
         if axis is not None:
             axis = checked_array(axis, (3,), rotor.key("tilt_axis"), source)
@@ -119,4 +138,4 @@ def _rotors_from_list(value: Any, source: str) -> tuple[np.ndarray, np.ndarray, 
     if any(a is None for a in axes) and not all(a is None for a in axes):
         raise ConfigError("rotors", "either every rotor has a tilt_axis or none has", source)
     tilt_axes = None if axes[0] is None else np.array(axes)
-    return np.array(positions), np.array(spins), tilt_axes
+    return np.array(positions), np.array(spins), np.array(thrust_axes, dtype=float), tilt_axes

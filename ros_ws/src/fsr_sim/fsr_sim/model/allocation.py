@@ -1,6 +1,7 @@
 """Control allocation built from rotor geometry (docs/model.md §3.2): never a hand-typed matrix.
 
-Per rotor ``i`` with position ``p_i`` (body FRD), spin ``k_i``, axis ``z_i = Rot(a_i, alpha_i) [0,0,-1]``
+Per rotor ``i`` with position ``p_i`` (body FRD), spin ``k_i``, axis ``z_i = Rot(a_i, alpha_i) z_0,i`` (``z_0,i`` its
+fixed thrust axis, ``-e3`` unless canted)
 and signed squared speed ``u_w,i = |w_i| w_i`` [(rad/s)^2]:
 
     f_b   = sum_i c_f u_w,i z_i                                   [N, body FRD]
@@ -9,11 +10,12 @@ and signed squared speed ``u_w,i = |w_i| w_i`` [(rad/s)^2]:
 so ``[f_b; tau_b] = wrench_from_rotor_speed_sq(...) @ u_w`` with a 6 x n matrix (rows
 ``f_x f_y f_z tau_x tau_y tau_z``).
 
-Tilting rotors (tilt axis ``a_i`` in the body x-y plane): ``z_i = cos(alpha_i) z_v,i + sin(alpha_i) z_l,i``
-with ``z_v,i = -e3`` and ``z_l,i = e3 x a_i``. With ``u_v,i = c_f u_w,i cos alpha_i`` and
-``u_l,i = c_f u_w,i sin alpha_i`` [N] the wrench is linear in ``u = [u_v1, u_l1, ..., u_vn, u_ln]``
-through the static 6 x 2n matrix of :func:`static_tilting_allocation`, and eq. 5 of the report inverts the
-substitution: ``u_w,i = sqrt(u_v,i^2 + u_l,i^2) / c_f``, ``alpha_i = atan2(u_l,i, u_v,i)``.
+Tilting rotors (tilt axis ``a_i`` normal to ``z_0,i``): ``z_i = cos(alpha_i) z_v,i + sin(alpha_i) z_l,i``
+with ``z_v,i = z_0,i`` and ``z_l,i = a_i x z_0,i`` (``e3 x a_i`` for an uncanted rotor). With
+``u_v,i = c_f u_w,i cos alpha_i`` and ``u_l,i = c_f u_w,i sin alpha_i`` [N] the wrench is linear in
+``u = [u_v1, u_l1, ..., u_vn, u_ln]`` through the static 6 x 2n matrix of :func:`static_tilting_allocation`,
+and eq. 5 of the report inverts the substitution: ``u_w,i = sqrt(u_v,i^2 + u_l,i^2) / c_f``,
+``alpha_i = atan2(u_l,i, u_v,i)``.
 """
 
 from __future__ import annotations
@@ -24,25 +26,27 @@ from fsr_sim.contract import body_force_of_thrust
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.model.vehicle import Vehicle
 
-ROTOR_AXIS_UNTILTED = np.array((0.0, 0.0, -1.0))
-
 
 def rotor_axes(vehicle: Vehicle, tilt_angles: np.ndarray | None = None) -> np.ndarray:
     """Thrust directions ``z_i`` (body FRD, unit), shape (n, 3), for tilt angles ``alpha_i`` [rad]."""
     n = vehicle.rotor_count
     if vehicle.tilt_axes is None or tilt_angles is None:
-        return np.tile(ROTOR_AXIS_UNTILTED, (n, 1))
+        return np.array(vehicle.thrust_axes)
     alpha = np.asarray(tilt_angles, dtype=float).reshape(n, 1)
     z_v, z_l = tilt_basis(vehicle)
     return np.cos(alpha) * z_v + np.sin(alpha) * z_l
 
 
 def tilt_basis(vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray]:
-    """``z_v,i = -e3`` and ``z_l,i = e3 x a_i``: the rotor axis at tilt 0 and at tilt +pi/2."""
-    n = vehicle.rotor_count
-    z_v = np.tile(ROTOR_AXIS_UNTILTED, (n, 1))
-    z_l = np.cross(np.array((0.0, 0.0, 1.0)), vehicle.tilt_axes)
-    return z_v, z_l
+    """``z_v,i = z_0,i`` and ``z_l,i = a_i x z_0,i``: the rotor axis at tilt 0 and at tilt +pi/2."""
+    z_v = np.array(vehicle.thrust_axes)
+    return z_v, np.cross(vehicle.tilt_axes, z_v)
+
+
+def actuation_matrix(vehicle: Vehicle) -> np.ndarray:
+    """What the rotors can produce: the 6 x n allocation of fixed rotors, or the 6 x 2n static allocation of rotors
+    on servos; rank 6 means :attr:`~fsr_sim.model.vehicle.Vehicle.fully_actuated`."""
+    return static_tilting_allocation(vehicle) if vehicle.has_servos else wrench_from_rotor_speed_sq(vehicle)
 
 
 def wrench_columns(vehicle: Vehicle, axes: np.ndarray, thrust: float, drag: float) -> np.ndarray:
@@ -59,8 +63,8 @@ def wrench_from_rotor_speed_sq(vehicle: Vehicle, tilt_angles: np.ndarray | None 
 def octocopter_allocation_4x8(vehicle: Vehicle) -> np.ndarray:
     """The report's ``G_q`` (rows ``f_z, tau_x, tau_y, tau_z``) of a coplanar vehicle: rows 2..5 of the
     6 x n allocation (``f_x``, ``f_y`` are identically zero without tilt)."""
-    if vehicle.is_tilting:
-        raise ValueError(f"G_q is defined for coplanar fixed rotors; '{vehicle.name}' has tilting rotors")
+    if vehicle.has_servos or np.any(vehicle.thrust_axes[:, :2] != 0.0):
+        raise ValueError(f"G_q is defined for coplanar fixed rotors; '{vehicle.name}' has tilting or canted rotors")
     return wrench_from_rotor_speed_sq(vehicle)[2:]
 
 
@@ -205,8 +209,8 @@ class FixedRotorAllocator:
     """
 
     def __init__(self, vehicle: Vehicle) -> None:
-        if vehicle.is_tilting:
-            raise ValueError(f"FixedRotorAllocator needs fixed rotors; '{vehicle.name}' tilts")
+        if vehicle.has_servos:
+            raise ValueError(f"FixedRotorAllocator needs fixed rotors; '{vehicle.name}' has rotors on servos")
         self.vehicle = vehicle
         self.allocation = wrench_from_rotor_speed_sq(vehicle)
         self.rows = np.flatnonzero(np.any(np.abs(self.allocation) > 1e-15, axis=1))

@@ -65,7 +65,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
                disturbances: Sequence[DisturbanceProfile], crash_speed: float) -> core.PlantParams:
     """The core's :class:`~fsr_sim.core.plant.PlantParams` of a checked vehicle and environment."""
     n = vehicle.rotor_count
-    if vehicle.is_tilting:
+    if vehicle.has_servos:
         vertical, lateral = (rotor_columns(vehicle, axes) for axes in tilt_basis(vehicle))
     else:
         vertical, lateral = rotor_columns(vehicle, rotor_axes(vehicle)), np.zeros((n, core_rotors.COLUMN_WIDTH))
@@ -75,7 +75,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         mass=float(vehicle.mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia), dt=float(dt),
         substeps=int(substeps), period=float(dt) * int(substeps), wrench_actuation=actuation == "wrench",
         speed_min=float(vehicle.rotor_speed_min), speed_max=float(vehicle.rotor_speed_max),
-        tilting=vehicle.is_tilting, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
+        tilting=vehicle.has_servos, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
     )
@@ -259,7 +259,7 @@ class Plant:
     @property
     def tilt_angles(self) -> np.ndarray | None:
         """The applied tilt angles [rad] (None for fixed rotors)."""
-        return self.core_state.tilts.copy() if self.vehicle.is_tilting else None
+        return self.core_state.tilts.copy() if self.vehicle.has_servos else None
 
     @property
     def force_command(self) -> np.ndarray:

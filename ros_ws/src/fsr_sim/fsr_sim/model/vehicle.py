@@ -1,8 +1,13 @@
 """Vehicle descriptions: mass, inertia and rotor geometry, read from YAML and validated.
 
 Frames: rotor positions ``p_i`` are in the body frame (FRD, metres, from the centre of mass). A rotor's
-thrust acts along its axis ``z_i = Rot(a_i, alpha_i) [0, 0, -1]`` (``-z_b`` when untilted). ``spin``
+thrust acts along its axis ``z_i = Rot(a_i, alpha_i) z_0,i``: ``z_0,i`` its fixed thrust axis (``-z_b`` unless
+the rotor is mounted canted), turned by its servo's tilt ``alpha_i`` about ``a_i`` if it has one. ``spin``
 is ``k_i``: +1 counter-clockwise, -1 clockwise seen from above (docs/model.md §3.2).
+
+The actuation is this data, not a vehicle kind: :attr:`Vehicle.has_servos` says whether ``rotor_cmd`` carries
+tilt angles, :attr:`Vehicle.fully_actuated` whether the rotors can produce any body wrench (canted fixed rotors,
+or rotors on servos), which is what the controllers and the planner ask.
 
 A :class:`Vehicle` is built from plain Python values (arrays are checked and copied) or read from a
 YAML file by :func:`load_vehicle` (the file format: :mod:`fsr_sim.config.vehicle_file`).
@@ -17,6 +22,15 @@ import numpy as np
 
 from fsr_sim.model.checks import InvalidValueError, finite_array, symmetric_positive_definite
 from fsr_sim.model.frames import GRAVITY
+
+UNCANTED_THRUST_AXIS = (0.0, 0.0, -1.0)  # body FRD: thrust along -z_b
+
+
+def _unit_rows(rows: np.ndarray, name: str, what: str) -> np.ndarray:
+    norms = np.linalg.norm(rows, axis=1)
+    if np.any(norms < 1e-9):
+        raise InvalidValueError(name, f"every {what} must be a non-zero vector")
+    return rows / norms[:, None]
 
 
 @dataclass(frozen=True)
@@ -42,13 +56,15 @@ class Vehicle:
     spins : array-like, shape (n,)
         ``k_i``: +1 counter-clockwise, -1 clockwise seen from above.
     tilt_axes : array-like, shape (n, 3), optional
-        Unit tilt axes in the body x-y plane (tilting rotors), or None for fixed rotors.
+        Servo tilt axes ``a_i`` (normalised; each normal to its rotor's thrust axis), or None without servos.
     tilt_angle_max : float
         [rad], tilt limits ``+-tilt_angle_max``.
     contact_height : float
         [m], distance from the centre of mass down to the landing gear's feet (ground contact).
     top_height : float
         [m], distance from the centre of mass up to the top of the vehicle (ceiling contact).
+    thrust_axes : array-like, shape (n, 3), optional
+        Each rotor's fixed thrust axis ``z_0,i`` (body FRD, normalised), at servo tilt 0; None: ``-z_b`` for all.
 
     Raises
     ------
@@ -71,6 +87,7 @@ class Vehicle:
     contact_height: float = 0.1  # [m] centre of mass above the landing gear's feet (ground contact)
     top_height: float = 0.1  # [m] top of the vehicle above the centre of mass (ceiling contact)
     description: str = ""
+    thrust_axes: np.ndarray | None = None  # (n, 3) unit; None -> -z_b for every rotor
 
     def __post_init__(self) -> None:
         def put(name: str, value: object) -> None:
@@ -101,15 +118,18 @@ class Vehicle:
         if not np.all(np.abs(spins) == 1.0):
             raise InvalidValueError("spins", f"each must be +1 (CCW) or -1 (CW), got {spins.tolist()}")
         put("spins", spins)
+        if self.thrust_axes is None:
+            thrust_axes = np.tile(UNCANTED_THRUST_AXIS, (n, 1))
+        else:
+            thrust_axes = _unit_rows(finite_array(self.thrust_axes, (n, 3), "thrust_axes"), "thrust_axes",
+                                     "thrust axis")
+        put("thrust_axes", thrust_axes)
         if self.tilt_axes is not None:
-            axes = finite_array(self.tilt_axes, (n, 3), "tilt_axes")
-            norms = np.linalg.norm(axes, axis=1)
-            if np.any(norms < 1e-9):
-                raise InvalidValueError("tilt_axes", "every tilt axis must be a non-zero vector")
-            axes = axes / norms[:, None]
+            axes = _unit_rows(finite_array(self.tilt_axes, (n, 3), "tilt_axes"), "tilt_axes", "tilt axis")
             # The static (linear) tilting allocation needs each tilt axis normal to the untilted thrust axis.
-            if np.any(np.abs(axes[:, 2]) > 1e-9):
-                raise InvalidValueError("tilt_axes", "tilt axes must lie in the body x-y plane")
+            if np.any(np.abs(np.sum(axes * thrust_axes, axis=1)) > 1e-9):
+                raise InvalidValueError("tilt_axes", "each tilt axis must be normal to its rotor's thrust axis (in "
+                                                     "the body x-y plane for uncanted rotors)")
             put("tilt_axes", axes)
 
     @property
@@ -117,8 +137,18 @@ class Vehicle:
         return int(self.positions.shape[0])
 
     @property
-    def is_tilting(self) -> bool:
+    def has_servos(self) -> bool:
+        """The rotors tilt on servos: ``rotor_cmd`` carries a tilt angle per rotor."""
         return self.tilt_axes is not None
+
+    @property
+    def fully_actuated(self) -> bool:
+        """The rotors can produce any body wrench (the allocation has rank 6): canted fixed rotors or servos. Such
+        a vehicle can hold any attitude (the Voliro controller); the others produce thrust along ``-z_b`` and a
+        torque (the geometric controller)."""
+        from fsr_sim.model.allocation import actuation_matrix  # allocation imports this module
+
+        return bool(np.linalg.matrix_rank(actuation_matrix(self), tol=1e-9) == 6)
 
     @property
     def arm_length(self) -> float:

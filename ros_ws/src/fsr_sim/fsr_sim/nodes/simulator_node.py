@@ -104,7 +104,7 @@ class SimulatorNode(Node):
         self.messages = StatePackets()
         self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         vehicle = self.config.plant_vehicle
-        self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.is_tilting)
+        self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.has_servos)
 
         command = WRENCH_CMD if self.config.actuation == "wrench" else ROTOR_CMD
         self.command_topic = command.name
