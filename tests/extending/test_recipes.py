@@ -78,3 +78,52 @@ def test_a_figure_registered_in_figures_is_drawn_by_the_analysis(tmp_path, monke
     analysis = analyze_recording(tmp_path / "ex4.mcap", tmp_path / "analysis")
     assert tmp_path / "analysis" / "altitude.png" in analysis.figures
     assert (tmp_path / "analysis" / "altitude.png").stat().st_size > 1000
+
+
+def recorded_odometry(path: Path) -> np.ndarray:
+    """(K, 13) ``odom`` rows (position, quaternion, body velocity, body angular velocity) of a recording."""
+    rows = []
+    for _, m in open_recording(path).messages("odom"):
+        p, q, v, w = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist.linear, m.twist.twist.angular
+        rows.append((p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z))
+    return np.array(rows)
+
+
+def test_a_noisy_odometry_has_the_configured_spread_and_the_flight_still_tracks(tmp_path):
+    files = recipe_files(tmp_path)
+    run = fly_in_process(load_scenario(files["noisy_ex4.yaml"]), recording=tmp_path / "noisy.mcap")
+    assert run.end_reason == "finished", run.reason
+    odom = recorded_odometry(tmp_path / "noisy.mcap")
+    true = run.state  # the true state (FlightRun never holds the measurement)
+    assert odom.shape == (4001, 13)
+    position_noise = odom[:, :3] - true[:, :3]
+    np.testing.assert_allclose(position_noise.std(axis=0), 0.01, rtol=0.1)
+    assert np.all(np.abs(position_noise.mean(axis=0)) < 0.001)
+    np.testing.assert_allclose((odom[:, 10:13] - true[:, 10:13]).std(axis=0), 0.01, rtol=0.1)
+    measured = np.array([rotation_from_quaternion(q) for q in odom[:, 3:7]])
+    angles = np.linalg.norm(np.array([_rotation_vector(r.T @ m) for r, m in zip(run.rotation, measured,
+                                                                                 strict=True)]), axis=1)
+    assert abs(np.sqrt(np.mean(angles**2) / 3.0) - np.deg2rad(0.05)) < 0.1 * np.deg2rad(0.05)
+    assert np.all(np.abs(np.linalg.norm(odom[:, 3:7], axis=1) - 1.0) < 1e-12) and np.all(odom[:, 6] >= 0.0)
+    assert np.linalg.norm(true[-1, :3] - (0.5, 0.5, -2.0)) < 0.02  # 1 cm noise: still on target
+
+
+def _rotation_vector(rotation: np.ndarray) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(rotation).as_rotvec()
+
+
+@pytest.mark.slow
+def test_the_noise_is_the_same_in_the_node_graph(tmp_path):
+    files = recipe_files(tmp_path)
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    graph, local = tmp_path / "graph.mcap", tmp_path / "local.mcap"
+    for out, extra in ((graph, []), (local, ["--in-process"])):
+        run = subprocess.run([str(BIN / "fsr-fly"), "--quiet", str(files["noisy_ex4.yaml"]), "--duration", "0.3",
+                              "--out", str(out), "--no-analysis", *extra], env=env, capture_output=True, text=True,
+                             timeout=180)
+        assert run.returncode == 0, run.stdout + run.stderr
+    g, loc = open_recording(graph), open_recording(local)
+    for topic in ("/odom", "/wrench_cmd", "/wrench_estimate"):
+        assert g.count(topic) == 301 and [d for _, d in g.raw(topic)] == [d for _, d in loc.raw(topic)], topic

@@ -24,7 +24,7 @@ from fsr_control.core.flatness import ATTITUDE_ERRORS
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
 from fsr_sim.contract import DIVERGED, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK, FINISHED, RUNNING, STOPPED
-from fsr_sim.core.odometry import ODOM_QUATERNION, PUBLISHED_SIZE, TRUTH_FORCE, TRUTH_TORQUE
+from fsr_sim.core.odometry import PUBLISHED_SIZE, TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.model.plant import divergence_reason
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import process_age
@@ -239,7 +239,7 @@ def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, co
     count = len(states)
     n = (control.shape[1] - control_layout.ROTOR_SPEEDS) // 2
     state = states.copy()
-    state[:, 6:10] = published[:, ODOM_QUATERNION:ODOM_QUATERNION + 4]  # the published sign (w >= 0)
+    state[state[:, 9] < 0.0, 6:10] *= -1.0  # odom's sign (w >= 0); the true state, not odom's measurement
 
     def columns(at: int, width: int = 3) -> np.ndarray:
         return control[:, at:at + width].copy()

@@ -34,13 +34,14 @@ from fsr_sim.config.vehicle_file import load_vehicle_file
 from fsr_sim.model.disturbances import DisturbanceProfile
 from fsr_sim.model.environment import Environment
 from fsr_sim.model.plant import Plant
+from fsr_sim.model.sensors import OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
 SECTION_GROUP = "fsr.scenario_sections"
 PLANT_KEYS = (
     "name", "description", "vehicle", "duration", "physics_dt", "physics_substeps", "actuation",
-    "initial_state", "plant", "environment", "disturbances", "lockstep",
+    "initial_state", "plant", "environment", "disturbances", "lockstep", "sensors",
 )
 
 
@@ -180,6 +181,7 @@ class SimulationConfig:
     lockstep_timeout: float = 1.0
     failsafe: str = "hold"
     real_time_factor: float = 1.0
+    odometry_noise: OdometryNoise = field(default_factory=OdometryNoise)
 
     @property
     def control_period(self) -> float:
@@ -241,6 +243,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     failsafe = lockstep.string("failsafe", "hold", choices=("hold", "cut"))
     real_time_factor = lockstep.number("real_time_factor", 1.0, strictly_positive=True)
     lockstep.reject_unknown()
+    odometry_noise = _odometry_noise(root.section("sensors"))
     root.reject_unknown(known=(*PLANT_KEYS, *registered_sections()))
 
     duration_steps = duration / (physics_dt * substeps)
@@ -261,7 +264,24 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
         lockstep_timeout=timeout,
         failsafe=failsafe,
         real_time_factor=real_time_factor,
+        odometry_noise=odometry_noise,
     )
+
+
+def _odometry_noise(sensors: Section) -> OdometryNoise:
+    """``sensors.odometry``: white noise on ``odom`` (:class:`fsr_sim.model.sensors.OdometryNoise`; angles in
+    degrees here)."""
+    odometry = sensors.section("odometry")
+    noise = OdometryNoise(
+        position_std=odometry.number("position_std", 0.0, minimum=0.0),
+        attitude_std=np.deg2rad(odometry.number("attitude_std_deg", 0.0, minimum=0.0)),
+        velocity_std=odometry.number("velocity_std", 0.0, minimum=0.0),
+        angular_velocity_std=odometry.number("angular_velocity_std", 0.0, minimum=0.0),
+        seed=odometry.integer("seed", 0, minimum=0, maximum=2**32 - 1),
+    )
+    odometry.reject_unknown()
+    sensors.reject_unknown()
+    return noise
 
 
 def plant_from_config(config: SimulationConfig) -> Plant:
@@ -271,4 +291,5 @@ def plant_from_config(config: SimulationConfig) -> Plant:
         config.plant_vehicle, dt=config.physics_dt, actuation=config.actuation, position=initial.position,
         rotation=initial.rotation, velocity=initial.velocity, angular_velocity=initial.angular_velocity,
         environment=config.environment, disturbances=config.disturbances, substeps=config.physics_substeps,
+        odometry_noise=config.odometry_noise,
     )

@@ -172,7 +172,8 @@ class Section:
             raise self.error(name, f"must be <= {maximum}, got {value}")
         return value
 
-    def integer(self, name: str, default: int | None = None, *, minimum: int | None = None) -> int:
+    def integer(self, name: str, default: int | None = None, *, minimum: int | None = None,
+                maximum: int | None = None) -> int:
         value = self.raw(name, default)
         if value is None:
             raise self.missing(name)
@@ -180,6 +181,8 @@ class Section:
             raise self.error(name, f"must be an integer, got {value!r}")
         if minimum is not None and value < minimum:
             raise self.error(name, f"must be >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise self.error(name, f"must be <= {maximum}, got {value}")
         return int(value)
 
     def boolean(self, name: str, default: bool | None = None) -> bool:

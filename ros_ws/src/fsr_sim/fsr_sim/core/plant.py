@@ -29,6 +29,7 @@ from fsr_sim.core.disturbances import external_wrench
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.rigid_body import rigid_body_rates, rk4_combine, stage_state, state_rotation
 from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, scaled_rotor_wrench, tilted_columns
+from fsr_sim.core.sensors import SensorParams
 from fsr_sim.core.so3 import mat_vec3
 from fsr_sim.core.surfaces import Surfaces, ceiling_rest_z, ground_rest_z, has_thrust_effects, thrust_ratios
 
@@ -64,6 +65,7 @@ class PlantParams(NamedTuple):
     disturbances: np.ndarray  # (m, WIDTH) rows of fsr_sim.core.disturbances
     disturbance_knots: np.ndarray  # (k, KNOT_WIDTH)
     crash_speed: float  # [m/s]
+    sensors: SensorParams  # the stage between the true state and odom (fsr_sim.core.sensors)
 
 
 class PlantState(NamedTuple):

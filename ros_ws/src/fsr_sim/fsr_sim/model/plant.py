@@ -52,6 +52,7 @@ from fsr_sim.model.rigid_body import (
     RigidBodyState,
     pack_state,
 )
+from fsr_sim.model.sensors import OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
 from fsr_sim.model.vehicle import Vehicle
 
@@ -62,7 +63,8 @@ ACTUATIONS = ("rotors", "wrench")
 
 
 def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, environment: Environment,
-               disturbances: Sequence[DisturbanceProfile], crash_speed: float) -> core.PlantParams:
+               disturbances: Sequence[DisturbanceProfile], crash_speed: float,
+               odometry_noise: OdometryNoise | None = None) -> core.PlantParams:
     """The core's :class:`~fsr_sim.core.plant.PlantParams` of a checked vehicle and environment."""
     n = vehicle.rotor_count
     if vehicle.has_servos:
@@ -78,6 +80,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         tilting=vehicle.has_servos, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
+        sensors=(odometry_noise or OdometryNoise()).pack(),
     )
 
 
@@ -143,6 +146,9 @@ class Plant:
         RK4 steps per :meth:`step` (the control period is ``dt * substeps``).
     crash_speed : float
         Downward speed at ground contact [m/s] beyond which :meth:`divergence` reports a crash.
+    odometry_noise : OdometryNoise, optional
+        The sensor stage between the true state and the published ``odom`` (:mod:`fsr_sim.model.sensors`;
+        default: none, ``odom`` is the true state).
 
     Raises
     ------
@@ -164,6 +170,7 @@ class Plant:
         substeps: int = 1,
         crash_speed: float = DEFAULT_CRASH_SPEED,
         attitude_rpy_deg: ArrayLike | None = None,
+        odometry_noise: OdometryNoise | None = None,
     ) -> None:
         if actuation not in ACTUATIONS:
             raise InvalidValueError("actuation", f"must be one of {', '.join(ACTUATIONS)}, got '{actuation}'")
@@ -183,7 +190,9 @@ class Plant:
         self.environment = Environment() if environment is None else environment
         self.disturbances = list(disturbances)
         self.crash_speed = crash_speed
-        self.params = pack_plant(vehicle, dt, substeps, actuation, self.environment, self.disturbances, crash_speed)
+        self.odometry_noise = odometry_noise or OdometryNoise()
+        self.params = pack_plant(vehicle, dt, substeps, actuation, self.environment, self.disturbances, crash_speed,
+                                 self.odometry_noise)
         self.core_state = new_plant_state(self.params, pack_state(
             finite_array(position, (3,), "position"), rotation, finite_array(velocity, (3,), "velocity"),
             finite_array(angular_velocity, (3,), "angular_velocity"),
