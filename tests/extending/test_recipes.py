@@ -48,20 +48,24 @@ def test_a_hexacopter_with_canted_arms_is_fully_actuated_and_holds_a_tilted_pose
     assert run.saturation["count"] == 0 and run.tilt_angles is None
 
 
+def assert_graph_equals_in_process(scenario: Path, folder: Path, topics: tuple[str, ...]) -> None:
+    """0.3 s of ``scenario`` flown as a node graph and in one process record the same bytes on ``topics``."""
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    graph, local = folder / "graph.mcap", folder / "local.mcap"
+    for out, extra in ((graph, []), (local, ["--in-process"])):
+        run = subprocess.run([str(BIN / "fsr-fly"), "--quiet", str(scenario), "--duration", "0.3", "--out", str(out),
+                              "--no-analysis", *extra], env=env, capture_output=True, text=True, timeout=180)
+        assert run.returncode == 0, run.stdout + run.stderr
+    g, loc = open_recording(graph), open_recording(local)
+    for topic in topics:
+        assert g.count(topic) == 301 and [d for _, d in g.raw(topic)] == [d for _, d in loc.raw(topic)], topic
+
+
 @pytest.mark.slow
 def test_the_hexacopter_flies_the_same_in_the_node_graph(tmp_path):
     """The recipe's vehicle in the node graph gives the in-process flight's messages, byte for byte."""
     files = recipe_files(tmp_path)
-    env = {**os.environ, "MPLBACKEND": "Agg"}
-    graph, local = tmp_path / "graph.mcap", tmp_path / "local.mcap"
-    for out, extra in ((graph, []), (local, ["--in-process"])):
-        run = subprocess.run([str(BIN / "fsr-fly"), "--quiet", str(files["hover_tilted.yaml"]), "--duration", "0.3",
-                              "--out", str(out), "--no-analysis", *extra], env=env, capture_output=True, text=True,
-                             timeout=180)
-        assert run.returncode == 0, run.stdout + run.stderr
-    g, loc = open_recording(graph), open_recording(local)
-    for topic in ("/odom", "/rotor_cmd", "/wrench_cmd"):
-        assert g.count(topic) == 301 and [d for _, d in g.raw(topic)] == [d for _, d in loc.raw(topic)], topic
+    assert_graph_equals_in_process(files["hover_tilted.yaml"], tmp_path, ("/odom", "/rotor_cmd", "/wrench_cmd"))
 
 
 def test_a_figure_registered_in_figures_is_drawn_by_the_analysis(tmp_path, monkeypatch):
@@ -117,13 +121,4 @@ def _rotation_vector(rotation: np.ndarray) -> np.ndarray:
 @pytest.mark.slow
 def test_the_noise_is_the_same_in_the_node_graph(tmp_path):
     files = recipe_files(tmp_path)
-    env = {**os.environ, "MPLBACKEND": "Agg"}
-    graph, local = tmp_path / "graph.mcap", tmp_path / "local.mcap"
-    for out, extra in ((graph, []), (local, ["--in-process"])):
-        run = subprocess.run([str(BIN / "fsr-fly"), "--quiet", str(files["noisy_ex4.yaml"]), "--duration", "0.3",
-                              "--out", str(out), "--no-analysis", *extra], env=env, capture_output=True, text=True,
-                             timeout=180)
-        assert run.returncode == 0, run.stdout + run.stderr
-    g, loc = open_recording(graph), open_recording(local)
-    for topic in ("/odom", "/wrench_cmd", "/wrench_estimate"):
-        assert g.count(topic) == 301 and [d for _, d in g.raw(topic)] == [d for _, d in loc.raw(topic)], topic
+    assert_graph_equals_in_process(files["noisy_ex4.yaml"], tmp_path, ("/odom", "/wrench_cmd", "/wrench_estimate"))
