@@ -1,13 +1,19 @@
-"""Validate every section of a scenario before any process starts (each package checks its own part)."""
+"""Validate every section of a scenario before any process starts (each package checks its own part).
+
+``fsr_sim`` checks the plant side; every other section is checked by the validator its package registers as
+an ``fsr.scenario_sections`` entry point (``controller`` and ``trajectory``: fsr_control, ``estimator``:
+fsr_estimation; a third-party package adds its own the same way), loaded and called here - the registry is
+what runs, so a section can never be accepted as known and then left unchecked.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
-from fsr_control.config.controller_config import controller_config
-from fsr_estimation.config.estimator_config import estimator_config
-from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
+from fsr_sim.config.scenario import Scenario, SimulationConfig, registered_sections, simulation_config
+
+REQUIRED_SECTIONS = ("controller", "estimator")  # what the flight itself needs
 
 
 @dataclass
@@ -16,6 +22,7 @@ class CheckedScenario:
     simulation: SimulationConfig
     controller: Any
     estimator: Any
+    sections: dict[str, Any] = field(default_factory=dict)  # every registered section -> its validated config
 
     @property
     def estimator_enabled(self) -> bool:
@@ -31,6 +38,18 @@ class CheckedScenario:
 
 
 def check_scenario(scenario: Scenario) -> CheckedScenario:
-    """Parse all sections; the first invalid value raises ConfigError naming the file and the key."""
+    """Parse all sections (the plant side, then each registered section in name order, each validator once);
+    the first invalid value raises ConfigError naming the file and the key."""
     simulation = simulation_config(scenario)
-    return CheckedScenario(scenario, simulation, controller_config(scenario), estimator_config(scenario))
+    by_validator: dict[Any, Any] = {}  # a validator owning several sections runs once
+    sections = {}
+    for name, point in sorted(registered_sections().items()):
+        validator = point.load()
+        if validator not in by_validator:
+            by_validator[validator] = validator(scenario)
+        sections[name] = by_validator[validator]
+    missing = [name for name in REQUIRED_SECTIONS if name not in sections]
+    if missing:
+        raise RuntimeError(f"no installed package validates the scenario section(s) {', '.join(missing)} (the "
+                           "fsr.scenario_sections entry points of fsr_control and fsr_estimation): reinstall them")
+    return CheckedScenario(scenario, simulation, sections["controller"], sections["estimator"], sections)
