@@ -5,9 +5,9 @@ import pytest
 
 from fsr_control.allocation import TiltingActuation
 from fsr_control.config.controller_config import controller_config
-from fsr_control.controllers.geometric import REPORT_GAINS as GEOMETRIC_GAINS
+from fsr_control.controllers.geometric import DEFAULT_GAINS as GEOMETRIC_GAINS
 from fsr_control.controllers.geometric import GeometricController
-from fsr_control.controllers.voliro import REPORT_GAINS as VOLIRO_GAINS
+from fsr_control.controllers.voliro import DEFAULT_GAINS as VOLIRO_GAINS
 from fsr_control.controllers.voliro import VoliroController
 from fsr_control.flight_controller import FlightController
 from fsr_control.planning.trajectory import Trajectory, Waypoint

@@ -42,7 +42,7 @@ from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
 CONTROLLER_TYPES = ("geometric", "voliro")
-DEFAULT_GAINS = {"geometric": geometric.REPORT_GAINS, "voliro": voliro.REPORT_GAINS}
+DEFAULT_GAINS = {"geometric": geometric.DEFAULT_GAINS, "voliro": voliro.DEFAULT_GAINS}
 SECONDARY_TYPES = ("none", "min_peak_speed")
 DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
 DEFAULT_GOAL_DURATION = 10.0  # s
