@@ -10,7 +10,7 @@ import pytest
 from rclpy.serialization import deserialize_message
 
 from fsr_bringup.analysis.figures import FIGURES, envelope
-from fsr_bringup.analysis.load import hold, load_flight
+from fsr_bringup.analysis.load import load_flight, zero_order_hold
 from fsr_bringup.analysis.metrics import flight_metrics
 from fsr_bringup.analysis.run import analyze_recording
 from fsr_bringup.cli.analyze_cli import main as analyze_main
@@ -128,10 +128,10 @@ def test_vectorised_decoding_equals_rclpy(synthetic_recording: Path) -> None:
             np.testing.assert_array_equal(columns.get(path)[index], np.asarray(expected))
 
 
-def test_hold_and_envelope() -> None:
-    stamps = np.array([10, 20, 30])
-    np.testing.assert_array_equal(hold(stamps, np.array([1.0, 2.0, 3.0]), np.array([5, 10, 25, 40]))[1:], [1, 2, 3])
-    assert np.isnan(hold(stamps, np.array([1.0, 2.0, 3.0]), np.array([5]))[0])
+def test_zero_order_hold_and_envelope() -> None:
+    stamps, values = np.array([10, 20, 30]), np.array([1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(zero_order_hold(stamps, values, np.array([5, 10, 25, 40]))[1:], [1, 2, 3])
+    assert np.isnan(zero_order_hold(stamps, values, np.array([5]))[0])
     t = np.arange(100_000) * 1e-3
     y = np.zeros_like(t)
     y[51_234] = 7.0  # a one-sample spike must survive decimation

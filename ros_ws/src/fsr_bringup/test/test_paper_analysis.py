@@ -26,7 +26,7 @@ from fsr_bringup.analysis.figures import (
     make_figures,
     mass_figure,
 )
-from fsr_bringup.analysis.load import hold, load_flight
+from fsr_bringup.analysis.load import load_flight, zero_order_hold
 from fsr_bringup.analysis.metrics import flight_metrics, tracking_errors
 from fsr_bringup.cli.analyze_cli import main as analyze_main
 from fsr_bringup.cli.fly_cli import parse_args as fly_args
@@ -69,8 +69,8 @@ def _estimate_and_truth(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     est = flight.wrench_estimate
     truth = flight.wrench_truth
     estimate = np.hstack((est.force, est.torque))
-    return (est.t, estimate, hold(effective.stamp_ns, effective.wrench_body, est.stamp_ns),
-            hold(truth.stamp_ns, np.hstack((truth.force, truth.torque)), est.stamp_ns))
+    return (est.t, estimate, zero_order_hold(effective.stamp_ns, effective.wrench_body, est.stamp_ns),
+            zero_order_hold(truth.stamp_ns, np.hstack((truth.force, truth.torque)), est.stamp_ns))
 
 
 def test_ex3_estimate_converges_to_the_effective_truth(ex3: Path) -> None:

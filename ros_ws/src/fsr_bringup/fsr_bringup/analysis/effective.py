@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_bringup.analysis.load import Flight, hold
+from fsr_bringup.analysis.load import Flight, zero_order_hold
 from fsr_sim.config.scenario import SimulationConfig, plant_from_config
 from fsr_sim.core.plant import actuator_wrench_log
 from fsr_sim.model.environment import contact_mask, pack_surfaces, thrust_ratio_log
@@ -103,18 +103,18 @@ def effective_wrench(flight: Flight) -> EffectiveWrench | None:
     plant = config.plant_vehicle
     m_true, m_est = plant.mass, model.mass
     i_true, i_est = np.asarray(plant.inertia, float), np.asarray(model.inertia, float)
-    f_cmd = hold(cmd.stamp_ns, cmd.force, target)
-    tau_cmd = hold(cmd.stamp_ns, cmd.torque, target)
+    f_cmd = zero_order_hold(cmd.stamp_ns, cmd.force, target)
+    tau_cmd = zero_order_hold(cmd.stamp_ns, cmd.torque, target)
     if flight.wrench_truth is not None:
-        f_ext_body = np.nan_to_num(hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.force, target))
-        tau_ext = np.nan_to_num(hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.torque, target))
+        f_ext_body = np.nan_to_num(zero_order_hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.force, target))
+        tau_ext = np.nan_to_num(zero_order_hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.torque, target))
     else:
         f_ext_body, tau_ext = np.zeros((n, 3)), np.zeros((n, 3))
     f_ext = np.einsum("kij,kj->ki", rotation, f_ext_body)
     # Actuator wrench at the start and at the end of each step, the command of the start held over it.
     if config.actuation == "rotors" and flight.rotor_cmd is not None:
-        speeds = hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.speeds, target)
-        tilts = (hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.tilts, target)
+        speeds = zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.speeds, target)
+        tilts = (zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.tilts, target)
                  if flight.rotor_cmd.tilts is not None else None)
         series = thrust_ratio_series(flight)
         ratios = series[1] * series[2] if series is not None else np.ones_like(speeds)

@@ -137,7 +137,7 @@ class Flight:
         return self.recording.truncated
 
 
-def hold(stamp_ns: np.ndarray, values: np.ndarray, target_ns: np.ndarray) -> np.ndarray:
+def zero_order_hold(stamp_ns: np.ndarray, values: np.ndarray, target_ns: np.ndarray) -> np.ndarray:
     """Zero-order hold of ``values`` (sorted by ``stamp_ns``) at ``target_ns``: the last value at or
     before each target; NaN before the first sample. Exact stamp matches (lockstep) pick that sample."""
     index = np.searchsorted(stamp_ns, target_ns, side="right") - 1

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
-from fsr_bringup.analysis.load import Flight, hold, load_flight
+from fsr_bringup.analysis.load import Flight, load_flight, zero_order_hold
 from fsr_estimation.core import metrics as estimator_metrics
 from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
 from fsr_sim.contract import ATTITUDE_CMD, REFERENCE, SIM_STATUS, STOPPED, WRENCH_SHORTFALL, SimStatus
@@ -76,20 +76,20 @@ def tracking_errors(flight: Flight) -> TrackingErrors | None:
     if odom is None or ref is None:
         return None
     target = odom.stamp_ns
-    p_d = hold(ref.stamp_ns, ref.position, target)
-    reference_attitude = _angle_deg(hold(ref.stamp_ns, ref.rotation.reshape(-1, 9), target), odom.rotation)
+    p_d = zero_order_hold(ref.stamp_ns, ref.position, target)
+    reference_attitude = _angle_deg(zero_order_hold(ref.stamp_ns, ref.rotation.reshape(-1, 9), target), odom.rotation)
     cmd = flight.attitude_cmd
-    commanded = (_angle_deg(hold(cmd.stamp_ns, cmd.rotation.reshape(-1, 9), target), odom.rotation)
+    commanded = (_angle_deg(zero_order_hold(cmd.stamp_ns, cmd.rotation.reshape(-1, 9), target), odom.rotation)
                  if cmd is not None else reference_attitude)
     return TrackingErrors(
         t=odom.t,
         position=odom.position - p_d,
-        velocity=odom.velocity_world - hold(ref.stamp_ns, ref.velocity, target),
+        velocity=odom.velocity_world - zero_order_hold(ref.stamp_ns, ref.velocity, target),
         attitude_deg=commanded,
         attitude_reference_deg=reference_attitude,
         attitude_commanded=cmd is not None,
         angular_velocity=odom.angular_velocity
-        - np.einsum("nji,nj->ni", odom.rotation, hold(ref.stamp_ns, ref.angular_velocity_world, target)),
+        - np.einsum("nji,nj->ni", odom.rotation, zero_order_hold(ref.stamp_ns, ref.angular_velocity_world, target)),
     )
 
 
@@ -223,7 +223,7 @@ def wrench_comparison(flight: Flight, settle_time: float = DEFAULT_SETTLE_S, set
     }
     if flight.wrench_truth is not None:
         truth = flight.wrench_truth
-        true = hold(truth.stamp_ns, np.hstack((truth.force, truth.torque)), est.stamp_ns)
+        true = zero_order_hold(truth.stamp_ns, np.hstack((truth.force, truth.torque)), est.stamp_ns)
         ok = late & np.all(np.isfinite(true), axis=1)
         result["truth_mean_last_s"] = true[last].mean(axis=0).tolist()
         if ok.any():
@@ -231,7 +231,7 @@ def wrench_comparison(flight: Flight, settle_time: float = DEFAULT_SETTLE_S, set
     effective = effective_wrench(flight)
     if effective is None:
         return result
-    true = hold(effective.stamp_ns, effective.wrench_body, est.stamp_ns)
+    true = zero_order_hold(effective.stamp_ns, effective.wrench_body, est.stamp_ns)
     defined = np.all(np.isfinite(true), axis=1)
     if defined.sum() < 2:
         return result
