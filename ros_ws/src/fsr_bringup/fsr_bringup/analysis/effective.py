@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_bringup.analysis.load import Flight, zero_order_hold
+from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
 from fsr_sim.config.scenario import SimulationConfig, plant_from_config
 from fsr_sim.core.plant import actuator_wrench_log
 from fsr_sim.model.environment import contact_mask, pack_surfaces, thrust_ratio_log
@@ -92,7 +92,7 @@ def actuator_wrench(config: SimulationConfig, speeds: np.ndarray, tilts: np.ndar
     return force, torque
 
 
-def effective_wrench(flight: Flight) -> EffectiveWrench | None:
+def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
     """The effective truth of the module docstring; None without odom, wrench_cmd, scenario or estimator model."""
     odom, cmd, config, model = flight.odom, flight.wrench_cmd, flight.config, flight.estimator
     if odom is None or cmd is None or config is None or model is None or len(odom.t) < 2:
@@ -164,7 +164,7 @@ def effective_wrench(flight: Flight) -> EffectiveWrench | None:
     )
 
 
-def thrust_ratio_series(flight: Flight) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def thrust_ratio_series(flight: RecordedFlight) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """``(t, ground, ceiling)``: per-rotor ``T / T_OGE`` of each surface along the flight, shape (n, rotors)
     (1 where a surface is off); None without odom or scenario."""
     odom, config = flight.odom, flight.config

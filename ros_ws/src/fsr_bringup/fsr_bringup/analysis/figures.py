@@ -38,7 +38,7 @@ from matplotlib.figure import Figure
 
 from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
-from fsr_bringup.analysis.load import Flight
+from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_sim.contract import REFERENCE, WRENCH_CMD
 from fsr_sim.model.so3 import euler_zyx_from_rotation
@@ -81,11 +81,11 @@ class Run:
     """One flight to draw: its label in legends, the decoded recording and its effective truth."""
 
     label: str
-    flight: Flight
+    flight: RecordedFlight
     effective: EffectiveWrench | None = None
 
     @classmethod
-    def of(cls, flight: Flight, label: str | None = None) -> Run:
+    def of(cls, flight: RecordedFlight, label: str | None = None) -> Run:
         return cls(label or flight.scenario_name, flight, effective_wrench(flight))
 
 
@@ -469,9 +469,9 @@ class FigureJob:
         return written, [note for _, notes in results for note in notes]
 
 
-def start_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions | None = None) -> FigureJob:
+def start_figures(runs: list[Run] | RecordedFlight, out_dir: Path, options: FigureOptions | None = None) -> FigureJob:
     """Start drawing every figure the runs allow into ``out_dir`` (:class:`FigureJob`)."""
-    if isinstance(runs, Flight):
+    if isinstance(runs, RecordedFlight):
         runs = [Run.of(runs)]
     options = options or FigureOptions()
     unknown = [f for f in options.formats if f not in FORMATS]
@@ -481,7 +481,7 @@ def start_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOption
     return FigureJob(runs, out_dir, options)
 
 
-def make_figures(runs: list[Run] | Flight, out_dir: Path, options: FigureOptions | None = None
+def make_figures(runs: list[Run] | RecordedFlight, out_dir: Path, options: FigureOptions | None = None
                  ) -> tuple[list[Path], list[str]]:
     """Draw every figure the runs allow into ``out_dir``; returns (written files, notes for skipped ones)."""
     return start_figures(runs, out_dir, options).result()

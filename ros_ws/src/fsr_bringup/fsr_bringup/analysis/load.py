@@ -6,7 +6,7 @@ Messages are sorted by stamp. Frames (docs/model.md §4): positions and the refe
 twist and wrenches in ``base_link_frd``. The reference (fsr_control.nodes.messages) is all world-frame:
 linear velocity and acceleration ``p_dot_d``, ``p_ddot_d`` and angular velocity ``R_d omega_d``.
 
-A missing topic is ``None`` with a note in :attr:`Flight.notes`; nothing here raises for a topic that is
+A missing topic is ``None`` with a note in :attr:`RecordedFlight.notes`; nothing here raises for a topic that is
 absent or that cannot be decoded.
 """
 
@@ -108,7 +108,7 @@ class Scalar:
 
 
 @dataclass
-class Flight:
+class RecordedFlight:
     """Everything the analysis needs from one recording (``None`` where a topic is missing)."""
 
     recording: Recording
@@ -158,7 +158,7 @@ def detect_namespace(recording: Recording) -> tuple[str, str | None]:
     return candidates[0], note
 
 
-def load_flight(recording: Recording | str | Path, namespace: str | None = None) -> Flight:
+def load_flight(recording: Recording | str | Path, namespace: str | None = None) -> RecordedFlight:
     """Decode the standard topics of ``recording`` (under ``namespace``, detected if None)."""
     if not isinstance(recording, Recording):
         recording = open_recording(recording)
@@ -169,13 +169,13 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
             notes.append(note)
     namespace = "/" + namespace.strip("/") if namespace.strip("/") else "/"
     config, scenario_name, estimator = _scenario(recording, notes)
-    flight = Flight(recording, namespace, scenario_name, config, estimator, notes=notes)
+    flight = RecordedFlight(recording, namespace, scenario_name, config, estimator, notes=notes)
     flight.compensation_mode, flight.compensation = _compensation(recording, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
         flight.message_counts[topic] = recording.count(topic)
-    loaders = {  # topic -> its decoder; the Flight attribute has the topic's name
+    loaders = {  # topic -> its decoder; the RecordedFlight attribute has the topic's name
         ODOM: _odometry, REFERENCE: _reference, WRENCH_TRUTH: _wrench, WRENCH_CMD: _wrench,
         WRENCH_SHORTFALL: _wrench, WRENCH_ESTIMATE: _wrench, ROTOR_CMD: _rotor_command, MASS_ESTIMATE: _scalar,
         ATTITUDE_CMD: _attitude, WRENCH_DESIRED: _wrench,

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
-from fsr_bringup.analysis.load import Flight, load_flight, zero_order_hold
+from fsr_bringup.analysis.load import RecordedFlight, load_flight, zero_order_hold
 from fsr_estimation.core import metrics as estimator_metrics
 from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
 from fsr_sim.contract import ATTITUDE_CMD, REFERENCE, SIM_STATUS, STOPPED, WRENCH_SHORTFALL, SimStatus
@@ -69,7 +69,7 @@ class TrackingErrors:
     angular_velocity: np.ndarray  # (n, 3) rad/s, body
 
 
-def tracking_errors(flight: Flight) -> TrackingErrors | None:
+def tracking_errors(flight: RecordedFlight) -> TrackingErrors | None:
     """Position, velocity, attitude and angular-velocity errors (module docstring); None without odom or
     reference."""
     odom, ref = flight.odom, flight.reference
@@ -129,7 +129,7 @@ def _limit_hits(values: np.ndarray, t: np.ndarray, hits: np.ndarray) -> dict[str
     }
 
 
-def saturation(flight: Flight) -> dict[str, Any] | None:
+def saturation(flight: RecordedFlight) -> dict[str, Any] | None:
     """Rotor commands at or beyond the vehicle's speed (and tilt) limits; None without rotor_cmd or
     scenario. Rotors are numbered from 1."""
     cmd, config = flight.rotor_cmd, flight.config
@@ -154,7 +154,7 @@ def saturation(flight: Flight) -> dict[str, Any] | None:
     return result
 
 
-def compensation(flight: Flight) -> dict[str, Any] | None:
+def compensation(flight: RecordedFlight) -> dict[str, Any] | None:
     """Whether the controller cancelled the estimated external wrench (``controller.compensation`` of the
     scenario in the metadata) and, if so, the states in which the contact rule switched it off
     (the contact rule, :func:`fsr_sim.model.environment.contact_mask`, on ``odom``) and the late estimates: 0, the
@@ -170,7 +170,7 @@ def compensation(flight: Flight) -> dict[str, Any] | None:
             "c0": flight.compensation.c0, "r": flight.compensation.r}
 
 
-def wrench_shortfall(flight: Flight) -> dict[str, Any] | None:
+def wrench_shortfall(flight: RecordedFlight) -> dict[str, Any] | None:
     """Per body axis (``force_x`` .. ``torque_z``): steps that gave way (``|demanded - commanded| >
     SHORTFALL_TOLERANCE``), their fraction, and the largest shortfall [N or N m] with its time; None without
     ``wrench_shortfall``."""
@@ -196,7 +196,7 @@ def _channels(values: np.ndarray) -> dict[str, float | None]:
     return {name: (float(v) if math.isfinite(v) else None) for name, v in zip(WRENCH_CHANNELS, values, strict=True)}
 
 
-def wrench_comparison(flight: Flight, settle_time: float = DEFAULT_SETTLE_S, settling: str = "standard",
+def wrench_comparison(flight: RecordedFlight, settle_time: float = DEFAULT_SETTLE_S, settling: str = "standard",
                       after: float | None = None) -> dict[str, Any] | None:
     """Online wrench estimate vs the effective truth (and vs the external wrench alone), body FRD [N, N m].
 
@@ -251,7 +251,7 @@ def wrench_comparison(flight: Flight, settle_time: float = DEFAULT_SETTLE_S, set
     return result
 
 
-def mass_comparison(flight: Flight) -> dict[str, Any] | None:
+def mass_comparison(flight: RecordedFlight) -> dict[str, Any] | None:
     """Final mass estimate [kg] vs the true plant mass (and the nominal model's) from the scenario."""
     if flight.mass_estimate is None:
         return None
@@ -269,7 +269,7 @@ def _range(values: np.ndarray) -> list[float]:
     return [float(np.min(values)), float(np.max(values))]
 
 
-def surface_caps(flight: Flight, t: np.ndarray, ground: np.ndarray, ceiling: np.ndarray) -> dict[str, Any]:
+def surface_caps(flight: RecordedFlight, t: np.ndarray, ground: np.ndarray, ceiling: np.ndarray) -> dict[str, Any]:
     """Per surface whose effect is on (and ``max_ratio > 1``): ``{steps, first_time_s, max_ratio}`` of the
     states at which any rotor's ratio (from :func:`thrust_ratio_series`) equals the cap ``max_ratio``."""
     env = flight.config.environment
@@ -293,14 +293,14 @@ def interrupted_at(status: SimStatus | None) -> float | None:
 
 
 def flight_metrics(
-    recording: Recording | Flight | str | Path, settle_time: float = DEFAULT_SETTLE_S, settling: str = "standard",
-    after: float | None = None,
+    recording: Recording | RecordedFlight | str | Path, settle_time: float = DEFAULT_SETTLE_S,
+    settling: str = "standard", after: float | None = None,
 ) -> dict[str, Any]:
     """All metrics of one flight as a JSON-ready dict (see the module docstring for definitions).
 
     ``settling`` (``standard`` | ``report``) and ``after`` [s] select the estimator metrics' settling-time
     definition and the start of the max-error window (default: the last 5 s)."""
-    flight = recording if isinstance(recording, Flight) else load_flight(recording)
+    flight = recording if isinstance(recording, RecordedFlight) else load_flight(recording)
     notes = list(flight.notes)
     odom = flight.odom
     status = flight.sim_status[-1] if flight.sim_status else None

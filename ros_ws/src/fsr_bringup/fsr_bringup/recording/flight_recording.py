@@ -29,7 +29,7 @@ TOPIC_TYPES = {"/" + name: type_name for name, type_name in recorded_topics().it
 BLOCK_STEPS = 1000  # steps packed and written at once
 
 
-class FlightRecorder:
+class InProcessRecorder:
     """Streams one in-process flight into a standard ROS 2 MCAP file (``close()`` finishes the file)."""
 
     def __init__(self, path: Path, scenario_yaml: str, rotors: bool, rotor_count: int = 0,

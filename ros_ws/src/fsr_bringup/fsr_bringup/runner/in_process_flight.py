@@ -3,7 +3,7 @@
 The loop itself is compiled (:mod:`fsr_bringup.core.flight_loop`: the simulator's lockstep step, the
 controller's tick and the estimator's sample, the functions the nodes call) and runs ``CHUNK_STEPS`` steps per
 call; between calls this driver writes the recording (:class:`fsr_bringup.recording.flight_recording.
-FlightRecorder`: the payloads the nodes publish, packed from the loop's arrays) and polls ``stop``, so Ctrl-C
+InProcessRecorder`: the payloads the nodes publish, packed from the loop's arrays) and polls ``stop``, so Ctrl-C
 (KeyboardInterrupt) ends the flight as ``stopped`` with every step flown in the arrays and the recording.
 """
 
@@ -143,7 +143,6 @@ class FlightRun:
         return path
 
 
-InProcessResult = FlightRun  # the name before the Python API
 
 
 class _Stopped(KeyboardInterrupt):
@@ -185,9 +184,9 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     estimates = np.zeros((size, 7))
     recorder = None
     if recording is not None:
-        from fsr_bringup.recording.flight_recording import FlightRecorder
+        from fsr_bringup.recording.flight_recording import InProcessRecorder
 
-        recorder = FlightRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos)
+        recorder = InProcessRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"

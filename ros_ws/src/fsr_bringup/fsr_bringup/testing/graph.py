@@ -92,7 +92,7 @@ class Inbox:
 
 
 @dataclass
-class Flight:
+class SimulatorTranscript:
     """What :meth:`GraphHarness.run_controller` saw: every odom (in order), the statuses, the exit code."""
 
     odoms: list[Any]
@@ -256,7 +256,7 @@ class GraphHarness:
         odom_topic: str = ODOM.name,
         status_topic: str = SIM_STATUS.name,
         timeout: float = 20.0,
-    ) -> Flight:
+    ) -> SimulatorTranscript:
         """Act as the lockstep controller of a simulator process until it exits.
 
         For every ``odom`` received, ``answer(odom)`` returns a command message, a list of them (published
@@ -283,7 +283,7 @@ class GraphHarness:
             if process.poll() is None:
                 raise AssertionError(f"{process.name} still running after {timeout} s; log:\n{self.log(process)}")
             self._drain(lambda: len(odoms) + len(statuses))
-            return Flight(
+            return SimulatorTranscript(
                 odoms=list(odoms.messages),
                 statuses=[SimStatus.from_json(m.data) for m in statuses.messages],
                 exit_code=process.returncode,
