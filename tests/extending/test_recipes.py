@@ -1,12 +1,15 @@
 """docs/extending.md's recipes, each done once as written there: the code blocks are taken from the document
 (a fence ``yaml NAME`` or ``python NAME`` is the file NAME), so the document and these examples cannot drift.
-Nothing here touches the package: a vehicle is two YAML files, a figure is registered from outside."""
+Nothing here touches the package: a vehicle is two YAML files, a figure is registered from outside, and the
+control law is added to a copy of ``fsr_control`` in a temporary folder."""
 
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -122,3 +125,56 @@ def _rotation_vector(rotation: np.ndarray) -> np.ndarray:
 def test_the_noise_is_the_same_in_the_node_graph(tmp_path):
     files = recipe_files(tmp_path)
     assert_graph_equals_in_process(files["noisy_ex4.yaml"], tmp_path, ("/odom", "/wrench_cmd", "/wrench_estimate"))
+
+
+def package_with_the_law(folder: Path, files: dict[str, Path]) -> Path:
+    """A copy of ``fsr_control`` with the control-law recipe applied as docs/extending.md says (a new file, an
+    import and a branch in ``core/laws.py``, an entry in ``controllers/catalog.py``); the folder holding it."""
+    import fsr_control
+
+    site = folder / "site"
+    package = site / "fsr_control"
+    shutil.copytree(Path(fsr_control.__file__).parent, package, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(files["preview_law.py"], package / "core" / "preview_law.py")
+    laws = package / "core" / "laws.py"
+    text = laws.read_text()
+    first_import = "from fsr_control.core.reference import"  # the import goes in alphabetical order
+    anchor = "    # a new law: its branch here"
+    assert text.count(first_import) == 1 and text.count(anchor) == 1, "the recipe's places in laws.py moved"
+    text = text.replace(first_import, files["preview_import.py"].read_text() + first_import)
+    laws.write_text(text.replace(anchor, files["preview_branch.py"].read_text() + anchor))
+    catalog = package / "controllers" / "catalog.py"
+    catalog.write_text(catalog.read_text() + "\n" + files["preview_entry.py"].read_text())
+    return site
+
+
+FLY_WITH_THE_LAW = """
+import json, sys
+import numpy as np
+import fsr_control.core.laws
+from fsr_bringup.runner.in_process_flight import fly_in_process
+from fsr_sim.config.scenario import load_scenario
+from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
+
+assert fsr_control.core.laws.__file__.startswith(sys.argv[2]), fsr_control.core.laws.__file__
+run = fly_in_process(load_scenario(sys.argv[1]))
+goal = rotation_from_euler_zyx(np.deg2rad((20.0, 0.0, 0.0)))
+print(json.dumps({"end": run.end_reason, "reason": run.reason, "steps": len(run.state),
+                  "position_error": float(np.linalg.norm(run.state[-1, :3] - (0.5, 0.5, -2.0))),
+                  "attitude_error": float(np.linalg.norm(rotation_from_quaternion(run.state[-1, 6:10]) - goal))}))
+"""
+
+
+def test_a_control_law_reading_the_reference_ahead_flies_the_tilting_quadrotor(tmp_path):
+    """The recipe's preview PD, added as written, flies (under CPython: NUMBA_DISABLE_JIT runs the same source
+    without compiling the edited core)."""
+    files = recipe_files(tmp_path)
+    site = package_with_the_law(tmp_path, files)
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": os.pathsep.join(
+        [str(site), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    run = subprocess.run([sys.executable, "-c", FLY_WITH_THE_LAW, str(files["preview_ex5.yaml"]), str(site)],
+                         env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
+    result = json.loads(run.stdout.strip().splitlines()[-1])
+    assert result["end"] == "finished" and result["steps"] == 4001, result
+    assert result["position_error"] < 1e-3 and result["attitude_error"] < 1e-3, result

@@ -15,7 +15,7 @@ import pytest
 from fsr_bringup.runner import flight as flight_module
 from fsr_bringup.runner import watcher as watcher_module
 from fsr_bringup.runner.domains import fixed_domain
-from fsr_bringup.runner.flight import Console, FlightMember, fly_graph
+from fsr_bringup.runner.flight import Console, VehicleLaunch, fly_graph
 from fsr_bringup.runner.watcher import FlightWatcher, watcher_command
 from fsr_sim.contract import DIVERGED, FINISHED, RUNNING, SimStatus
 
@@ -90,7 +90,7 @@ def test_a_watcher_stuck_at_exit_does_not_hold_the_run(tmp_path, monkeypatch):
     """Every node runs elsewhere (``--nodes`` selected none here): the flight ends with the watcher's final
     status; the watcher ignores SIGINT and SIGTERM and is killed; the run's result stands."""
     monkeypatch.setattr(watcher_module, "watcher_command", lambda namespaces: [sys.executable, "-c", HUNG_WATCHER])
-    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    members = [VehicleLaunch("", tmp_path / "scenario.yaml", True)]
     start = time.monotonic()
     result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
                        fixed_domain(0), 1.0, Console(quiet=True), nodes=set())
@@ -118,7 +118,7 @@ def test_a_simulator_ended_by_its_teardown_watchdog_keeps_the_flight_result(tmp_
                         lambda namespaces: [sys.executable, "-c", FINAL_STATUS_WATCHER, state])
     monkeypatch.setattr(flight_module, "node_commands",
                         lambda *args: [("simulator", [sys.executable, "-c", SIMULATOR_TEARDOWN_HUNG])])
-    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    members = [VehicleLaunch("", tmp_path / "scenario.yaml", True)]
     result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
                        fixed_domain(0), 1.0, Console(quiet=True), nodes={"simulator"})
     assert result.exit_code == code
@@ -136,7 +136,7 @@ def test_a_controller_ended_by_its_teardown_watchdog_is_a_warning(tmp_path, monk
     controller = SIMULATOR_TEARDOWN_HUNG  # the same hang, in the controller
     monkeypatch.setattr(flight_module, "node_commands", lambda *args: [
         ("controller", [sys.executable, "-c", controller]), ("simulator", [sys.executable, "-c", simulator])])
-    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    members = [VehicleLaunch("", tmp_path / "scenario.yaml", True)]
     result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
                        fixed_domain(0), 1.0, Console(quiet=True))
     assert result.exit_code == 0 and result.failures == []
@@ -156,7 +156,7 @@ def test_a_recorder_ended_by_its_teardown_watchdog_after_the_flight_is_a_warning
     monkeypatch.setattr(flight_module, "node_commands", lambda *args: [
         ("recorder", [sys.executable, "-c", RECORDER_TEARDOWN_HUNG]),
         ("simulator", [sys.executable, "-c", "import time; time.sleep(1.0)"])])
-    members = [FlightMember("", tmp_path / "scenario.yaml", True)]
+    members = [VehicleLaunch("", tmp_path / "scenario.yaml", True)]
     result = fly_graph(members, tmp_path / "flight.mcap", tmp_path / "scenario.yaml", tmp_path / "logs",
                        fixed_domain(0), 1.0, Console(quiet=True))
     assert result.exit_code == 0 and result.failures == []

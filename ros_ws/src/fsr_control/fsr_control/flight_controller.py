@@ -1,8 +1,9 @@
 """One object that turns a state into an actuator command: planner + control law + allocation.
 
 ``FlightController.command(t, p, R, v_world, w_body)`` runs the compiled core's tick
-(:func:`fsr_control.core.controller.controller_tick`: the reference at ``t`` [s], the configured law --
-geometric or Voliro, both returning a body wrench -- on the nominal vehicle model, with
+(:func:`fsr_control.core.controller.controller_tick`: the reference at ``t`` [s] (and ahead, for a law that
+reads a horizon), the configured law -- geometric, Voliro or another of the catalog, each returning a body
+wrench -- on the nominal vehicle model, with
 ``controller.compensation: estimate`` cancelling the wrench its own observer estimated at the previous stamp
 (:mod:`fsr_control.compensation`), and the allocation to rotor speeds and tilts, or the wrench passed
 through in wrench actuation). The controller node and the in-process loop run exactly this tick, once per
@@ -23,12 +24,11 @@ import numpy as np
 from fsr_control.allocation import make_actuation
 from fsr_control.compensation import WrenchCompensator, pack_compensation
 from fsr_control.config.controller_config import ControllerConfig
-from fsr_control.controllers.common import ControlLaw, WrenchCommand
-from fsr_control.controllers.geometric import GeometricController
-from fsr_control.controllers.voliro import VoliroController
+from fsr_control.controllers.catalog import LAWS
+from fsr_control.controllers.common import CompiledLaw, WrenchCommand, pack_law
 from fsr_control.core import controller as core
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
-from fsr_control.core.reference import CHANNELS, DERIVATIVES
+from fsr_control.core.reference import CHANNELS, DERIVATIVES, HORIZON_WIDTH
 from fsr_control.planning.trajectory import Reference, Trajectory
 from fsr_sim.core.so3 import Mat3, Vec3, matrix_rows
 from fsr_sim.model.allocation import SaturationReport
@@ -37,11 +37,11 @@ from fsr_sim.model.vehicle import Vehicle
 ROLL_PITCH_TOLERANCE = 1e-4  # rad: a goal for a fixed-rotor vehicle must be level (yaw only)
 
 
-def make_control_law(config: ControllerConfig, vehicle: Vehicle) -> ControlLaw:
-    """The law ``config.type`` names (``geometric`` or ``voliro``) on the nominal ``vehicle``."""
-    if config.type == "voliro":
-        return VoliroController(vehicle, config.gains, config.angular_feedforward)
-    return GeometricController(vehicle, config.gains)
+def make_control_law(config: ControllerConfig, vehicle: Vehicle) -> CompiledLaw:
+    """The law ``config.type`` names (:data:`fsr_control.controllers.catalog.LAWS`) on the nominal ``vehicle``."""
+    law = LAWS[config.type]
+    return CompiledLaw(pack_law(vehicle, config.gains, law.kind, tuple(law.default_gains), config.angular_feedforward,
+                                law.horizon_steps, law.horizon_dt))
 
 
 def seconds_from_ns(stamp_ns: int) -> float:
@@ -139,7 +139,8 @@ class FlightController:
         self.tilting = self.rotors and vehicle.has_servos
         self.output = np.zeros(core.output_size(vehicle.rotor_count))  # the last tick's output row
         self.state = core.ControllerState(self.law.memory, self.actuator.state, compensation[1],
-                                          np.zeros((DERIVATIVES, CHANNELS)))
+                                          np.zeros((DERIVATIVES, CHANNELS)),
+                                          np.zeros((self.law.params.horizon_steps, HORIZON_WIDTH)))
         self._law_and_allocation = (self.law.params, self.actuator.params, compensation[0])
         self.params: core.ControllerParams | None = None  # packed with the trajectory's table
         self.trajectory: Trajectory | None = None

@@ -3,6 +3,7 @@ import math
 import numpy as np
 import pytest
 
+from fsr_control.core import reference as core_reference
 from fsr_control.planning.flatness import flat_attitude_rates
 from fsr_control.planning.polynomial import SepticSegment
 from fsr_control.planning.trajectory import Trajectory, Waypoint, yaw_rotation
@@ -131,3 +132,23 @@ def test_flat_attitude_rates_match_finite_differences():
         np.testing.assert_allclose(omega, vee(rotation.T @ (r_plus - r_minus)) / (2 * h), atol=1e-8)
         np.testing.assert_allclose(omega_dot, (w_plus - w_minus) / (2 * h), atol=1e-7)
         np.testing.assert_allclose(rotation.T @ rotation, np.eye(3), atol=1e-14)
+
+
+def test_the_horizon_holds_the_reference_ahead_row_by_row():
+    """sample_horizon (compiled): row i is the reference at t + (i + 1) dt, across a segment's end and the hold."""
+    goal_rotation = rotation_from_euler_zyx(np.radians((20.0, -10.0, 30.0)))
+    trajectory = Trajectory([Waypoint(GOAL, goal_rotation, 2.0, 0.5), Waypoint(START, np.eye(3), 1.0)], START,
+                            np.eye(3), full_attitude=True)
+    layout = core_reference
+    horizon = np.full((60, layout.HORIZON_WIDTH), np.nan)
+    core_reference.sample_horizon(trajectory.table(), 1.3, 0.05, np.zeros((5, 4)), horizon)
+    for i, row in enumerate(horizon):
+        expected = trajectory.evaluate(1.3 + (i + 1) * 0.05)
+        assert row[layout.HORIZON_TIME] == 1.3 + (i + 1) * 0.05
+        for at, value in ((layout.HORIZON_POSITION, expected.position), (layout.HORIZON_VELOCITY, expected.velocity),
+                          (layout.HORIZON_ACCELERATION, expected.acceleration),
+                          (layout.HORIZON_ROTATION, expected.rotation.ravel()),
+                          (layout.HORIZON_ANGULAR_VELOCITY, expected.angular_velocity)):
+            np.testing.assert_allclose(row[at:at + len(value)], value, rtol=0, atol=1e-12)
+        assert row[layout.HORIZON_YAW] == pytest.approx(expected.yaw, abs=1e-12)
+    assert horizon[-1, layout.HORIZON_TIME] > 3.5  # the last rows hold the end pose

@@ -29,7 +29,7 @@ import yaml
 from fsr_bringup.cli.analyze_cli import add_figure_arguments, figure_options
 from fsr_bringup.runner.domains import acquire_domain, fixed_domain
 from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_path, load_fleet
-from fsr_bringup.runner.flight import Console, FlightMember, fly_graph, node_commands
+from fsr_bringup.runner.flight import Console, VehicleLaunch, fly_graph, node_commands
 from fsr_bringup.runner.remote import parse_node_selection
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_sim.cli.arguments import ArgumentParser
@@ -90,25 +90,25 @@ def load_members(args: argparse.Namespace) -> tuple[str, list[FleetMember]]:
     return checked.scenario.name, [FleetMember("", checked)]
 
 
-def write_scenarios(members: list[FleetMember], run_dir: Path) -> tuple[Path, list[FlightMember]]:
+def write_scenarios(members: list[FleetMember], run_dir: Path) -> tuple[Path, list[VehicleLaunch]]:
     """Write each member's merged scenario into the run folder (what the nodes read and the recording keeps)."""
-    flight_members = []
+    launches = []
     for member in members:
         stem = member.namespace.strip("/") or "scenario"
         path = (run_dir / f"{stem}.yaml").resolve()
         path.write_text(member.checked.scenario.dump(), encoding="utf-8")
-        flight_members.append(FlightMember(member.namespace, path, member.checked.estimator_enabled))
+        launches.append(VehicleLaunch(member.namespace, path, member.checked.estimator_enabled))
     if len(members) == 1 and not members[0].namespace:
-        return flight_members[0].scenario_path, flight_members
+        return launches[0].scenario_path, launches
     combined = (run_dir / "fleet.yaml").resolve()
     fleet = [
         {"namespace": m.namespace, "scenario": yaml.safe_load(m.checked.scenario.dump())} for m in members
     ]
     combined.write_text(yaml.safe_dump({"fleet": fleet}, sort_keys=False), encoding="utf-8")
-    return combined, flight_members
+    return combined, launches
 
 
-def local_nodes(text: str | None, members: list[FlightMember], recording: Path, scenario_path: Path
+def local_nodes(text: str | None, members: list[VehicleLaunch], recording: Path, scenario_path: Path
                 ) -> set[str] | None:
     """The process names ``--nodes`` selects for this host (None: the whole graph)."""
     if text is None:
@@ -163,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as error:
         print(f"fsr-fly: cannot create '{run_dir}': {error.strerror}", file=sys.stderr)
         return EXIT_CONFIG_ERROR
-    scenario_path, flight_members = write_scenarios(members, run_dir)
+    scenario_path, launches = write_scenarios(members, run_dir)
     for member in members:
         label = f"{member.namespace}: " if member.namespace else ""
         print(f"fsr-fly: {name}: {label}{member.checked.summary_line()}", flush=True)
@@ -181,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"fsr-fly: {error}", file=sys.stderr)
             return EXIT_CONFIG_ERROR
         try:
-            nodes = local_nodes(args.nodes, flight_members, recording, scenario_path)
+            nodes = local_nodes(args.nodes, launches, recording, scenario_path)
         except ValueError as error:
             print(f"fsr-fly: {error}", file=sys.stderr)
             return EXIT_CONFIG_ERROR
@@ -192,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
             here = "" if nodes is None else f", nodes here: {', '.join(sorted(nodes))}"
             print(f"fsr-fly: ROS domain {domain.domain_id}{here}, logs in {run_dir / 'logs'}", flush=True)
             result = fly_graph(
-                flight_members, recording, scenario_path, run_dir / "logs", domain, duration,
+                launches, recording, scenario_path, run_dir / "logs", domain, duration,
                 Console(quiet=args.quiet), localhost_only=not args.network, nodes=nodes,
                 startup_timeout=startup_timeout,
             )

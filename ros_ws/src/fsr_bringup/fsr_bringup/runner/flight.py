@@ -110,8 +110,8 @@ class Console:
 
 
 @dataclass(frozen=True)
-class FlightMember:
-    """One vehicle of a run: its namespace ('' for a single vehicle) and its validated scenario file."""
+class VehicleLaunch:
+    """How to start one vehicle's nodes: its namespace ('' for a single vehicle) and its validated scenario file."""
 
     namespace: str
     scenario_path: Path
@@ -122,7 +122,7 @@ class FlightMember:
 
 
 def node_commands(
-    members: list[FlightMember], recording: Path, scenario_path: Path, startup_timeout: float | None = None
+    members: list[VehicleLaunch], recording: Path, scenario_path: Path, startup_timeout: float | None = None
 ) -> list[tuple[str, list[str]]]:
     """(name, argv) of each node of the graph, in start order: recorder, then per vehicle the estimator,
     the controller and the simulator (whose lockstep handshake waits for the others, local or remote)."""
@@ -164,7 +164,7 @@ def child_environment(domain: DomainLease, localhost_only: bool) -> dict[str, st
 
 
 def fly_graph(
-    members: list[FlightMember],
+    members: list[VehicleLaunch],
     recording: Path,
     scenario_path: Path,
     log_dir: Path,

@@ -10,7 +10,8 @@ trajectory:
       hold: 0.0                     # optional wait after arrival [s] >= 0
   goal_duration: 10.0               # travel time [s] of a goal received at run time (`goal` topic)
 controller:
-  type: geometric                   # geometric (fixed rotors) | voliro (tilting rotors); default by vehicle
+  type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | a law of
+                                    # fsr_control.controllers.catalog.LAWS; default by vehicle
   gains: {k_p: [20, 20, 100], k_v: [20, 20, 100], k_r: [10, 10, 100], k_w: [10, 10, 100]}
   angular_feedforward: consistent   # voliro only: consistent | report
   secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
@@ -33,7 +34,8 @@ import numpy as np
 
 from fsr_control.allocation import ALLOCATION_STRATEGIES
 from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig
-from fsr_control.controllers import geometric, voliro
+from fsr_control.controllers import voliro
+from fsr_control.controllers.catalog import LAWS
 from fsr_control.planning.trajectory import Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import Section, checked_spd
@@ -41,8 +43,6 @@ from fsr_sim.model.environment import pack_surfaces
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
-CONTROLLER_TYPES = ("geometric", "voliro")
-DEFAULT_GAINS = {"geometric": geometric.DEFAULT_GAINS, "voliro": voliro.DEFAULT_GAINS}
 SECONDARY_TYPES = ("none", "min_peak_speed")
 DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
 DEFAULT_GOAL_DURATION = 10.0  # s
@@ -72,7 +72,7 @@ class ControllerConfig:
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
-    defaults = DEFAULT_GAINS[controller_type]
+    defaults = LAWS[controller_type].default_gains
     gains = {}
     for name, default in defaults.items():
         value = section.raw(name)
@@ -133,16 +133,17 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     actuation = scenario.data.get("actuation", "rotors")
     controller = scenario.section("controller")
     default_type = "voliro" if vehicle.fully_actuated else "geometric"
-    controller_type = controller.string("type", default_type, choices=CONTROLLER_TYPES)
-    if controller_type == "voliro" and not vehicle.fully_actuated:
-        raise controller.error("type", f"voliro needs a fully actuated vehicle (rotors on servos or canted); "
-                                       f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
-    if controller_type == "geometric" and vehicle.fully_actuated:
-        raise controller.error("type", f"geometric is for vehicles with thrust along -z_b; '{vehicle.name}' is "
-                                       "fully actuated (use voliro)")
-    if controller_type == "voliro" and actuation == "wrench":
-        raise controller.error("type", "voliro allocates its 6-D wrench to the rotors: it needs 'actuation: "
-                                       "rotors'")
+    controller_type = controller.string("type", default_type, choices=tuple(LAWS))
+    law = LAWS[controller_type]
+    if law.fully_actuated and not vehicle.fully_actuated:
+        raise controller.error("type", f"{controller_type} needs a fully actuated vehicle (rotors on servos or "
+                                       f"canted); '{vehicle.name}' produces thrust along -z_b only (use geometric)")
+    if vehicle.fully_actuated and not law.fully_actuated:
+        raise controller.error("type", f"{controller_type} is for vehicles with thrust along -z_b; '{vehicle.name}' "
+                                       "is fully actuated (use voliro)")
+    if law.fully_actuated and actuation == "wrench":
+        raise controller.error("type", f"{controller_type} allocates its 6-D wrench to the rotors: it needs "
+                                       "'actuation: rotors'")
     gains = _gains(controller.section("gains"), controller_type)
     canted = vehicle.fully_actuated and not vehicle.has_servos  # fixed rotors: clamped rotor by rotor
     allocation = controller.string("allocation", "clamp" if canted else DEFAULT_ALLOCATION,

@@ -1,10 +1,10 @@
 """What the control laws share: their interface and their Python shell around the compiled core.
 
 The interface (:class:`ControlLaw`): ``compute(reference, position, rotation, velocity_world,
-angular_velocity_body) -> WrenchCommand``, the body wrench to produce and the attitude it commands;
-allocation (fsr_control.allocation) turns the wrench into rotor speeds and tilts. The laws themselves are
-written once, in the compiled core (:mod:`fsr_control.core.laws`); :class:`CompiledLaw` packs a law's gains
-and nominal model once and calls it.
+angular_velocity_body, compensation, horizon) -> WrenchCommand``, the body wrench to produce and the
+attitude it commands; allocation (fsr_control.allocation) turns the wrench into rotor speeds and tilts. The
+laws themselves are written once, in the compiled core (:mod:`fsr_control.core.laws`); :class:`CompiledLaw`
+packs a law's gains and nominal model once and calls it.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 
 from fsr_control.core import laws
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
-from fsr_control.core.reference import ReferenceSample
+from fsr_control.core.reference import HORIZON_WIDTH, ReferenceSample
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.core.so3 import Vec3, matrix_rows
 from fsr_sim.model.vehicle import Vehicle
@@ -57,7 +57,8 @@ class ControlLaw(Protocol):
     ``rotation`` body FRD -> world NED, angular velocity body FRD [rad/s])."""
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
-                angular_velocity_body: np.ndarray, compensation: Compensation | None = None) -> WrenchCommand:
+                angular_velocity_body: np.ndarray, compensation: Compensation | None = None,
+                horizon: np.ndarray | None = None) -> WrenchCommand:
         """The body wrench for this state and reference.
 
         Parameters
@@ -73,6 +74,8 @@ class ControlLaw(Protocol):
         compensation : Compensation, optional
             The estimated external wrench to cancel (:data:`Compensation`; None: uncompensated, bit for bit
             the law as written). How each law uses it: its own ``compute``.
+        horizon : numpy.ndarray, shape (N, HORIZON_WIDTH), optional
+            The reference ahead, for a law that reads it (rows of :mod:`fsr_control.core.reference`).
 
         Returns
         -------
@@ -88,15 +91,16 @@ def compensation_of(compensation: Compensation | None) -> laws.Compensation:
     return laws.Compensation(True, force, torque, rate, acceleration)
 
 
-def pack_law(vehicle: Vehicle, gains: dict[str, np.ndarray], voliro: bool,
-             angular_feedforward: str = "consistent") -> laws.LawParams:
-    """The core's :class:`~fsr_control.core.laws.LawParams` (gains (3, 3) each; ``k_v`` is Voliro's ``k_d``)."""
-    def gain(name: str) -> np.ndarray:
-        return np.ascontiguousarray(np.asarray(gains[name], dtype=float).reshape(3, 3))
-
-    return laws.LawParams(voliro, float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float),
-                          gain("k_p"), gain("k_d" if voliro else "k_v"), gain("k_r"), gain("k_w"),
-                          angular_feedforward == "report")
+def pack_law(vehicle: Vehicle, gains: dict[str, np.ndarray], kind: int, gain_names: tuple[str, str, str, str],
+             angular_feedforward: str = "consistent", horizon_steps: int = 0,
+             horizon_dt: float = 0.0) -> laws.LawParams:
+    """The core's :class:`~fsr_control.core.laws.LawParams` for the law ``kind``: ``gains[name]`` (3, 3) for
+    each of ``gain_names`` in the core's slot order (``k_p``, ``k_v``, ``k_r``, ``k_w``; Voliro's ``k_d`` is its
+    ``k_v``) and the reference horizon the law reads (``horizon_steps`` samples ``horizon_dt`` [s] apart)."""
+    k_p, k_v, k_r, k_w = (np.ascontiguousarray(np.asarray(gains[name], dtype=float).reshape(3, 3))
+                          for name in gain_names)
+    return laws.LawParams(kind, float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float), k_p, k_v,
+                          k_r, k_w, angular_feedforward == "report", int(horizon_steps), float(horizon_dt))
 
 
 class CompiledLaw:
@@ -113,18 +117,22 @@ class CompiledLaw:
         self.memory[:] = 0.0
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
-                angular_velocity_body: np.ndarray, compensation: Compensation | None = None) -> WrenchCommand:
-        """The body wrench for this state and reference (:meth:`ControlLaw.compute`). Raises ValueError when no
-        attitude can be commanded (a zero thrust vector, or one horizontal along the heading)."""
-        sample = reference_sample(reference)
+                angular_velocity_body: np.ndarray, compensation: Compensation | None = None,
+                horizon: np.ndarray | None = None) -> WrenchCommand:
+        """The body wrench for this state and reference (:meth:`ControlLaw.compute`); ``horizon``: the reference
+        ahead, (``params.horizon_steps``, ``HORIZON_WIDTH``) rows of :mod:`fsr_control.core.reference` (needed
+        only by a law that looks ahead). Raises ValueError when no attitude can be commanded (a zero thrust
+        vector, or one horizontal along the heading) or the horizon does not have the law's shape."""
+        steps = self.params.horizon_steps
+        horizon = np.zeros((0, HORIZON_WIDTH)) if horizon is None and steps == 0 else horizon
+        if horizon is None or np.shape(horizon) != (steps, HORIZON_WIDTH):
+            raise ValueError(f"this law reads the reference {steps} samples ahead: horizon must have shape "
+                             f"({steps}, {HORIZON_WIDTH}), got {None if horizon is None else np.shape(horizon)}")
         state = (_vector(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), _vector(velocity_world),
                  _vector(angular_velocity_body))
-        if self.params.voliro:
-            result = laws.voliro_law(self.params, sample, *state, compensation_of(compensation))
-        else:
-            result = laws.geometric_law(self.params, self.memory, float(reference.time), sample, *state,
-                                        compensation_of(compensation))
-        status, force, torque, rotation_commanded = result
+        status, force, torque, rotation_commanded = laws.control_law(
+            self.params, self.memory, np.ascontiguousarray(horizon, dtype=float), float(reference.time),
+            reference_sample(reference), *state, compensation_of(compensation))
         if status != ATTITUDE_OK:
             raise ValueError(ATTITUDE_ERRORS[status])
         return WrenchCommand(np.array(force), np.array(torque), np.array(rotation_commanded))

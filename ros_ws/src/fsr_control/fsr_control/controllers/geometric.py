@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsr_control.controllers.common import CompiledLaw, pack_law
+from fsr_control.core import laws
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_GAINS = {  # the report's exercise-4 gains (docs/model.md §3.6), used when a scenario gives none
@@ -66,4 +67,4 @@ class GeometricController(CompiledLaw):
         if vehicle.fully_actuated:
             raise ValueError(f"the geometric controller is for vehicles that produce thrust along -z_b and a torque; "
                              f"'{vehicle.name}' is fully actuated (use voliro)")
-        super().__init__(pack_law(vehicle, gains, voliro=False))
+        super().__init__(pack_law(vehicle, gains, laws.GEOMETRIC, tuple(DEFAULT_GAINS)))

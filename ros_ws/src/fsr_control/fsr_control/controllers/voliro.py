@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsr_control.controllers.common import CompiledLaw, pack_law
+from fsr_control.core import laws
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_GAINS = {  # the report's exercise-5 gains (docs/model.md §3.7), used when a scenario gives none
@@ -63,5 +64,5 @@ class VoliroController(CompiledLaw):
                              f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
         if angular_feedforward not in ANGULAR_FEEDFORWARDS:
             raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
-        super().__init__(pack_law(vehicle, gains, voliro=True, angular_feedforward=angular_feedforward))
+        super().__init__(pack_law(vehicle, gains, laws.VOLIRO, tuple(DEFAULT_GAINS), angular_feedforward))
         self.report_feedforward = angular_feedforward == "report"

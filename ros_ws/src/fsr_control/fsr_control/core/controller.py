@@ -1,4 +1,5 @@
-"""The controller's per-step tick (compiled core): reference -> (compensation) -> law -> allocation.
+"""The controller's per-step tick (compiled core): reference (and its horizon) -> (compensation) -> law ->
+allocation.
 
 :func:`controller_tick` is what the controller node, :class:`fsr_control.flight_controller.FlightController`
 and the in-process loop run for the state stamped ``t``. It writes one output row (:func:`output_size`
@@ -24,8 +25,8 @@ from fsr_control.core.compensation import (
     compensation_record,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_control.core.laws import NO_COMPENSATION, LawParams, geometric_law, voliro_law
-from fsr_control.core.reference import TrajectoryTable, sample_reference
+from fsr_control.core.laws import NO_COMPENSATION, LawParams, control_law
+from fsr_control.core.reference import TrajectoryTable, sample_horizon, sample_reference
 from fsr_sim.core.jit import jit
 from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, quaternion_from_rotation_rows
 
@@ -65,6 +66,7 @@ class ControllerState(NamedTuple):
     allocation: AllocationState
     compensation: CompensationState
     reference: np.ndarray  # (5, 4) scratch: the active segment's channel derivatives
+    horizon: np.ndarray  # (law.horizon_steps, HORIZON_WIDTH): the reference ahead (fsr_control.core.reference)
 
 
 @jit
@@ -106,13 +108,10 @@ def controller_tick(params: ControllerParams, state: ControllerState, t: float, 
     compensation = NO_COMPENSATION
     if params.compensation.enabled:  # cancel the estimate of t_(k-1), then feed the observer this step
         compensation = compensation_estimate(params.compensation, state.compensation, t, position[2])
-    if params.law.voliro:
-        status, force_d, torque_d, rotation_c = voliro_law(params.law, reference, position, rotation,
-                                                           velocity_world, angular_velocity, compensation)
-    else:
-        status, force_d, torque_d, rotation_c = geometric_law(params.law, state.law, t, reference, position,
-                                                              rotation, velocity_world, angular_velocity,
-                                                              compensation)
+    if params.law.horizon_steps > 0:
+        sample_horizon(params.trajectory, t, params.law.horizon_dt, state.reference, state.horizon)
+    status, force_d, torque_d, rotation_c = control_law(params.law, state.law, state.horizon, t, reference, position,
+                                                        rotation, velocity_world, angular_velocity, compensation)
     if status != ATTITUDE_OK:
         return status
     _put3(out, DESIRED_FORCE, force_d)

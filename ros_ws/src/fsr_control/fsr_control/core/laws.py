@@ -1,6 +1,13 @@
-"""The control laws per step (compiled core): geometric (fixed rotors) and Voliro (tilting rotors).
+"""The control laws per step (compiled core): geometric (fixed rotors) and Voliro (fully actuated).
 
-Both take the reference, the state (position and velocity world NED [m, m/s], ``R`` rows body FRD -> world,
+:func:`control_law` is the interface the controller's tick calls: the law ``params.kind`` names, given the
+reference at ``t``, the reference over the law's horizon (``params.horizon_steps`` rows at ``t + dt, ...,
+t + N dt``, ``dt = params.horizon_dt``, laid out as in :mod:`fsr_control.core.reference`; no rows for a law
+that does not look ahead), the state and the compensation. A new law is its function (in a core file of
+its own), a branch in :func:`control_law` and an entry in :data:`fsr_control.controllers.catalog.LAWS`
+(``docs/extending.md``).
+
+Each law takes the reference, the state (position and velocity world NED [m, m/s], ``R`` rows body FRD -> world,
 angular velocity body [rad/s]) and, with ``controller.compensation: estimate``, the estimated external wrench
 to cancel (:class:`Compensation`), and return ``(status, force_body, torque_body, R_c)``: the body wrench
 [N, N m] to produce and the attitude the law steers to. Their equations and the reasons behind them are in
@@ -34,8 +41,12 @@ HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY = 0, 1, 2  # velocity: 3 entries
 MEMORY_SIZE = 5
 
 
+# LawParams.kind
+GEOMETRIC, VOLIRO = 0, 1
+
+
 class LawParams(NamedTuple):
-    voliro: bool  # the Voliro law (tilting rotors); else the geometric law
+    kind: int  # which law (GEOMETRIC, VOLIRO, ...)
     mass: float  # nominal mass [kg]
     inertia: np.ndarray  # (3, 3) nominal inertia [kg m^2]
     k_p: np.ndarray  # (3, 3)
@@ -43,6 +54,8 @@ class LawParams(NamedTuple):
     k_r: np.ndarray  # (3, 3)
     k_w: np.ndarray  # (3, 3)
     report_feedforward: bool  # Voliro: the report's angular feed-forward
+    horizon_steps: int  # reference samples ahead the law reads (0: none)
+    horizon_dt: float  # their spacing [s]
 
 
 class Compensation(NamedTuple):
@@ -188,3 +201,16 @@ def voliro_law(params: LawParams, reference: ReferenceSample, position: Vec3, ro
     force_body = mat_t_vec3(r, (v[0], v[1], v[2] - GRAVITY))
     return (ATTITUDE_OK, (m * force_body[0], m * force_body[1], m * force_body[2]),
             (inertia_w[0] + gyro[0], inertia_w[1] + gyro[1], inertia_w[2] + gyro[2]), rotation_desired)
+
+
+@jit_inline
+def control_law(params: LawParams, memory, horizon, t: float, reference: ReferenceSample,  # noqa: ANN001
+                position: Vec3, rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3,
+                compensation: Compensation) -> tuple:
+    """``(status, force_body, torque_body, R_c)`` of the law ``params.kind`` (module docstring): ``memory`` the
+    law's own (``MEMORY_SIZE``), ``horizon`` the reference ahead (``params.horizon_steps`` rows)."""
+    if params.kind == VOLIRO:
+        return voliro_law(params, reference, position, rotation, velocity_world, angular_velocity, compensation)
+    # a new law: its branch here, e.g. ``if params.kind == MY_LAW: return my_law(params, horizon, ...)``
+    return geometric_law(params, memory, t, reference, position, rotation, velocity_world, angular_velocity,
+                         compensation)

@@ -10,6 +10,11 @@ their goal with every derivative zero. The attitude turns about the segment's fi
 is ``R_d = Rz(psi_0 + theta)``.
 
 The active segment at ``t`` is the last one starting at or before ``t`` (the first one before that).
+
+A law that looks ahead (a preview or a model-predictive law) gets the reference over a horizon:
+:func:`sample_horizon` writes the samples at ``t + dt, ..., t + N dt`` as rows laid out by the ``HORIZON_*``
+constants (time [s], position, velocity, acceleration world NED, ``R_d`` row by row, ``omega_d`` desired
+body, heading ``psi`` [rad]).
 """
 
 from __future__ import annotations
@@ -25,6 +30,10 @@ from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, yaw_rotation_rows
 DERIVATIVES = 5  # value, velocity, acceleration, jerk, snap
 CHANNELS = 4  # x, y, z, theta
 DEGREE = 7
+# A horizon row (sample_horizon)
+HORIZON_TIME, HORIZON_POSITION, HORIZON_VELOCITY, HORIZON_ACCELERATION = 0, 1, 4, 7
+HORIZON_ROTATION, HORIZON_ANGULAR_VELOCITY, HORIZON_YAW = 10, 19, 22  # R_d: 9 entries row by row
+HORIZON_WIDTH = 23
 
 
 class TrajectoryTable(NamedTuple):
@@ -141,3 +150,22 @@ def sample_reference(table: TrajectoryTable, t: float, scratch) -> ReferenceSamp
     segment = active_segment(table, t)
     channel_derivatives(table, segment, t, scratch)
     return reference_from_derivatives(table, segment, scratch)
+
+
+@jit
+def sample_horizon(table: TrajectoryTable, t: float, dt: float, scratch, horizon) -> None:  # noqa: ANN001
+    """The reference at ``t + (i + 1) dt`` [s] into row ``i`` of ``horizon`` (N, ``HORIZON_WIDTH``), for each of
+    its rows (module docstring); ``scratch`` (5, 4) as in :func:`sample_reference`."""
+    for i in range(horizon.shape[0]):
+        time = t + (i + 1) * dt
+        sample = sample_reference(table, time, scratch)
+        row = horizon[i]
+        row[HORIZON_TIME] = time
+        for k in range(3):
+            row[HORIZON_POSITION + k] = sample.position[k]
+            row[HORIZON_VELOCITY + k] = sample.velocity[k]
+            row[HORIZON_ACCELERATION + k] = sample.acceleration[k]
+            row[HORIZON_ANGULAR_VELOCITY + k] = sample.angular_velocity[k]
+            for j in range(3):
+                row[HORIZON_ROTATION + 3 * k + j] = sample.rotation[k][j]
+        row[HORIZON_YAW] = sample.yaw
