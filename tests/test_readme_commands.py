@@ -10,6 +10,9 @@ the commands as written, to keep the run short:
 * the by-hand block (``export ROS_DOMAIN_ID=42`` and one node per line) runs as one scripted graph: the
   nodes are started together in a leased ROS domain instead of 42 (localhost discovery), the simulator
   line gets ``-p duration:=0.5``, and every node must end by itself (exit 0) with a complete recording;
+* the companion-computer block (``python3 -m venv companion``, the ``pip install``, one node) runs as
+  written in its own folder with a copy of ``ros_ws`` (pip builds a local folder in place), with its own
+  compiled-core cache; the node flies 0.5 s against the repository's simulator in a leased ROS domain;
 * ``bash scripts/setup.sh && .venv/bin/python -m pytest`` is not run: it is this test suite (CI runs it
   as ``.ci/run``), running it here would recurse.
 """
@@ -18,6 +21,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -36,6 +40,7 @@ LINKED = (".venv", "scripts", "requirements.txt", "ros_ws", "examples", "benchma
 SHORT_FLIGHT = " --duration 0.5"
 SUITE_ITSELF = "python -m pytest"
 BY_HAND_MARK = "export ROS_DOMAIN_ID="
+COMPANION_MARK = "python3 -m venv companion"
 
 
 def fenced_blocks(text: str, language: str) -> list[str]:
@@ -56,14 +61,16 @@ def commands(block: str) -> list[str]:
 README_TEXT = README.read_text(encoding="utf-8")
 BLOCKS = [commands(block) for block in fenced_blocks(README_TEXT, "bash")]
 BY_HAND = next(block for block in BLOCKS if block and block[0].startswith(BY_HAND_MARK))
-SINGLE = [c for block in BLOCKS if block is not BY_HAND for c in block if SUITE_ITSELF not in c]
+COMPANION = next(block for block in BLOCKS if block and block[0] == COMPANION_MARK)
+SINGLE = [c for block in BLOCKS if block is not BY_HAND and block is not COMPANION for c in block
+          if SUITE_ITSELF not in c]
 
 
 def test_the_readme_has_the_commands_this_test_expects():
     every = [c for block in BLOCKS for c in block]
     assert every[0] == "bash scripts/setup.sh && .venv/bin/fsr-fly ex3_estimation --out runs/ex3_estimation.mcap"
     assert every[1] == "bash scripts/setup.sh && .venv/bin/python -m pytest"
-    assert len(SINGLE) >= 10 and len(BY_HAND) == 5
+    assert len(SINGLE) >= 10 and len(BY_HAND) == 5 and len(COMPANION) == 3
     yaml_blocks = fenced_blocks(README_TEXT, "yaml")
     assert len(yaml_blocks) == 1 and "name: my_flight" in yaml_blocks[0]
 
@@ -98,6 +105,27 @@ def test_readme_command_runs(workdir, command):
         assert (workdir / out.group(1)).with_suffix("").joinpath("metrics.json").is_file()
 
 
+def run_together(lines: list[str], cwd: Path, env: dict[str, str], timeout: float) -> dict[str, str]:
+    """Start every command line at once; each must end by itself (no signal) with exit 0. {line: output}."""
+    processes = []
+    try:
+        for line in lines:
+            processes.append((line, subprocess.Popen(
+                ["bash", "-c", f"exec {line}"], cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT, text=True, start_new_session=True,
+            )))
+        outputs = {}
+        for line, process in processes:
+            outputs[line], _ = process.communicate(timeout=timeout)
+            assert process.returncode == 0, f"$ {line}\n{outputs[line][-3000:]}"
+        return outputs
+    finally:
+        for _, process in processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait(5)
+
+
 @pytest.mark.graph
 def test_readme_by_hand_nodes_run_together_and_end_by_themselves(workdir):
     assert BY_HAND[0] == "export ROS_DOMAIN_ID=42"
@@ -107,23 +135,37 @@ def test_readme_by_hand_nodes_run_together_and_end_by_themselves(workdir):
     with acquire_domain(TEST_RANGE) as lease:
         env = {k: v for k, v in os.environ.items() if k not in ("ROS_LOCALHOST_ONLY", "PYTHONPATH")}
         env.update(ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-        processes = []
-        try:
-            for line in lines:
-                run = line + " -p duration:=0.5" if "simulator" in line.split()[0] else line
-                processes.append((run, subprocess.Popen(
-                    ["bash", "-c", f"exec {run}"], cwd=workdir, env=env, stdin=subprocess.DEVNULL,
-                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True,
-                )))
-            for run, process in processes:  # no signal: every node must end with the flight
-                output, _ = process.communicate(timeout=90)
-                assert process.returncode == 0, f"$ {run}\n{output[-3000:]}"
-        finally:
-            for _, process in processes:
-                if process.poll() is None:
-                    process.kill()
-                    process.wait(5)
+        run_together([line + " -p duration:=0.5" if "simulator" in line.split()[0] else line for line in lines],
+                     workdir, env, timeout=90)
     result = open_recording(recording)
     assert not result.truncated
     assert len({t for t, _ in result.raw("/odom")}) == 501 and result.count("/wrench_estimate") == 501
     assert yaml.safe_load(result.scenario_yaml)["name"] == "ex4_geometric"
+
+
+@pytest.mark.graph
+@pytest.mark.timeout(600)
+def test_readme_companion_install_flies_its_controller_against_the_simulator(tmp_path):
+    make_venv, install, node = COMPANION
+    assert "pip install" in install and node.startswith("companion/bin/controller --ros-args -p scenario:=")
+    shutil.copytree(ROOT / "ros_ws", tmp_path / "ros_ws",
+                    ignore=shutil.ignore_patterns("build", "install", "log", "*.egg-info", "__pycache__"))
+    env = {k: v for k, v in os.environ.items() if k not in ("ROS_LOCALHOST_ONLY", "PYTHONPATH", "VIRTUAL_ENV")}
+    env["FSR_NUMBA_CACHE_BASE"] = str(tmp_path / "cache")  # its own core (no fsr_bringup): its own cache
+    for command in (make_venv, install):
+        result = subprocess.run(["bash", "-c", command], cwd=tmp_path, env=env, capture_output=True, text=True,
+                                timeout=600, stdin=subprocess.DEVNULL)
+        assert result.returncode == 0, f"$ {command}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}"
+    listed = subprocess.run([str(tmp_path / "companion" / "bin" / "python"), "-m", "pip", "list", "--format=freeze"],
+                            capture_output=True, text=True, timeout=120).stdout.lower()
+    installed = {re.split(r"==| @ ", line)[0].replace("_", "-") for line in listed.splitlines()}
+    assert {"fsr-sim", "fsr-control", "fsr-estimation"} <= installed and "fsr-bringup" not in installed, listed
+    assert not installed & {"mcap", "mcap-ros2-support", "matplotlib"}, listed
+    scenario = node.split("scenario:=")[1].split()[0]
+    simulator = f"{ROOT}/.venv/bin/simulator --ros-args -p scenario:={scenario} -p wait_for_subscribers:=1 " \
+                "-p duration:=0.5 -p startup_timeout:=300"  # while the companion compiles its core
+    with acquire_domain(TEST_RANGE) as lease:
+        env.update(ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        outputs = run_together([node, simulator], tmp_path, env, timeout=300)
+    assert "finished: reached the scenario duration 0.5 s (500 steps" in outputs[simulator], outputs[simulator]
+    assert "501 odom answered" in outputs[node], outputs[node]

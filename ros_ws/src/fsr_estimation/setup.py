@@ -10,7 +10,9 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
     ],
-    install_requires=["setuptools", "numpy", "scipy", "matplotlib", "fsr_sim"],
+    install_requires=["setuptools", "numpy", "scipy", "fsr_sim"],
+    # fsr-estimate's figures and its MCAP logs; the estimator node needs neither
+    extras_require={"cli": ["matplotlib", "fsr_sim[recording]"]},
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",

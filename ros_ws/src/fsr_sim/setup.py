@@ -12,9 +12,11 @@ setup(
         ("share/" + package_name, ["package.xml"]),
     ],
     # runtime Python dependencies (the ROS message packages and rclpy are <exec_depend>s in package.xml,
-    # installed from pip by requirements.txt); mcap, mcap-ros2-support, ros-rosidl-parser: fsr_sim.recording
-    install_requires=["setuptools", "numpy", "scipy", "numba", "PyYAML", "mcap", "mcap-ros2-support",
-                      "ros-rosidl-parser"],
+    # installed from pip by requirements.txt); ros-rosidl-parser: message classes from the contract's type
+    # names. MCAP recordings (fsr_sim.recording) are the 'recording' extra: a controller or estimator node on
+    # a companion computer installs fsr_sim without them.
+    install_requires=["setuptools", "numpy", "scipy", "numba", "PyYAML", "ros-rosidl-parser"],
+    extras_require={"recording": ["mcap", "mcap-ros2-support"]},
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",

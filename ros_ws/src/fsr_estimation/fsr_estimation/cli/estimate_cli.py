@@ -189,8 +189,11 @@ def run(args: argparse.Namespace) -> str:
         except OSError as error:
             raise UsageError(f"--json: cannot write '{args.json}' ({error.strerror})") from None
     if args.plots is not None:
-        from fsr_estimation.cli.estimate_plots import write_plots
-
+        try:
+            from fsr_estimation.cli.estimate_plots import write_plots
+        except ModuleNotFoundError as error:
+            raise UsageError(f"--plots needs '{error.name}', which is not installed: pip install "
+                             "'fsr_estimation[cli]'") from None
         try:
             args.plots.mkdir(parents=True, exist_ok=True)
         except OSError as error:

@@ -206,7 +206,10 @@ def load_mcap(path: str | Path) -> FlightLog:
 
     A file without its MCAP footer (recorder killed, copy cut short) is read up to its last complete chunk
     and the log is flagged ``truncated``; the caller decides whether a partial flight is acceptable."""
-    from fsr_sim.recording.reader import RecordingError, open_recording
+    try:
+        from fsr_sim.recording.reader import RecordingError, open_recording
+    except ModuleNotFoundError as error:  # fsr_sim installed without its 'recording' extra
+        raise FlightLogError(f"{path}: {error}") from None
 
     path = Path(path)
     try:
