@@ -29,7 +29,8 @@ def add_figure_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--titles", action="store_true", help="put a title inside each figure (default: none)")
     parser.add_argument("--settling", choices=SETTLING_CHOICES, default="standard",
                         help="settling-time definition of the estimator metrics (default standard; report = the "
-                             "report's, as fsr-estimate --settling report)")
+                             "definition of the report fsr started from, docs/model.md section 5, as "
+                             "fsr-estimate --settling report)")
     parser.add_argument("--after", type=float, metavar="T",
                         help="estimator max error over t >= T [s] (default: the last 5 s)")
 

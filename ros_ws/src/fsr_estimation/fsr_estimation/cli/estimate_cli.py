@@ -41,7 +41,8 @@ LOG formats: .mat (the report's layout: attitude, attitude_vel, linear_vel, thru
 EPILOG = """\
 settling: 'standard' = the time after which |error| stays within 3 % of |truth| to the end of the log;
 'report' = the report's convergence time (first k whose moving max of the signed error over [k - 2 s, k + 4 s]
-is within 3 %, reported as k T_s), which reproduces its Table 3.
+is within 3 %, reported as k T_s), which reproduces its Table 3 (docs/model.md, section 5: the report this
+project started from and where fsr differs from it).
 example: fsr-estimate examples/ex3_flight_log.mcap --mass 1.5 --inertia 1.2416,1.2416,2.4832 --c0 10 --r 1:5
          --truth 1,1,0,0,0,-0.4 --settling report
 """
