@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fsr_bringup.analysis.run import analyze_recording
 from fsr_bringup.testing.graph import wait_for_recorded, wait_for_text
 from fsr_sim.recording.reader import open_recording
 
@@ -184,6 +185,7 @@ def test_interrupted_run_records_every_message_up_to_the_last_step_and_says_inte
     assert recording.count("mass_estimate") == recording.count("wrench_estimate")
     summary = (tmp_path / "run" / "summary.md").read_text()
     assert f"interrupted at t = {steps * 1e-3:.3f} s" in summary, summary
+    assert f"fsr-fly: flight interrupted: simulated {steps * 1e-3:.3f} s" in stdout, stdout  # one stop time
 
 
 def test_invalid_scenario_is_refused_before_any_process_starts(tmp_path):
@@ -241,3 +243,14 @@ def test_three_vehicles_fly_under_their_namespaces(tmp_path):
         assert final_status(recording, namespace)["state"] == "finished"
         final = odom_positions(out, f"{namespace}/odom")[-1]
         assert np.linalg.norm(final - goal) < 0.01, (namespace, final)
+    # each vehicle is analysed with its own scenario from the fleet in the metadata
+    scenarios = {"/uav1": "octo_ground_effect", "/uav2": "ex4_geometric", "/uav3": "ex5_voliro"}
+    for namespace, name in scenarios.items():
+        metrics = analyze_recording(recording, tmp_path / namespace.strip("/"), namespace=namespace,
+                                    figures=False).metrics
+        notes = "\n".join(metrics["notes"])
+        assert metrics["scenario"] == name and "cannot be used" not in notes and "skipped" not in notes, notes
+        assert metrics["saturation"] is not None and metrics["mass"]["true_kg"] is not None, metrics
+    missing = analyze_recording(recording, tmp_path / "uav9", namespace="/uav9", figures=False).metrics["notes"]
+    assert any("the fleet in the metadata has no vehicle under /uav9 (it has /uav1, /uav2, /uav3)" in n
+               for n in missing), missing

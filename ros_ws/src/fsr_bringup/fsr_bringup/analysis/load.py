@@ -168,9 +168,10 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
         if note:
             notes.append(note)
     namespace = "/" + namespace.strip("/") if namespace.strip("/") else "/"
-    config, scenario_name, estimator = _scenario(recording, notes)
+    scenario = recorded_scenario(recording, namespace, notes)
+    config, scenario_name, estimator = _scenario(scenario, recording.path.stem, notes)
     flight = RecordedFlight(recording, namespace, scenario_name, config, estimator, notes=notes)
-    flight.compensation_mode, flight.compensation = _compensation(recording, notes)
+    flight.compensation_mode, flight.compensation = _compensation(scenario, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
@@ -198,20 +199,37 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     return flight
 
 
-def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig | None, str, EstimatorConfig | None]:
-    """(plant-side config, scenario name, estimator config) of the scenario stored in the metadata."""
+def recorded_scenario(recording: Recording, namespace: str, notes: list[str]) -> Scenario | None:
+    """The scenario the recording's metadata holds for the vehicle under ``namespace`` (``/`` or ``/uav1``):
+    a single vehicle's scenario, or the member of a fleet (``fleet: [{namespace, scenario}, ...]``, what
+    ``fsr-fly`` records for several vehicles). None, with a note saying why, when there is none."""
     text = recording.scenario_yaml
-    fallback = recording.path.stem
     if text is None:
         notes.append("no scenario in the recording's metadata: vehicle limits, true mass and surfaces unknown")
-        return None, fallback, None
+        return None
     source = f"{recording.path} (fsr_scenario metadata)"
     try:
         data = parse_yaml_mapping(text, source)
     except ConfigError as error:
         notes.append(f"scenario in the metadata cannot be read: {error}")
+        return None
+    if isinstance(data.get("fleet"), list):
+        members = {"/" + str(m.get("namespace", "")).strip("/"): m.get("scenario") for m in data["fleet"]
+                   if isinstance(m, dict)}
+        data = members.get(namespace)
+        if not isinstance(data, dict):
+            notes.append(f"the fleet in the metadata has no vehicle under {namespace} (it has "
+                         f"{', '.join(sorted(members)) or 'none'}): vehicle limits, true mass and surfaces unknown")
+            return None
+        source = f"{source}, fleet member {namespace}"
+    return Scenario(data=data, source=source, base_dir=recording.path.parent)
+
+
+def _scenario(scenario: Scenario | None, fallback: str,
+              notes: list[str]) -> tuple[SimulationConfig | None, str, EstimatorConfig | None]:
+    """(plant-side config, scenario name, estimator config) of the recorded scenario."""
+    if scenario is None:
         return None, fallback, None
-    scenario = Scenario(data=data, source=source, base_dir=recording.path.parent)
     try:
         config = simulation_config(scenario)
     except ConfigError as error:
@@ -225,14 +243,11 @@ def _scenario(recording: Recording, notes: list[str]) -> tuple[SimulationConfig 
     return config, scenario.name, estimator
 
 
-def _compensation(recording: Recording, notes: list[str]) -> tuple[str | None, CompensationConfig | None]:
-    """(``controller.compensation`` of the scenario in the metadata, its validated settings or None)."""
-    text = recording.scenario_yaml
-    if text is None:
+def _compensation(scenario: Scenario | None, notes: list[str]) -> tuple[str | None, CompensationConfig | None]:
+    """(``controller.compensation`` of the recorded scenario, its validated settings or None)."""
+    if scenario is None:
         return None, None
-    source = f"{recording.path} (fsr_scenario metadata)"
     try:
-        scenario = Scenario(data=parse_yaml_mapping(text, source), source=source, base_dir=recording.path.parent)
         return ("estimate", config) if (config := controller_config(scenario).compensation) else ("none", None)
     except ConfigError as error:
         notes.append(f"controller section of the scenario cannot be used: {error}")
@@ -321,6 +336,16 @@ def _by_name(names: list[np.ndarray], values: np.ndarray, kind: str, n: int) -> 
 def _scalar(recording: Recording, topic: str) -> Scalar:
     stamp, c = _columns(recording, topic)
     return Scalar(stamp, stamp / NS_PER_S, c.get("data").astype(float))
+
+
+def final_sim_time(recording: Recording | str | Path, namespaces: list[str]) -> float | None:
+    """Simulated time [s] of the last ``sim_status`` recorded under ``namespaces`` (the latest vehicle's), the
+    stop time the analysis reports; None when none was recorded."""
+    if not isinstance(recording, Recording):
+        recording = open_recording(recording)
+    times = [statuses[-1].sim_time for namespace in namespaces
+             if (statuses := _statuses(recording, resolve(SIM_STATUS.name, namespace or "/"), []))]
+    return max(times) if times else None
 
 
 def _statuses(recording: Recording, topic: str, notes: list[str]) -> list[SimStatus]:

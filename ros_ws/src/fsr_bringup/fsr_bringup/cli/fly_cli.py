@@ -205,8 +205,17 @@ def main(argv: list[str] | None = None) -> int:
                   f"{result.sim_time:.3f} s in {result.wall_time:.2f} s wall; the recording is on the recorder's "
                   "host", flush=True)
             return result.exit_code
+    sim_time = result.sim_time
+    if recording.exists():  # the stop time the simulator recorded (what the summary reports), not the last seen
+        from fsr_bringup.analysis.load import final_sim_time
+        from fsr_sim.recording.reader import RecordingError
+
+        try:
+            sim_time = final_sim_time(recording, [m.namespace for m in members]) or sim_time
+        except RecordingError:
+            pass  # reported by the analysis below
     print(
-        f"fsr-fly: flight {'interrupted' if result.interrupted else 'ended'}: simulated {result.sim_time:.3f} s "
+        f"fsr-fly: flight {'interrupted' if result.interrupted else 'ended'}: simulated {sim_time:.3f} s "
         f"in {result.wall_time:.2f} s wall (real-time factor {result.real_time_factor:.2f})",
         flush=True,
     )
