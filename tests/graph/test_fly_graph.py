@@ -112,6 +112,10 @@ def test_graph_and_in_process_runs_agree(tmp_path):
             assert [data for _, data in g.raw(topic)] == [data for _, data in loc.raw(topic)], topic
         # /clock (not in an in-process recording) is as deep as the streams: the recorder keeps every step.
         assert g.count("/clock") == 501
+        # a normal end reads as one: every node ended by itself (the watcher, fsr-fly's own, is stopped)
+        logs = {log.name: log.read_text() for log in (tmp_path / f"{scenario}_graph" / "logs").glob("*.log")}
+        assert {"simulator.log", "controller.log", "estimator.log", "recorder.log"} <= set(logs), sorted(logs)
+        assert not [name for name, text in logs.items() if "received SIG" in text], logs
 
 
 def test_killed_controller_is_reported_and_the_recording_is_complete(tmp_path):

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fsr_bringup.runner.domains import DomainLease
-from fsr_bringup.runner.processes import NodeProcess, ProcessGroup, describe_exit, executable
+from fsr_bringup.runner.processes import DRAIN_WAIT_S, NodeProcess, ProcessGroup, describe_exit, executable
 from fsr_sim.contract import (
     DIVERGED,
     EXIT_DIVERGED,
@@ -246,6 +246,11 @@ def fly_graph(
                 console.progress(f"t = {watcher.sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
     finally:
         console.end_progress()
+        if not interrupted and simulators and not failures:
+            # A normal end: the other nodes see the final sim_status and end by themselves once they have
+            # answered and recorded everything (a signal now would read like an interruption in their logs).
+            group.wait_for_exit([n.name for n in group.nodes if n.name not in (*simulators, WATCHER_PROCESS)],
+                                DRAIN_WAIT_S)
         # The watcher goes with the first wave: it is not needed any more, and if its DDS teardown hangs
         # (watcher_node.py) the wave's SIGTERM/SIGKILL ends it while nothing waits for its exit code.
         group.stop_all(first=(*simulators, WATCHER_PROCESS))

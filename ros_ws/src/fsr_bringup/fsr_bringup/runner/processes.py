@@ -123,6 +123,13 @@ class ProcessGroup:
     def get(self, name: str) -> NodeProcess | None:
         return next((n for n in self.nodes if n.name == name), None)
 
+    def wait_for_exit(self, names: list[str], timeout: float) -> None:
+        """Wait up to ``timeout`` s for the named nodes to exit by themselves (no signal)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and any(
+                n.process.poll() is None for n in self.nodes if n.name in names):
+            time.sleep(0.02)
+
     def stop(self, names: list[str], timeout: float) -> None:
         """SIGINT the named nodes, wait up to ``timeout`` s, then SIGTERM, then SIGKILL."""
         nodes = [n for n in self.nodes if n.name in names and n.process.poll() is None]

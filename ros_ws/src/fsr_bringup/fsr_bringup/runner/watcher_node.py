@@ -67,13 +67,20 @@ def make_watcher(namespaces: list[str]) -> object:
                 self.create_subscription(message_class(SIM_STATUS.type), resolve(SIM_STATUS.name, namespace),
                                          lambda msg, ns=namespace: self._on_status(ns, msg.data), qos_of(SIM_STATUS))
             self.create_timer(NODE_LIST_PERIOD, self._list_nodes)
+            self.final: dict[str, bool] = dict.fromkeys(namespaces, False)
 
         def _on_progress(self, msg: object) -> None:  # rosgraph_msgs/Clock
             emit({"progress": msg.clock.sec + msg.clock.nanosec * 1e-9, "at": time.monotonic()})
 
         def _on_status(self, namespace: str, data: str) -> None:
             status = SimStatus.from_json(data)
+            self.final[namespace] = status is not None and status.final
             emit({"status": namespace, "value": None if status is None else status.as_dict()})
+
+        @property
+        def flight_over(self) -> bool:
+            """Every vehicle's simulator published its final status (fsr-fly stops the watcher then)."""
+            return all(self.final.values())
 
         def _list_nodes(self) -> None:
             emit({"nodes": [f"{ns.rstrip('/')}/{name}" for name, ns in self.get_node_names_and_namespaces()]})

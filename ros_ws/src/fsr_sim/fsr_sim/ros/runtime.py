@@ -154,8 +154,10 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
             else:
                 executor.spin_once(timeout_sec=0.1)
         code = int(getattr(node, "exit_code", EXIT_OK))
-        if stop:
-            node.get_logger().info(f"received {stop.signal_name}, shutting down")
+        if stop:  # a node that saw the flight end (flight_over) is stopped, not interrupted
+            node.get_logger().info(f"the flight is over: stopping ({stop.signal_name})"
+                                   if getattr(node, "flight_over", False)
+                                   else f"received {stop.signal_name}, shutting down")
     except KeyboardInterrupt:
         pass
     finally:
