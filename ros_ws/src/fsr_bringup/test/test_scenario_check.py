@@ -45,3 +45,26 @@ def test_a_missing_required_validator_is_named(monkeypatch):
     monkeypatch.setattr(scenario_check, "registered_sections", lambda: sections)
     with pytest.raises(RuntimeError, match="estimator"):
         scenario_check.check_scenario(load_scenario("ex4_geometric"))
+
+
+@pytest.mark.parametrize(("override", "message"), [
+    ("plant.mass=-1", "--set plant.mass=-1: plant.mass: must be > 0, got -1.0"),
+    ("controller.gains.k_p=[10,10]", "--set controller.gains.k_p=[10,10]: controller.gains.k_p: must be 3 numbers "
+                                     "(the diagonal) or a 3 x 3 matrix, got [10.0, 10.0]"),
+    ("disturbances.3.force=[1,0,0]", "--set disturbances.3.force=[1,0,0]: disturbances: is not set, so it has no "
+                                     "item 3: set the whole list (disturbances=[...])"),
+])
+def test_an_invalid_override_is_named_as_the_source_of_the_error(override, message):
+    with pytest.raises(ConfigError) as error:
+        scenario_check.check_scenario(load_scenario("ex4_geometric", [override]))
+    assert str(error.value) == message
+
+
+def test_an_error_in_the_file_still_names_the_file_when_other_keys_are_overridden(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text("vehicle: quadrotor_ex4\nduration: 1.0\nplant: {mass: -2}\n")
+    with pytest.raises(ConfigError) as error:
+        scenario_check.check_scenario(load_scenario(path, ["duration=2.0"]))
+    assert str(error.value).startswith(f"{path}: plant.mass: must be > 0")
+    checked = scenario_check.check_scenario(load_scenario("ex4_geometric", ["controller.gains.k_p=[1,2,3]"]))
+    assert checked.controller.gains["k_p"].tolist() == [[1, 0, 0], [0, 2, 0], [0, 0, 3]]

@@ -52,7 +52,7 @@ def test_full_matrix_gain_accepted(tmp_path):
     ("controller", "key", "reason"),
     [
         ({"gains": {"k_p": [20, -1, 100]}}, "controller.gains.k_p", "positive definite"),
-        ({"gains": {"k_p": [20, 100]}}, "controller.gains.k_p", "shape"),
+        ({"gains": {"k_p": [20, 100]}}, "controller.gains.k_p", "3 numbers"),
         ({"gains": {"k_p": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]}}, "controller.gains.k_p", "symmetric"),
         ({"gains": {"k_P": [1, 1, 1]}}, "controller.gains.k_P", "did you mean 'k_p'"),
         ({"gains": {"k_d": [1, 1, 1]}}, "controller.gains.k_d", "unknown key"),  # voliro's name

@@ -30,7 +30,6 @@ def test_override_by_dotted_path_with_yaml_value(tmp_path):
          "environment.ground.hieght: unknown key"),
         ("vehicle: octocopter\nduration: 1.0\ndisturbances: [{kind: gust}]\n", [], "disturbances.0.kind"),
         ("vehicle: octocopter\nduration: 1.0\n", ["duration"], "--set: expected KEY=VALUE"),
-        ("vehicle: octocopter\nduration: 1.0\n", ["disturbances.3.force=[1,0,0]"], "disturbances"),
         ("vehicle: octocopter\nduration: 1.0005\n", [], "duration: must be a whole number of steps"),
     ],
 )
@@ -39,6 +38,14 @@ def test_invalid_scenarios_are_refused_naming_file_and_key(tmp_path, text, overr
     with pytest.raises(ConfigError, match=message) as error:
         simulation_config(load_scenario(path, overrides))
     assert "s.yaml" in str(error.value)
+
+
+def test_an_override_into_a_missing_list_is_refused_naming_the_override(tmp_path):
+    path = write(tmp_path, "vehicle: octocopter\nduration: 1.0\n")
+    with pytest.raises(ConfigError) as error:
+        load_scenario(path, ["disturbances.3.force=[1,0,0]"])
+    assert str(error.value) == ("--set disturbances.3.force=[1,0,0]: disturbances: is not set, so it has no item 3: "
+                                "set the whole list (disturbances=[...])")
 
 
 def test_apply_override_creates_missing_sections():

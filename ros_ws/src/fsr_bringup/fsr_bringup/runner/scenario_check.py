@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from fsr_sim.config.scenario import Scenario, SimulationConfig, registered_sections, simulation_config
+from fsr_sim.config.validation import ConfigError
 
 REQUIRED_SECTIONS = ("controller", "estimator")  # what the flight itself needs
 
@@ -39,7 +40,15 @@ class CheckedScenario:
 
 def check_scenario(scenario: Scenario) -> CheckedScenario:
     """Parse all sections (the plant side, then each registered section in name order, each validator once);
-    the first invalid value raises ConfigError naming the file and the key."""
+    the first invalid value raises ConfigError naming the key and where its value came from (the file, or the
+    ``--set`` that gave it)."""
+    try:
+        return _checked(scenario)
+    except ConfigError as error:
+        raise scenario.attribute(error) from None
+
+
+def _checked(scenario: Scenario) -> CheckedScenario:
     simulation = simulation_config(scenario)
     by_validator: dict[Any, Any] = {}  # a validator owning several sections runs once
     sections = {}

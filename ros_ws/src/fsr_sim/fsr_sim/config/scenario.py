@@ -71,10 +71,19 @@ class Scenario:
     data: dict[str, Any]
     source: str
     base_dir: Path
+    overridden: dict[str, str] = field(default_factory=dict)  # dotted key -> how it was set ("--set k=v")
 
     @property
     def name(self) -> str:
         return str(self.data.get("name", Path(self.source).stem))
+
+    def attribute(self, error: ConfigError) -> ConfigError:
+        """``error`` with the override that set the refused value as its source (``--set plant.mass=-1``), when
+        an override set that key, one inside it or one containing it; else ``error`` itself (the file)."""
+        for key, how in self.overridden.items():
+            if error.key == key or error.key.startswith(f"{key}.") or key.startswith(f"{error.key}."):
+                return ConfigError(error.key, error.reason, how)
+        return error
 
     def section(self, name: str) -> Section:
         """Checked access to the top-level section ``name`` (an empty mapping if absent)."""
@@ -107,15 +116,19 @@ def scenario_from_mapping(data: dict[str, Any], source: str = "<python>", base_d
     if not isinstance(data, dict):
         raise ConfigError("", f"a scenario must be a mapping, got {type(data).__name__}", source)
     data = copy.deepcopy(data)
+    overridden = {}
     for item in overrides or []:
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise ConfigError("--set", f"expected KEY=VALUE, got '{item}'", source)
-        apply_override(data, key.strip(), value, source)
+        overridden[key.strip()] = f"--set {item}"
+        apply_override(data, key.strip(), value, overridden[key.strip()])
     for key, value in (values or {}).items():
-        set_value(data, str(key), copy.deepcopy(value), source)
+        overridden[str(key)] = f"set {key}={value!r}"
+        set_value(data, str(key), copy.deepcopy(value), overridden[str(key)])
     Section(data, "", source).reject_unknown(top_level_keys())  # names the closest known key of a typo
-    return Scenario(data=data, source=source, base_dir=Path.cwd() if base_dir is None else Path(base_dir))
+    return Scenario(data=data, source=source, base_dir=Path.cwd() if base_dir is None else Path(base_dir),
+                    overridden=overridden)
 
 
 def apply_override(data: dict[str, Any], dotted_key: str, yaml_value: str, source: str = "") -> None:
@@ -138,6 +151,9 @@ def set_value(data: dict[str, Any], dotted_key: str, value: Any, source: str = "
             node = node[_list_index(node, part, where, source)]
         else:
             if node.get(part) is None:
+                if parts[depth + 1].isdigit():  # an item of a list the scenario does not have
+                    raise ConfigError(where, f"is not set, so it has no item {parts[depth + 1]}: set the whole list "
+                                             f"({where}=[...])", source)
                 node[part] = {}
             node = node[part]
         if not isinstance(node, (dict, list)):

@@ -54,8 +54,10 @@ def symmetric_positive_definite(value: ArrayLike, name: str) -> np.ndarray:
         A ``ValueError``: for another shape, NaN/inf, an asymmetric matrix or a non-positive eigenvalue.
     """
     array = np.asarray(value, dtype=float) if _numeric(value) else None
-    matrix = np.diag(finite_array(value, (3,), name)) if array is not None and array.shape == (3,) else (
-        finite_array(value, (3, 3), name))
+    if array is None or array.shape not in ((3,), (3, 3)):
+        shown = repr(value) if array is None else array.tolist()
+        raise InvalidValueError(name, f"must be 3 numbers (the diagonal) or a 3 x 3 matrix, got {shown}")
+    matrix = np.diag(finite_array(value, (3,), name)) if array.shape == (3,) else finite_array(value, (3, 3), name)
     if not np.allclose(matrix, matrix.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(matrix).max()))):
         raise InvalidValueError(name, f"must be symmetric, got {matrix.tolist()}")
     eigenvalues = np.linalg.eigvalsh(matrix)
