@@ -1,10 +1,7 @@
 """Controller node (console script ``controller``): answers every ``odom`` with the command for it.
 
-Parameters: ``scenario`` (built-in name or YAML path; its ``controller`` and ``trajectory`` sections),
-``controller_type`` (``geometric`` | ``voliro``, overrides the scenario), gain overrides ``k_p``, ``k_v``,
-``k_d``, ``k_r``, ``k_w`` (3 numbers, the diagonal), ``exit_on_finish`` (default true: end by itself once
-``sim_status`` reports the end of the flight, :mod:`fsr_sim.ros.flight_end`). An invalid value exits with
-code 2 and names it.
+Parameters: :data:`USAGE` (what ``controller --help`` prints; ``exit_on_finish``: :mod:`fsr_sim.ros.flight_end`).
+An invalid value exits with code 2 and names it.
 
 Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
@@ -32,19 +29,43 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 
 from fsr_control.config.controller_config import controller_config
+from fsr_control.controllers.catalog import LAWS
 from fsr_control.flight_controller import FlightController, seconds_from_ns
 from fsr_control.nodes.messages import goal_from_message
 from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
-from fsr_sim.contract import BY_NAME, GOAL, ODOM
+from fsr_sim.contract import (
+    BY_NAME,
+    CONTROLLER,
+    EXIT_CONFIG_ERROR,
+    EXIT_FAILURE,
+    EXIT_OK,
+    GOAL,
+    ODOM,
+    SIM_STATUS,
+)
 from fsr_sim.model.allocation import WRENCH_AXES
 from fsr_sim.ros.conversions import odometry_state_from_bytes
 from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.flight_end import FlightEnd
+from fsr_sim.ros.node_usage import NodeUsage, Parameter
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GAIN_PARAMETERS = ("k_p", "k_v", "k_d", "k_r", "k_w")
+USAGE = NodeUsage(
+    CONTROLLER,
+    "Answers every odom with the command for it: planner, control law and allocation (the lockstep).",
+    (
+        Parameter("scenario", "", "built-in scenario name or scenario YAML path (required): its controller and "
+                                  "trajectory sections"),
+        Parameter("controller_type", "", f"{' | '.join(LAWS)}: overrides the scenario's controller.type"),
+        *(Parameter(gain, "", "3 numbers, the gain's diagonal: overrides the scenario's") for gain in GAIN_PARAMETERS),
+        Parameter("exit_on_finish", "true", "end by itself once sim_status reports the end of the flight"),
+    ),
+    (ODOM, GOAL, SIM_STATUS),
+    (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR),
+)
 
 
 def scenario_with_parameters(scenario: Scenario, controller_type: str, gains: dict[str, list[float]]) -> Scenario:
@@ -175,7 +196,7 @@ class ControllerNode(Node):
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_node(lambda _args: ControllerNode(), argv)
+    return run_node(lambda _args: ControllerNode(), argv, usage=USAGE)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ from rclpy.node import Node
 from std_srvs.srv import Trigger
 
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
-from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, node_settings
+from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, USAGE, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
 from fsr_sim.contract import MASS_ESTIMATE, ODOM, WRENCH_CMD, WRENCH_ESTIMATE
 from fsr_sim.ros import cdr_read
@@ -128,7 +128,7 @@ class EstimatorNode(Node):
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_node(lambda _args: EstimatorNode(), sys.argv if argv is None else argv)
+    return run_node(lambda _args: EstimatorNode(), sys.argv if argv is None else argv, usage=USAGE)
 
 
 if __name__ == "__main__":

@@ -24,9 +24,34 @@ from fsr_estimation.config.estimator_config import DEFAULT_C0, DEFAULT_R, Estima
 from fsr_estimation.core.filter_design import check_filter_parameters
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError, Section, checked_spd
+from fsr_sim.contract import (
+    ESTIMATOR,
+    EXIT_CONFIG_ERROR,
+    EXIT_FAILURE,
+    EXIT_OK,
+    ODOM,
+    SIM_STATUS,
+    WRENCH_CMD,
+)
+from fsr_sim.ros.node_usage import NodeUsage, Parameter
 
 PARAMETER_SOURCE = "ROS parameter"
-PARAMETER_NAMES = ("scenario", "c0", "r", "mass", "inertia", "control_period")
+USAGE = NodeUsage(
+    ESTIMATOR,
+    "Momentum-based external wrench and mass estimation on the live graph (docs/model.md section 3.8).",
+    (
+        Parameter("scenario", "", "built-in scenario name or scenario YAML path: its estimator section"),
+        Parameter("c0", "", f"rad/s > 0, the observer's filter (default: the scenario's, else {DEFAULT_C0:g})"),
+        Parameter("r", "", f"integer >= 1, the filter's order (default: the scenario's, else {DEFAULT_R})"),
+        Parameter("mass", "", "kg > 0, the nominal mass (required without a scenario)"),
+        Parameter("inertia", "", "3 numbers (the diagonal) or 9 (row-major), kg m^2 (required without a scenario)"),
+        Parameter("control_period", "", "s > 0 (default: the scenario's, else from the first two samples)"),
+        Parameter("exit_on_finish", "true", "end by itself once sim_status reports the end of the flight"),
+    ),
+    (ODOM, WRENCH_CMD, SIM_STATUS),
+    (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR),
+)
+PARAMETER_NAMES = tuple(p.name for p in USAGE.parameters if p.name != "exit_on_finish")  # that one: runtime
 
 
 @dataclass(frozen=True)

@@ -73,7 +73,7 @@ from fsr_sim.nodes.lockstep import (
     FreeRunPacer,
     classify_stamp,
 )
-from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, load_simulation, parse_parameters
+from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, USAGE, load_simulation, parse_parameters
 from fsr_sim.nodes.state_packets import StatePackets
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.endpoints import publisher, subscription
@@ -441,7 +441,7 @@ def _node_path(namespace: str, name: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    sys.exit(run_node(SimulatorNode, argv))
+    sys.exit(run_node(SimulatorNode, argv, usage=USAGE))
 
 
 if __name__ == "__main__":

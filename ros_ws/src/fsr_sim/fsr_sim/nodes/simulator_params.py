@@ -20,13 +20,37 @@ from typing import Any
 
 from fsr_sim.config.scenario import Scenario, SimulationConfig, load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError, Section, resolve_config_path
+from fsr_sim.contract import (
+    EXIT_CONFIG_ERROR,
+    EXIT_DIVERGED,
+    EXIT_FAILURE,
+    EXIT_OK,
+    ROTOR_CMD,
+    SIMULATOR,
+    WRENCH_CMD,
+)
+from fsr_sim.ros.node_usage import NodeUsage, Parameter
 
 PARAMETER_SOURCE = "ROS parameter"
 
-PARAMETER_NAMES = (
-    "scenario", "wait_for_subscribers", "publish_clock", "startup_timeout",
-    "lockstep", "timeout", "failsafe", "real_time_factor", "duration",
+USAGE = NodeUsage(
+    SIMULATOR,
+    "Steps the plant in lockstep with the controller and publishes the state (docs/model.md section 4).",
+    (
+        Parameter("scenario", "", "built-in scenario name or scenario YAML path (required)"),
+        Parameter("wait_for_subscribers", "1", "odom subscribers to wait for before step 0"),
+        Parameter("publish_clock", "true", "publish /clock (one simulator per graph should)"),
+        Parameter("startup_timeout", "20.0", "s the start-up handshake may take"),
+        Parameter("lockstep", "", "true | false: overrides the scenario's lockstep.enabled"),
+        Parameter("timeout", "", "s without a command before the failsafe (lockstep.timeout)"),
+        Parameter("failsafe", "", "hold | cut (lockstep.failsafe)"),
+        Parameter("real_time_factor", "", "free-running pace (lockstep.real_time_factor)"),
+        Parameter("duration", "", "s, a whole number of control periods (the scenario's duration)"),
+    ),
+    (ROTOR_CMD, WRENCH_CMD),  # the one the scenario's actuation names
+    (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR, EXIT_DIVERGED),
 )
+PARAMETER_NAMES = tuple(parameter.name for parameter in USAGE.parameters)
 
 
 @dataclass(frozen=True)

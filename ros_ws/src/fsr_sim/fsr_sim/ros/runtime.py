@@ -41,6 +41,7 @@ from fsr_sim.contract import (  # noqa: F401 - the exit codes are the contract's
     EXIT_INTERRUPTED,
     EXIT_OK,
 )
+from fsr_sim.ros.node_usage import NodeUsage, wants_help
 
 # A node whose rcl/DDS teardown hung after its work was done (files closed, acks waited for) is ended by this
 # signal from its own watchdog (TeardownWatchdog): the runner tells it from a failure by the exit status.
@@ -103,8 +104,9 @@ def process_age() -> float:
 
 
 def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = None,
-             exit_process: bool = True) -> int:
+             exit_process: bool = True, usage: NodeUsage | None = None) -> int:
     """Create the node with ``make_node(args)`` and spin it until done or signalled; returns an exit code.
+    ``-h`` / ``--help`` (before ``--ros-args``) prints ``usage`` and returns 0 without starting anything.
 
     The node may define ``done() -> bool`` (stop spinning, e.g. end of the flight), ``exit_code`` and
     ``close()``; it may define ``spin_once(executor, stop)`` to drive its own loop (the simulator's
@@ -117,12 +119,15 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
     of rclpy objects, Fast DDS global destructors) adds up to seconds on a loaded machine and is where a
     by-hand node was seen to hang. Files are already closed by ``close()``.
     """
+    argv = sys.argv if argv is None else argv
+    if usage is not None and wants_help(argv):
+        print(usage.text())
+        return EXIT_OK
     configure_environment()
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    argv = sys.argv if argv is None else argv
     stop = StopFlag()
     stop.install()
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
