@@ -178,3 +178,17 @@ def test_a_flight_stopped_by_a_signal_is_summarised_as_interrupted() -> None:
     assert "| end state | **interrupted at t = 5.123 s** (received SIGINT) |" in summary
     finished = SimStatus("finished", "r", 1.0, 1000).as_dict()
     assert "interrupted" not in markdown_summary({"scenario": "x", "sim_status": finished})
+
+
+def test_a_wrench_actuated_flight_has_no_rotor_saturation_to_report(tmp_path: Path) -> None:
+    from fsr_bringup.runner.in_process_flight import fly_in_process
+    from fsr_sim.config.scenario import load_scenario
+
+    scenario = load_scenario("ex4_geometric")
+    assert scenario.data["actuation"] == "wrench"
+    fly_in_process(scenario, recording=tmp_path / "wrench.mcap", max_steps=300)
+    result = analyze_recording(tmp_path / "wrench.mcap", tmp_path / "out", figures=False)
+    notes = "\n".join(result.metrics["notes"])
+    assert "no rotor saturation: wrench actuation applies the commanded wrench as it is" in notes
+    assert "saturation skipped" not in notes and "wrench shortfall skipped" not in notes
+    assert result.metrics["saturation"] is None and "gave way" not in result.summary

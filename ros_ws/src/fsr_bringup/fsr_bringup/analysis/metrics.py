@@ -338,13 +338,17 @@ def flight_metrics(
         }
     else:
         metrics["commanded_thrust_N"] = None
-    metrics["saturation"] = saturation(flight)
-    if metrics["saturation"] is None:
-        notes.append("saturation skipped: rotor_cmd or scenario missing")
-    metrics[WRENCH_SHORTFALL.name] = wrench_shortfall(flight)
     metrics["compensation"] = compensation(flight)
-    if metrics[WRENCH_SHORTFALL.name] is None:
-        notes.append("wrench shortfall skipped: wrench_shortfall missing")
+    if flight.config is not None and flight.config.actuation == "wrench":  # no rotors: nothing can saturate
+        metrics["saturation"] = metrics[WRENCH_SHORTFALL.name] = None
+        notes.append("no rotor saturation: wrench actuation applies the commanded wrench as it is")
+    else:
+        metrics["saturation"] = saturation(flight)
+        if metrics["saturation"] is None:
+            notes.append("saturation skipped: rotor_cmd or scenario missing")
+        metrics[WRENCH_SHORTFALL.name] = wrench_shortfall(flight)
+        if metrics[WRENCH_SHORTFALL.name] is None:
+            notes.append("wrench shortfall skipped: wrench_shortfall missing")
     if errors is not None and not errors.attitude_commanded:
         notes.append("no attitude_cmd: attitude error measured against the planner's attitude R_d")
     metrics["external_wrench"] = wrench_comparison(flight, settle_time, settling, after)

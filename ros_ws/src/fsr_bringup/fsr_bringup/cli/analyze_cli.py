@@ -3,9 +3,8 @@
 One recording: ``DIR/metrics.json``, ``DIR/summary.md`` and the figures (``--format png,pdf,svg``; PNG at
 300 dpi, journal column widths, no titles unless ``--titles``). Several recordings are overlaid in the same
 figures (a colour per run, ``--labels a,b``) with their metrics side by side in one table. A truncated
-recording (writer killed) is analysed up to its last complete chunk and said so. Exit codes: 0 done, 2 a
-file is missing, not MCAP or empty, or an argument is invalid (one line on stderr), 1 the output cannot be
-written.
+recording (writer killed) is analysed up to its last complete chunk and said so. Exit codes:
+``fsr-analyze --help``.
 """
 
 from __future__ import annotations
@@ -47,7 +46,9 @@ def figure_options(args: argparse.Namespace) -> object:
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = ArgumentParser(prog="fsr-analyze", description=__doc__.split("\n")[0])
+    parser = ArgumentParser(prog="fsr-analyze", doc=__doc__, exit_codes={
+        EXIT_OK: "done", EXIT_FAILURE: "the output cannot be written",
+        EXIT_CONFIG_ERROR: "a file is missing, not MCAP or empty, or an argument is invalid (one line on stderr)"})
     parser.add_argument("recordings", type=Path, nargs="+", metavar="RECORDING",
                         help="MCAP file(s) written by fsr-record / fsr-fly; several are overlaid")
     parser.add_argument("--out", type=Path, help="output folder (default: next to the first recording, "

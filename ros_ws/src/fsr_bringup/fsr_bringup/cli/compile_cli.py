@@ -5,18 +5,20 @@
 The core (:mod:`fsr_sim.core.jit`) is compiled by numba on first use and cached on disk in a folder keyed by
 its sources; this command uses every entry point the nodes, the in-process loop, the analysis and the Python
 API call -- a short flight of every built-in scenario, recorded and analysed, and the node-side calls -- so
-that each is compiled (or found in the cache) here. Exit codes: 0 done, 2 bad arguments.
+that each is compiled (or found in the cache) here.
 """
 
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+from fsr_sim.cli.arguments import ArgumentParser
+from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 
 BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
             "step_disturbance", "wind_rejection")
@@ -113,8 +115,8 @@ def _python_api() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="fsr-compile", description=__doc__.split("\n\n")[0].split(": ", 1)[1],
-                                     epilog="exit codes: 0 done, 2 bad arguments")
+    parser = ArgumentParser(prog="fsr-compile", doc=__doc__,
+                            exit_codes={EXIT_OK: "done", EXIT_CONFIG_ERROR: "invalid arguments"})
     parser.parse_args(argv)
     from fsr_sim.core.jit import CACHE_FOLDER, numba
 

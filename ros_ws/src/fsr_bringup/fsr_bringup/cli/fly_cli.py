@@ -10,8 +10,7 @@
 Starts the simulator, controller, estimator and recorder as separate processes in a ROS domain of their
 own (localhost-only discovery), streams their logs with a prefix per node, shows progress on a terminal,
 stops every process it started, then writes figures and ``metrics.json`` next to the recording and prints
-a summary. Exit codes: 0 success, 1 a node failed (named in the message), 2 invalid scenario or arguments,
-3 the flight diverged, 130 interrupted.
+a summary. Exit codes: ``fsr-fly --help``.
 """
 
 from __future__ import annotations
@@ -35,15 +34,16 @@ from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.config.validation import ConfigError, builtin_names
-from fsr_sim.contract import EXIT_CONFIG_ERROR
+from fsr_sim.contract import EXIT_CODES, EXIT_CONFIG_ERROR, EXIT_DIVERGED, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
 REMOTE_STARTUP_TIMEOUT = 300.0  # s: with --nodes the other hosts' nodes may be started by hand, later
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = ArgumentParser(
-        prog="fsr-fly", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = ArgumentParser(prog="fsr-fly", doc=__doc__, exit_codes={
+        EXIT_OK: "the flight finished", EXIT_FAILURE: "a node failed (named in the message)",
+        EXIT_CONFIG_ERROR: EXIT_CODES[EXIT_CONFIG_ERROR], EXIT_DIVERGED: EXIT_CODES[EXIT_DIVERGED],
+        EXIT_INTERRUPTED: EXIT_CODES[EXIT_INTERRUPTED]})
     parser.add_argument(
         "scenario",
         help=f"built-in scenario ({', '.join(builtin_names('scenarios'))}), built-in fleet "

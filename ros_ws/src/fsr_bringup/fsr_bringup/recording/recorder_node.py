@@ -81,9 +81,9 @@ _STAMP = struct.Struct("<iI")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    parser = ArgumentParser(
-        prog="fsr-record", description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = ArgumentParser(prog="fsr-record", doc=__doc__, exit_codes={
+        EXIT_OK: "the recording is complete", EXIT_FAILURE: "the file could not be written",
+        EXIT_CONFIG_ERROR: "invalid argument, topic type or scenario (nothing was recorded)"})
     parser.add_argument("--out", required=True, type=Path, help="MCAP file to write (overwritten)")
     parser.add_argument(
         "--scenario", help="scenario stored in the file's metadata: a built-in name (e.g. ex4_geometric) or a YAML path"

@@ -21,12 +21,13 @@ import numpy as np
 from fsr_estimation.core.metrics import CHANNELS, SETTLING_DEFINITIONS, SweepResult, sweep
 from fsr_estimation.core.observer import ObserverModel
 from fsr_estimation.io.flight_log import CSV_COLUMNS_HELP, FlightLog, FlightLogError, load_flight_log
+from fsr_sim.cli.arguments import exit_codes_text
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 
 CHANNEL_LABELS = {"fx": "f_x", "fy": "f_y", "fz": "f_z", "tx": "tau_x", "ty": "tau_y", "tz": "tau_z"}
 
 DESCRIPTION = """\
-Momentum-based external wrench estimation (docs/model.md §3.8) over a flight log, for every (c0, r) pair.
+Momentum-based external wrench estimation (docs/model.md section 3.8) over a flight log, for every (c0, r) pair.
 
 The estimate w_hat = [f_e; tau_e] has the force in the world NED frame [N] and the torque in Euler-angle
 (ZYX eta) coordinates [N m], as in the report; --truth is compared with w_hat in that same frame (the
@@ -46,6 +47,8 @@ project started from and where fsr differs from it).
 example: fsr-estimate examples/ex3_flight_log.mcap --mass 1.5 --inertia 1.2416,1.2416,2.4832 --c0 10 --r 1:5
          --truth 1,1,0,0,0,-0.4 --settling report
 """
+EXIT_MEANINGS = {EXIT_OK: "done", EXIT_CONFIG_ERROR: "invalid argument, or a log that cannot be read or used "
+                                                     "(one line on stderr)"}
 
 
 class UsageError(ValueError):
@@ -92,7 +95,7 @@ def parse_orders(text: str) -> list[int]:
 
 def build_parser() -> argparse.ArgumentParser:
     description = DESCRIPTION.format(csv=textwrap.fill(CSV_COLUMNS_HELP, 105))
-    parser = _Parser(prog="fsr-estimate", description=description, epilog=EPILOG,
+    parser = _Parser(prog="fsr-estimate", description=description, epilog=EPILOG + exit_codes_text(EXIT_MEANINGS),
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("log", metavar="LOG", help="flight log (.mat, .mcap or .csv)")
     parser.add_argument("--mass", required=True, type=float, metavar="M", help="model mass [kg] > 0")

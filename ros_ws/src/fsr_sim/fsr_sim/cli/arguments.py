@@ -3,9 +3,25 @@
 from __future__ import annotations
 
 import argparse
+import textwrap
 from typing import NoReturn
 
 from fsr_sim.contract import EXIT_CONFIG_ERROR
+
+
+def plain_description(doc: str) -> str:
+    """What a command does, from the first paragraph of its module docstring, as plain text: the
+    ``` ``fsr-fly SCENARIO``: ``` lead (``--help`` shows the usage above it) and reST markup dropped."""
+    first = " ".join(doc.strip().split("\n\n")[0].split())
+    if first.startswith("``") and "``: " in first:
+        first = first.split("``: ", 1)[1]
+    first = first.replace("``", "").replace(":mod:", "").replace("`", "")
+    return textwrap.fill(first[:1].upper() + first[1:], 100)
+
+
+def exit_codes_text(meanings: dict[int, str]) -> str:
+    """The ``exit codes:`` lines of a command's ``--help`` (code -> what it means for this command)."""
+    return "exit codes:\n" + "\n".join(f"  {code:<4}{meaning}" for code, meaning in meanings.items())
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -13,7 +29,19 @@ class ArgumentParser(argparse.ArgumentParser):
 
     ``fsr-fly ex4_geometric --duration abc`` prints
     ``fsr-fly: error: argument --duration: invalid float value: 'abc' (see fsr-fly --help)`` and exits 2.
+    ``doc`` (the command's module docstring) gives the description (:func:`plain_description`) and
+    ``exit_codes`` (code -> meaning) the end of the help.
     """
+
+    def __init__(self, *args: object, doc: str | None = None, exit_codes: dict[int, str] | None = None,
+                 **kwargs: object) -> None:
+        if doc is not None:
+            kwargs.setdefault("description", plain_description(doc))
+        if exit_codes is not None:
+            epilog = kwargs.get("epilog")
+            kwargs["epilog"] = (f"{epilog}\n" if epilog else "") + exit_codes_text(exit_codes)
+            kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         one_line = " ".join(message.split())

@@ -117,7 +117,8 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = ArgumentParser(prog="fsr-vehicle", description=__doc__.split("\n")[0])
+    parser = ArgumentParser(prog="fsr-vehicle", doc=__doc__, exit_codes={
+        EXIT_OK: "done", EXIT_CONFIG_ERROR: "unknown vehicle, invalid vehicle file or argument"})
     parser.add_argument("vehicle", help=f"built-in name ({', '.join(builtin_names('vehicles'))}) or YAML path")
     parser.add_argument("--json", action="store_true", help="print JSON instead of Markdown")
     args = parser.parse_args(argv)

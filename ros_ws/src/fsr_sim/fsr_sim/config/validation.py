@@ -100,10 +100,17 @@ def resolve_config_path(name_or_path: str, kind: str) -> Path:
         return candidate
     builtin = builtin_config_dir(kind) / f"{name_or_path}.yaml"
     if not builtin.is_file():
-        raise ConfigError(
-            "", f"unknown {kind[:-1]} '{name_or_path}' (built-in: {', '.join(builtin_names(kind))})"
-        )
+        names = builtin_names(kind)
+        raise ConfigError("", f"unknown {kind[:-1]} '{name_or_path}' {did_you_mean(name_or_path, names)}"
+                              f"(built-in: {', '.join(names)})")
     return builtin
+
+
+def did_you_mean(word: str, names: Iterable[str]) -> str:
+    """``"(did you mean 'k_p'?) "`` for the closest of ``names`` to ``word`` (case-insensitive), or ``""``."""
+    lowered = {name.lower(): name for name in names}
+    close = difflib.get_close_matches(word.lower(), list(lowered), n=1, cutoff=0.5)
+    return f"(did you mean '{lowered[close[0]]}'?) " if close else ""
 
 
 class Section:
@@ -214,10 +221,7 @@ class Section:
         unknown = sorted(str(k) for k in self.data if k not in names)
         if not unknown:
             return
-        lowered = {name.lower(): name for name in names}
-        close = difflib.get_close_matches(unknown[0].lower(), list(lowered), n=1, cutoff=0.5)
-        hint = f"(did you mean '{lowered[close[0]]}'?) " if close else ""
-        raise self.error(unknown[0], f"unknown key {hint}(known here: {', '.join(names)})")
+        raise self.error(unknown[0], f"unknown key {did_you_mean(unknown[0], names)}(known here: {', '.join(names)})")
 
 
 def checked_array(value: Any, shape: tuple[int, ...], key: str, source: str = "") -> np.ndarray:
