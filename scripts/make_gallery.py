@@ -1,4 +1,4 @@
-"""Regenerate the README's figure gallery (``docs/gallery/*.png``) from in-process flights.
+"""Regenerate the figure gallery of docs/analysis.md (``docs/gallery/*.png``) from in-process flights.
 
     .venv/bin/python scripts/make_gallery.py                 # fly the four scenarios (about a minute or two)
     .venv/bin/python scripts/make_gallery.py --from runs/    # reuse runs/<scenario>.mcap where they exist

@@ -1,4 +1,4 @@
-"""Nodes started by hand (README "Starting one node on its own"): they end by themselves with the flight,
+"""Nodes started by hand (docs/architecture.md, "Starting one node on its own"): they end by themselves with the flight,
 and every node exits within 2 s of SIGINT/SIGTERM whatever it is doing.
 
 Each test leases its own ROS domain (``ros_graph``), keeps discovery on localhost, waits on events (log
@@ -31,7 +31,7 @@ STARTED_LINES = {  # a log line each node prints once it is built (before any pe
 
 def by_hand_commands(scenario: str, *, duration: float | None = None, wait_for: int = 3,
                      keep_running: bool = False, out: str = "manual.mcap") -> dict[str, list[str]]:
-    """The README's four by-hand lines (recorder first, simulator last), optionally shortened/kept alive."""
+    """docs/architecture.md's four by-hand lines (recorder first, simulator last), optionally shortened/kept alive."""
     keep = ["-p", "exit_on_finish:=false"] if keep_running else []
     simulator = [executable("simulator"), "--ros-args", "-p", f"scenario:={scenario}",
                  "-p", f"wait_for_subscribers:={wait_for}"]

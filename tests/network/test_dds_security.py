@@ -1,4 +1,4 @@
-"""Evidence behind the README's "Who may join": the Fast DDS of the pip wheels has no DDS Security.
+"""Evidence behind docs/network.md, "Who may join": the Fast DDS of the pip wheels has no DDS Security.
 
 With ``ROS_SECURITY_ENABLE=true`` and an enclave (rcl only checks that its six files exist), rmw_fastrtps
 asks Fast DDS for the builtin authentication/access-control plugins and node creation fails with "This Fast

@@ -154,7 +154,7 @@ def unplug_controller(lab: NetLab, recording: Path, after_steps: int, down_for: 
 def test_brief_link_loss_pauses_the_lockstep_and_loses_nothing(lab_factory, domain_id, tmp_path):
     lab = lab_factory(["sim", "ctl", "est"])
     # After the cable is back, ARP (1 s retransmission) and DDS repair (100 ms heartbeats) can add about a second:
-    # a timeout of 3 s keeps a 0.3 s outage a pause (README, "One flight over several hosts").
+    # a timeout of 3 s keeps a 0.3 s outage a pause (docs/network.md).
     flight = ["ex4_geometric", "--duration", "2.0", "--set", "lockstep.timeout=3.0"]
     sides = fly_three_hosts(lab, domain_id, tmp_path, flight)
     recording = tmp_path / "sim" / "sim.mcap"

@@ -23,7 +23,7 @@ Thrusts are scaled by their mean before the steps so that the powers stay near 1
 (:func:`fsr_control.core.allocation.null_space_correction`; the 2 x 2 system of the tilting quadrotor in
 closed form). The wrench is unchanged
 (to rounding): tracking is the same, only the rotor speeds and tilt angles change. Over the exercise-5
-flight it lowers the peak rotor speed while the vehicle holds roll = pitch = 45 deg (numbers in the README,
+flight it lowers the peak rotor speed while the vehicle holds roll = pitch = 45 deg (numbers in docs/differences.md,
 "Voliro secondary objective", checked by ``tests/flights/test_flight_ex5.py``).
 """
 

@@ -1,6 +1,6 @@
 """The flight contract: every topic, frame id, joint name, status key, exit code and convention of an fsr
-flight, declared once. Nodes, the recorder, the in-process recording, the analysis and the README's topic
-table derive from it (a test checks that none of these literals appears anywhere else).
+flight, declared once. Nodes, the recorder, the in-process recording, the analysis and the topic
+table of docs/architecture.md derive from it (a test checks that none of these literals appears anywhere else).
 
 Topics are relative names (a vehicle namespace moves them all) except ``/clock``. For each topic
 (:class:`Topic`): its message type, the QoS profile the publisher and the subscribers use
@@ -66,7 +66,7 @@ class Topic:
     per_step: bool  # one message per lockstep step, stamped with the state it belongs to
     frame: str = ""  # header.frame_id ("" without a header)
     child_frame: str = ""  # Odometry's child_frame_id; the trajectory's one joint
-    notes: str = ""  # what it carries (the README's topic table)
+    notes: str = ""  # what it carries (the topic table of docs/architecture.md)
 
 
 CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", "CLOCK", SIMULATOR, True, True,
@@ -136,7 +136,8 @@ def stamped_streams() -> tuple[str, ...]:
 
 
 def topic_table() -> str:
-    """The README's topic table (Markdown), generated from :data:`TOPICS` (``python -m fsr_sim.contract``)."""
+    """The topic table of docs/architecture.md (Markdown), generated from :data:`TOPICS`
+    (``python -m fsr_sim.contract``)."""
     rows = ["| topic | type | from | QoS | recorded | frame_id | what it carries |", "|---|---|---|---|---|---|---|"]
     for t in TOPICS:
         frame = f"`{t.frame}`" if t.frame else "-"
