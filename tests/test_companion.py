@@ -10,6 +10,8 @@ import subprocess
 import sys
 from importlib.metadata import requires
 
+import pytest
+
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
 
 OPTIONAL = {"mcap", "mcap-ros2-support", "matplotlib"}
@@ -55,6 +57,7 @@ def test_the_node_packages_do_not_require_the_recording_or_plotting_libraries():
     assert "mcap" in extras and "matplotlib" in extras  # ... which are the extras
 
 
+@pytest.mark.graph  # the three nodes are created (DDS participants), though not spun
 def test_the_nodes_start_without_them_and_say_what_to_install(tmp_path):
     (tmp_path / "log.mcap").write_bytes(b"")
     with acquire_domain(TEST_RANGE) as lease:

@@ -39,7 +39,7 @@ def test_compiled_and_cpython_flights_are_bit_identical():
     assert np.array_equal(compiled, python), np.abs(compiled - python).max()
 
 
-@pytest.mark.slow
+@pytest.mark.graph
 def test_no_flight_and_no_node_compiles_with_the_cache_filled(tmp_path):
     """After fsr-compile (scripts/setup.sh runs it) an in-process flight and every node of a graph flight only
     load compiled code: numba's cache reports loads, never a save."""

@@ -89,6 +89,7 @@ def domain():
         yield lease.domain_id
 
 
+@pytest.mark.graph  # it flies a node graph from the installed copy
 def test_non_editable_install_runs_every_command(tmp_path, domain):
     if importlib.util.find_spec("pip") is None:
         pytest.skip("pip is not available in this environment (needed to install the packages)")

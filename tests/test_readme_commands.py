@@ -96,6 +96,7 @@ def test_my_flight_yaml_example_is_a_valid_scenario(workdir):
     assert load_scenario(workdir / "my_flight.yaml").name == "my_flight"
 
 
+@pytest.mark.graph  # fsr-fly flies node graphs
 @pytest.mark.parametrize("command", SINGLE)
 def test_readme_command_runs(workdir, command):
     env = {k: v for k, v in os.environ.items() if k not in ("ROS_DOMAIN_ID", "PYTHONPATH")}

@@ -64,7 +64,7 @@ def assert_graph_equals_in_process(scenario: Path, folder: Path, topics: tuple[s
         assert g.count(topic) == 301 and [d for _, d in g.raw(topic)] == [d for _, d in loc.raw(topic)], topic
 
 
-@pytest.mark.slow
+@pytest.mark.graph
 def test_the_hexacopter_flies_the_same_in_the_node_graph(tmp_path):
     """The recipe's vehicle in the node graph gives the in-process flight's messages, byte for byte."""
     files = recipe_files(tmp_path)
@@ -121,7 +121,7 @@ def _rotation_vector(rotation: np.ndarray) -> np.ndarray:
     return Rotation.from_matrix(rotation).as_rotvec()
 
 
-@pytest.mark.slow
+@pytest.mark.graph
 def test_the_noise_is_the_same_in_the_node_graph(tmp_path):
     files = recipe_files(tmp_path)
     assert_graph_equals_in_process(files["noisy_ex4.yaml"], tmp_path, ("/odom", "/wrench_cmd", "/wrench_estimate"))

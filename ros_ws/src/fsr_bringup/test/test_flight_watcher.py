@@ -4,6 +4,7 @@ node ended by its teardown watchdog after its work was done is a warning, not a 
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import sys
 import textwrap
@@ -69,10 +70,15 @@ def test_wait_returns_when_an_event_arrives():
     assert time.monotonic() - start < 1.0
 
 
-def test_watcher_command_runs_the_watcher_module():
+def test_watcher_command_runs_the_watcher_module_for_every_namespace():
+    """The command fsr-fly starts is this interpreter running the watcher module, which reads back the
+    namespaces it was given."""
+    from fsr_bringup.runner import watcher_node
+
     command = watcher_command(["", "/uav2"])
-    assert command[:3] == [sys.executable, "-m", "fsr_bringup.runner.watcher_node"]
-    assert command[3:] == ["--namespace", "", "--namespace", "/uav2"]
+    assert command[0] == sys.executable and command[1] == "-m"
+    assert importlib.util.find_spec(command[2]).origin == watcher_node.__file__
+    assert watcher_node.parse_args(command[3:]).namespace == ["", "/uav2"]
 
 
 HUNG_WATCHER = textwrap.dedent('''

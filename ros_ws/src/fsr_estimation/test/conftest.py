@@ -1,4 +1,5 @@
-"""Shared fixtures: the report's flight log (skipped when ../shared is missing) and a synthetic one."""
+"""Shared fixtures: the report's flight log (its .mat where it is, else the shipped MCAP conversion) and a
+synthetic one."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from fsr_estimation.io.flight_log import FlightLog, body_force_from_thrust, load_mat
+from fsr_estimation.io.flight_log import FlightLog, body_force_from_thrust, load_flight_log, load_mat
 
 REPO = Path(__file__).resolve().parents[4]
 REPORT_MAT = REPO.parent / "shared" / "data" / "ws_homework_3_2025.mat"
@@ -54,10 +55,19 @@ def synthetic():
 
 
 @pytest.fixture(scope="session")
-def report_log() -> FlightLog:
+def report_mat() -> Path:
+    """The report's own .mat log, for the tests of the .mat reader: it is the course's data, not shipped
+    with fsr (the same flight, converted, is ``examples/ex3_flight_log.mcap``)."""
     if not REPORT_MAT.is_file():
-        pytest.skip(f"report log {REPORT_MAT} not available")
-    return load_mat(REPORT_MAT)
+        pytest.skip(f"the report's .mat log is not in this checkout ({REPORT_MAT}: the course's data, not shipped; "
+                    f"the same flight converted to MCAP, {EXAMPLE_MCAP.name}, is tested instead)")
+    return REPORT_MAT
+
+
+@pytest.fixture(scope="session")
+def report_log() -> FlightLog:
+    """The report's exercise-3 flight: its .mat log where it is, else the shipped MCAP conversion of it."""
+    return load_mat(REPORT_MAT) if REPORT_MAT.is_file() else load_flight_log(EXAMPLE_MCAP)
 
 
 def synthetic_log(n: int = 4000, sample_time: float = 0.001, mass: float = MASS,

@@ -39,9 +39,9 @@ def test_report_tables_from_the_shipped_mcap(ref, capsys):
     check_report_tables(capsys.readouterr().out, ref)
 
 
-def test_report_tables_and_max_errors_from_the_mat(ref, report_log, capsys, tmp_path):
+def test_report_tables_and_max_errors_from_the_mat(ref, report_mat, capsys, tmp_path):
     out = tmp_path / "results.json"
-    assert main([str(ref.REPORT_MAT), *REPORT_ARGS, "--settling", "report", "--after", "25", "--json", str(out)]) == 0
+    assert main([str(report_mat), *REPORT_ARGS, "--settling", "report", "--after", "25", "--json", str(out)]) == 0
     check_report_tables(capsys.readouterr().out, ref)
     results = json.loads(out.read_text())
     assert [(item["c0"], item["r"]) for item in results] == [(10.0, r) for r in range(1, 6)]

@@ -46,7 +46,8 @@ def test_bad_logs_are_refused_with_the_reason(change, message):
     assert str(error.value).startswith("bad.csv: ")
 
 
-def test_mat_layout_and_its_refusals(tmp_path, report_log):
+def test_mat_layout_and_its_refusals(tmp_path, report_mat):
+    report_log = load_mat(report_mat)
     assert len(report_log) == 30001 and report_log.sample_time == pytest.approx(0.001, rel=1e-12)
     np.testing.assert_array_equal(report_log.force_body[:, :2], 0.0)
     assert np.all(report_log.force_body[:, 2] < 0.0)  # thrust along -z_b

@@ -104,7 +104,7 @@ def test_batched_writes_give_the_same_file(tmp_path, chunk_size):
     for batched in (False, True):
         path = tmp_path / f"run_{batched}.mcap"
         writer = RecordingWriter(path, {"fsr_scenario": {"yaml": "name: test\n"}}, chunk_size=chunk_size)
-        assert batched is False or writer._fast is not None  # the pinned mcap writer takes the fast path
+        assert batched is False or writer.fast_path  # the pinned mcap writer takes the fast path
         writer.add_topic("/odom", "nav_msgs/msg/Odometry")
         writer.add_topic("/wrench_cmd", "geometry_msgs/msg/WrenchStamped")
         for k in range(300):
@@ -141,9 +141,9 @@ def test_block_writes_give_the_same_file(tmp_path, chunk_size, fast):
     files = []
     for block in (False, True):
         path = tmp_path / f"run_{block}.mcap"
-        writer = RecordingWriter(path, {"fsr_scenario": {"yaml": "name: test\n"}}, chunk_size=chunk_size)
-        if not fast:
-            writer._fast = None
+        writer = RecordingWriter(path, {"fsr_scenario": {"yaml": "name: test\n"}}, chunk_size=chunk_size,
+                                 fast_path=fast)
+        assert writer.fast_path is fast
         for topic, type_name in (("/odom", "nav_msgs/msg/Odometry"), ("/wrench", "geometry_msgs/msg/WrenchStamped"),
                                  ("/mass", "std_msgs/msg/Float64")):
             writer.add_topic(topic, type_name)

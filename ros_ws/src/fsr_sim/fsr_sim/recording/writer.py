@@ -38,7 +38,10 @@ class RecordingWriter:
         path: str | Path,
         metadata: dict[str, dict[str, str]] | None = None,
         chunk_size: int = DEFAULT_CHUNK_SIZE,
+        fast_path: bool = True,
     ) -> None:
+        """``fast_path``: write records straight into the open chunk where the installed mcap allows it (the
+        file is the same, byte for byte; False writes through mcap's own API, as with any other version)."""
         self.path = Path(path)
         try:
             self._file: IO[bytes] | None = open(self.path, "wb")  # noqa: SIM115 - closed in close()
@@ -52,7 +55,12 @@ class RecordingWriter:
         self.message_counts: dict[str, int] = {}
         for name, data in (metadata or {}).items():
             self._writer.add_metadata(name, dict(data))
-        self._fast = _FastMessages.attach(self._writer)
+        self._fast = _FastMessages.attach(self._writer) if fast_path else None
+
+    @property
+    def fast_path(self) -> bool:
+        """Whether records go straight into the open chunk (the pinned mcap) or through mcap's API."""
+        return self._fast is not None
 
     def add_topic(self, topic: str, type_name: str) -> None:
         """Register ``topic`` (absolute name) with its type (``nav_msgs/msg/Odometry``); idempotent."""
