@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fsr_bringup.runner.domains import DomainLease
-from fsr_bringup.runner.processes import DRAIN_WAIT_S, NodeProcess, ProcessGroup, describe_exit, executable
+from fsr_bringup.runner.processes import NodeProcess, ProcessGroup, describe_exit, executable
 from fsr_sim.contract import (
     DIVERGED,
     EXIT_DIVERGED,
@@ -44,6 +44,7 @@ EXIT_NODE_FAILED = EXIT_FAILURE
 TEARDOWN_HUNG = -TEARDOWN_HUNG_SIGNAL  # returncode of a node that its watchdog ended after its work was done
 MISSING_REPORT_AFTER = 3.0  # s: first warning naming the nodes not discovered yet (--nodes)
 MISSING_REPORT_EVERY = 5.0  # s: then again this often until the flight starts
+END_BY_THEMSELVES_S = 3.0  # s after a normal end for the nodes to end on their own before they are signalled
 
 
 @dataclass
@@ -250,7 +251,7 @@ def fly_graph(
             # A normal end: the other nodes see the final sim_status and end by themselves once they have
             # answered and recorded everything (a signal now would read like an interruption in their logs).
             group.wait_for_exit([n.name for n in group.nodes if n.name not in (*simulators, WATCHER_PROCESS)],
-                                DRAIN_WAIT_S)
+                                END_BY_THEMSELVES_S)
         # The watcher goes with the first wave: it is not needed any more, and if its DDS teardown hangs
         # (watcher_node.py) the wave's SIGTERM/SIGKILL ends it while nothing waits for its exit code.
         group.stop_all(first=(*simulators, WATCHER_PROCESS))
