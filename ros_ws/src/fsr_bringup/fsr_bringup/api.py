@@ -25,6 +25,7 @@ def simulate(
     duration: float | None = None,
     record: str | Path | None = None,
     stop: Callable[[], str | None] | None = None,
+    progress: Callable[[float, float], None] | None = None,
 ) -> FlightRun:
     """Fly a scenario in one process (the node graph's modules and lockstep, without DDS).
 
@@ -39,7 +40,11 @@ def simulate(
     record : str or Path, optional
         Also write the MCAP recording there (as ``fsr-fly --in-process`` does).
     stop : callable, optional
-        Polled before each step; returning a reason (e.g. a signal name) ends the flight there as interrupted.
+        Polled between chunks of steps (every simulated second); returning a reason (e.g. a signal name) ends
+        the flight there as interrupted.
+    progress : callable, optional
+        Called after each chunk with the simulated time [s] of the last state flown and the wall time [s] the
+        loop has taken.
 
     Returns
     -------
@@ -63,4 +68,4 @@ def simulate(
     checked = check_scenario(loaded)
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
-    return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop)
+    return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop, progress=progress)

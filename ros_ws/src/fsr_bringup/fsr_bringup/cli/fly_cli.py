@@ -68,7 +68,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="how long the simulator waits for the other nodes (default 20 s; 300 s with --nodes)",
     )
     parser.add_argument("--no-analysis", action="store_true", help="skip figures and metrics")
-    parser.add_argument("--quiet", action="store_true", help="do not stream node logs")
+    parser.add_argument("--quiet", action="store_true", help="do not stream node logs (the progress is still shown)")
     add_figure_arguments(parser)
     return parser.parse_args(argv)
 
@@ -172,8 +172,13 @@ def main(argv: list[str] | None = None) -> int:
     if args.in_process:
         from fsr_bringup.api import simulate
 
+        console = Console(quiet=args.quiet)
         with interrupts_end_the_flight() as stop:
-            result = simulate(members[0].checked.scenario, record=recording, stop=stop)
+            try:
+                result = simulate(members[0].checked.scenario, record=recording, stop=stop,
+                                  progress=lambda t, wall: console.flight_progress(t, duration, wall))
+            finally:
+                console.end_progress()
     else:
         try:
             domain = fixed_domain(args.domain_id) if args.domain_id is not None else acquire_domain()

@@ -44,6 +44,7 @@ EXIT_NODE_FAILED = EXIT_FAILURE
 TEARDOWN_HUNG = -TEARDOWN_HUNG_SIGNAL  # returncode of a node that its watchdog ended after its work was done
 MISSING_REPORT_AFTER = 3.0  # s: first warning naming the nodes not discovered yet (--nodes)
 MISSING_REPORT_EVERY = 5.0  # s: then again this often until the flight starts
+PLAIN_PROGRESS_EVERY_S = 10.0  # s of wall time between progress lines when stdout is not a terminal
 END_BY_THEMSELVES_S = 3.0  # s after a normal end for the nodes to end on their own before they are signalled
 
 
@@ -63,13 +64,15 @@ class FlightResult:
 
 
 class Console:
-    """Prefixed node output and a one-line progress display (only on a terminal)."""
+    """Prefixed node output (hidden by ``quiet``) and the flight's progress: a line rewritten in place on a
+    terminal, else (a CI log, a pipe) a plain line every :data:`PLAIN_PROGRESS_EVERY_S` of wall time."""
 
     def __init__(self, quiet: bool = False) -> None:
         self.quiet = quiet
         self.tty = sys.stdout.isatty()
         self.lock = threading.Lock()
         self.progress_line = ""
+        self.last_plain = time.monotonic()
 
     def echo(self, name: str, line: str) -> None:
         if self.quiet:
@@ -95,12 +98,22 @@ class Console:
                 sys.stdout.flush()
 
     def progress(self, text: str) -> None:
-        if not self.tty or self.quiet:
-            return
         with self.lock:
+            if not self.tty:
+                now = time.monotonic()
+                if now - self.last_plain >= PLAIN_PROGRESS_EVERY_S:
+                    self.last_plain = now
+                    sys.stdout.write(f"fsr-fly: {text}\n")
+                    sys.stdout.flush()
+                return
             self.progress_line = text
             sys.stdout.write("\r\033[K" + text)
             sys.stdout.flush()
+
+    def flight_progress(self, sim_time: float, duration: float, wall: float) -> None:
+        """Simulated time [s] out of ``duration`` after ``wall`` seconds, and their ratio."""
+        rtf = sim_time / wall if wall > 0 else 0.0
+        self.progress(f"t = {sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
 
     def end_progress(self) -> None:
         if self.tty and self.progress_line:
@@ -242,9 +255,7 @@ def fly_graph(
                                    f"in domain {domain.domain_id}: {', '.join(missing)}")
             if now - last_progress > 0.25:
                 last_progress = now
-                wall = now - start
-                rtf = watcher.sim_time / wall if wall > 0 else 0.0
-                console.progress(f"t = {watcher.sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
+                console.flight_progress(watcher.sim_time, duration, now - start)
     finally:
         console.end_progress()
         if not interrupted and simulators and not failures:

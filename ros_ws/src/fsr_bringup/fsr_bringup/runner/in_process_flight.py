@@ -154,13 +154,15 @@ class _Stopped(KeyboardInterrupt):
 
 
 def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None,
-                   stop: Callable[[], str | None] | None = None) -> FlightRun:
+                   stop: Callable[[], str | None] | None = None,
+                   progress: Callable[[float, float], None] | None = None) -> FlightRun:
     """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process.
 
     ``recording``: write the MCAP file there. ``max_steps``: stop after that many steps (default: the
     scenario's duration). ``stop``: polled between chunks of steps; a signal name (e.g. ``"SIGINT"``) ends the
     flight there (``end_reason`` ``stopped``, ``interrupted``). A KeyboardInterrupt (Ctrl-C in a notebook)
-    ends it too, at the end of the chunk being flown.
+    ends it too, at the end of the chunk being flown. ``progress``: called after each chunk with the
+    simulated time [s] of the last state flown and the wall time [s] the loop has taken.
     """
     from fsr_estimation.config.estimator_config import estimator_config
     from fsr_estimation.core.observer import MomentumObserver
@@ -211,6 +213,8 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
                 recorder.write_steps(np.arange(count, flown, dtype=np.int64) * period_ns, published[count:flown],
                                      control[count:flown], estimates[count:flown] if estimation.enabled else None)
             count = flown
+            if progress is not None and count:
+                progress((count - 1) * period_ns * 1e-9, time.perf_counter() - start)
             if outcome == flight_loop.DIVERGED:
                 end_reason, reason = DIVERGED, divergence_reason(detail, plant.params, plant.core_state)
             elif outcome == flight_loop.CONTROLLER_FAILED:
