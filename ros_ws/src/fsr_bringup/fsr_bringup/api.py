@@ -17,6 +17,7 @@ from typing import Any
 from fsr_bringup.runner.in_process_flight import FlightRun, fly_in_process
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_sim.config.scenario import Scenario, load_scenario, scenario_from_mapping
+from fsr_sim.contract import recording_selection
 
 
 def simulate(
@@ -26,6 +27,7 @@ def simulate(
     record: str | Path | None = None,
     stop: Callable[[], str | None] | None = None,
     progress: Callable[[float, float], None] | None = None,
+    record_topics: str | None = None,
 ) -> FlightRun:
     """Fly a scenario in one process (the node graph's modules and lockstep, without DDS).
 
@@ -45,6 +47,9 @@ def simulate(
     progress : callable, optional
         Called after each chunk with the simulated time [s] of the last state flown and the wall time [s] the
         loop has taken.
+    record_topics : str, optional
+        With ``record``: record only these topics, comma-separated (``"odom,reference"``; ``sim_status`` is
+        always kept), as ``fsr-fly --record-topics``.
 
     Returns
     -------
@@ -68,4 +73,6 @@ def simulate(
     checked = check_scenario(loaded)
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
-    return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop, progress=progress)
+    topics = None if record_topics is None else recording_selection(record_topics)
+    return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop, progress=progress,
+                          record_topics=topics)

@@ -130,6 +130,22 @@ def recorded_topics() -> dict[str, str]:
     return {t.name: t.type for t in TOPICS if t.recorded and t.name != CLOCK.name}
 
 
+def recording_selection(text: str) -> frozenset[str]:
+    """The topics to record from a comma-separated list of recorded topics (``odom,reference``; ``clock`` is
+    ``/clock``): ``sim_status`` is always kept (how the flight ended). ValueError names an unknown one."""
+    from fsr_sim.config.validation import did_you_mean
+
+    known = [*recorded_topics(), CLOCK.name]
+    chosen = {item.strip().lstrip("/") for item in text.split(",") if item.strip()}
+    for name in sorted(chosen):
+        if ("/" + name if name == CLOCK.name.lstrip("/") else name) not in known:
+            raise ValueError(f"unknown recorded topic '{name}' {did_you_mean(name, [k.lstrip('/') for k in known])}"
+                             f"(recorded: {', '.join(k.lstrip('/') for k in known)})")
+    if not chosen:
+        raise ValueError("no topic named (give a comma-separated list, e.g. odom,reference)")
+    return frozenset({"/" + n if n == CLOCK.name.lstrip("/") else n for n in chosen} | {SIM_STATUS.name})
+
+
 def stamped_streams() -> tuple[str, ...]:
     """The per-step topics with a header stamp (a recording holds one message per step of each that started)."""
     return tuple(t.name for t in TOPICS if t.per_step and t.frame and t.name != CLOCK.name)

@@ -274,7 +274,7 @@ def rotors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     """Rotor speeds [rad/s] (and tilt angles [deg]) per run (one row each), a colour per rotor, limits grey."""
     runs_with = [r for r in runs if r.flight.rotor_cmd is not None]
     if not runs_with:
-        return Drawn(None, "no rotor_cmd (wrench actuation: no rotors)")
+        return Drawn(None, "no rotor_cmd (wrench actuation has no rotors, or not recorded)")
     tilting = any(r.flight.rotor_cmd.tilts is not None for r in runs_with)
     fig, axes = _figure(len(runs_with), 2 if tilting else 1, _width("two" if tilting else "one", options),
                         row_height=1.5)
@@ -305,7 +305,7 @@ def external_wrench_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     wrench alone (``wrench_truth``) in grey for comparison."""
     runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.wrench_estimate is not None]
     if not runs_with:
-        return Drawn(None, "no wrench_estimate (estimator off)")
+        return Drawn(None, "no wrench_estimate (estimator off, or not recorded)")
     fig, axes = _figure(3, 2, _width("two", options))
     for index, run in runs_with:
         est = run.flight.wrench_estimate
@@ -337,7 +337,7 @@ def mass_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     """Mass estimate ``m_e + f_e,z / g`` [kg] of each run vs the true plant mass and the estimator's model."""
     runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.mass_estimate is not None]
     if not runs_with:
-        return Drawn(None, "no mass_estimate (estimator off)")
+        return Drawn(None, "no mass_estimate (estimator off, or not recorded)")
     fig, axes = _figure(1, 1, _width("one", options), row_height=1.8)
     ax = axes[0, 0]
     for index, run in runs_with:

@@ -31,10 +31,18 @@ from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_pat
 from fsr_bringup.runner.flight import Console, VehicleLaunch, fly_graph, node_commands
 from fsr_bringup.runner.remote import parse_node_selection
 from fsr_bringup.runner.scenario_check import check_scenario
-from fsr_sim.cli.arguments import ArgumentParser
+from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.config.validation import ConfigError, builtin_names
-from fsr_sim.contract import EXIT_CODES, EXIT_CONFIG_ERROR, EXIT_DIVERGED, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
+from fsr_sim.contract import (
+    EXIT_CODES,
+    EXIT_CONFIG_ERROR,
+    EXIT_DIVERGED,
+    EXIT_FAILURE,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    recording_selection,
+)
 
 REMOTE_STARTUP_TIMEOUT = 300.0  # s: with --nodes the other hosts' nodes may be started by hand, later
 
@@ -68,6 +76,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="how long the simulator waits for the other nodes (default 20 s; 300 s with --nodes)",
     )
     parser.add_argument("--no-analysis", action="store_true", help="skip figures and metrics")
+    parser.add_argument("--record-topics", metavar="LIST", type=argument_type(recording_selection),
+                        help="record only these topics, comma-separated (e.g. odom,reference,clock: a long flight "
+                             "in a smaller file); sim_status is always recorded; the analysis skips what is "
+                             "missing, with a note (default: every topic)")
     parser.add_argument("--quiet", action="store_true", help="do not stream node logs (the progress is still shown)")
     add_figure_arguments(parser)
     return parser.parse_args(argv)
@@ -176,7 +188,9 @@ def main(argv: list[str] | None = None) -> int:
         with interrupts_end_the_flight() as stop:
             try:
                 result = simulate(members[0].checked.scenario, record=recording, stop=stop,
-                                  progress=lambda t, wall: console.flight_progress(t, duration, wall))
+                                  progress=lambda t, wall: console.flight_progress(t, duration, wall),
+                                  record_topics=None if args.record_topics is None else ",".join(
+                                      sorted(args.record_topics)))
             finally:
                 console.end_progress()
     else:
@@ -199,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
             result = fly_graph(
                 launches, recording, scenario_path, run_dir / "logs", domain, duration,
                 Console(quiet=args.quiet), localhost_only=not args.network, nodes=nodes,
-                startup_timeout=startup_timeout,
+                startup_timeout=startup_timeout, record_topics=args.record_topics,
             )
         for note in result.notes:
             print(f"fsr-fly: WARNING: {note}", file=sys.stderr, flush=True)

@@ -33,7 +33,8 @@ class InProcessRecorder:
     """Streams one in-process flight into a standard ROS 2 MCAP file (``close()`` finishes the file)."""
 
     def __init__(self, path: Path, scenario_yaml: str, rotors: bool, rotor_count: int = 0,
-                 tilting: bool = False) -> None:
+                 tilting: bool = False, topics: frozenset[str] | None = None) -> None:
+        """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all)."""
         from fsr_control.nodes.packets import ControllerPackets
         from fsr_estimation.nodes.packets import EstimatePackets
         from fsr_sim.nodes.state_packets import StatePackets
@@ -45,6 +46,7 @@ class InProcessRecorder:
                                                                  EstimatePackets())
                            for topic, template in packets.templates.items()}
         self._registered: set[str] = set()
+        self._topics = topics
 
     def write_steps(self, stamps_ns: np.ndarray, published: np.ndarray, control: np.ndarray,
                     estimates: np.ndarray | None) -> None:
@@ -61,6 +63,8 @@ class InProcessRecorder:
                 columns += [("/" + WRENCH_ESTIMATE.name, estimates[block, :6]),
                             ("/" + MASS_ESTIMATE.name, estimates[block, 6:])]
             stamps = stamps_ns[block]
+            if self._topics is not None:
+                columns = [(topic, values) for topic, values in columns if topic[1:] in self._topics]
             for topic, _ in columns:
                 self._register(topic)
             self.writer.write_block(stamps, [(topic, None, self._templates[topic].pack_rows(stamps, values))

@@ -45,7 +45,7 @@ import sys
 import time
 from pathlib import Path
 
-from fsr_sim.cli.arguments import ArgumentParser
+from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.contract import (
     BY_NAME,
     CLOCK,
@@ -53,6 +53,7 @@ from fsr_sim.contract import (
     STAMP_TOLERANCE_NS,
     SimStatus,
     recorded_topics,
+    recording_selection,
     stamped_streams,
     topic_named,
 )
@@ -97,16 +98,23 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         help="record the standard topics under NS (repeatable; default: the node's namespace)",
     )
     parser.add_argument(
+        "--only", metavar="LIST", type=argument_type(recording_selection),
+        help="record only these of the standard topics, comma-separated (e.g. odom,reference,clock); sim_status "
+             "is always recorded (default: all)",
+    )
+    parser.add_argument(
         "--topic", action="append", default=[], metavar="NAME:TYPE",
         help="also record NAME (relative names go under each namespace) of TYPE pkg/msg/Type (repeatable)",
     )
     return parser.parse_args(argv)
 
 
-def topic_list(namespaces: list[str], extra: list[str]) -> list[tuple[str, str]]:
-    """(topic name, type) to subscribe to; relative names are resolved by the node (its namespace)."""
+def topic_list(namespaces: list[str], extra: list[str], only: frozenset[str] | None = None) -> list[tuple[str, str]]:
+    """(topic name, type) to subscribe to; relative names are resolved by the node (its namespace). ``only``:
+    the standard topics to keep (:func:`fsr_sim.contract.recording_selection`; None: all)."""
     prefixes = ["/" + ns.strip("/") + "/" if ns.strip("/") else "/" for ns in namespaces] or [""]
-    topics: dict[str, str] = {CLOCK.name: CLOCK.type}
+    standard = {name: type_name for name, type_name in STANDARD_TOPICS.items() if only is None or name in only}
+    topics: dict[str, str] = {CLOCK.name: CLOCK.type} if only is None or CLOCK.name in only else {}
     extras: list[tuple[str, str]] = []
     for item in extra:
         name, sep, type_name = item.rpartition(":")
@@ -114,7 +122,7 @@ def topic_list(namespaces: list[str], extra: list[str]) -> list[tuple[str, str]]
             raise ValueError(f"--topic: expected NAME:TYPE (e.g. odom:nav_msgs/msg/Odometry), got '{item}'")
         extras.append((name, type_name))
     for prefix in prefixes:
-        for name, type_name in [*STANDARD_TOPICS.items(), *extras]:
+        for name, type_name in [*standard.items(), *extras]:
             topics[name if name.startswith("/") else prefix + name] = type_name
     return list(topics.items())
 
@@ -388,7 +396,7 @@ def main(argv: list[str] | None = None) -> int:
     from fsr_sim.ros.message_schema import message_class
 
     try:
-        topics = topic_list(args.namespace, args.topic)
+        topics = topic_list(args.namespace, args.topic, args.only)
     except ValueError as error:
         print(f"fsr-record: error: {error}", file=sys.stderr)
         return EXIT_CONFIG_ERROR

@@ -136,11 +136,15 @@ class VehicleLaunch:
 
 
 def node_commands(
-    members: list[VehicleLaunch], recording: Path, scenario_path: Path, startup_timeout: float | None = None
+    members: list[VehicleLaunch], recording: Path, scenario_path: Path, startup_timeout: float | None = None,
+    record_topics: frozenset[str] | None = None,
 ) -> list[tuple[str, list[str]]]:
     """(name, argv) of each node of the graph, in start order: recorder, then per vehicle the estimator,
-    the controller and the simulator (whose lockstep handshake waits for the others, local or remote)."""
+    the controller and the simulator (whose lockstep handshake waits for the others, local or remote).
+    ``record_topics``: the recorder keeps only these (:func:`fsr_sim.contract.recording_selection`)."""
     recorder = [executable("fsr-record"), "--out", str(recording), "--scenario", str(scenario_path)]
+    if record_topics is not None:
+        recorder += ["--only", ",".join(sorted(record_topics))]
     for member in members:
         if member.namespace:
             recorder += ["--namespace", member.namespace]
@@ -188,6 +192,7 @@ def fly_graph(
     localhost_only: bool = True,
     nodes: set[str] | None = None,
     startup_timeout: float | None = None,
+    record_topics: frozenset[str] | None = None,
 ) -> FlightResult:
     """Run the graph until every simulator has ended; stop everything; report failures by node name.
 
@@ -207,7 +212,7 @@ def fly_graph(
         interrupted.append(signal.Signals(signum).name)
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    commands = node_commands(members, recording, scenario_path, startup_timeout)
+    commands = node_commands(members, recording, scenario_path, startup_timeout, record_topics)
     all_names = [name for name, _command in commands]
     local = set(all_names) if nodes is None else set(nodes)
     simulators = {m.process_name("simulator"): m.namespace for m in members if m.process_name("simulator") in local}

@@ -155,14 +155,16 @@ class _Stopped(KeyboardInterrupt):
 
 def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None,
                    stop: Callable[[], str | None] | None = None,
-                   progress: Callable[[float, float], None] | None = None) -> FlightRun:
+                   progress: Callable[[float, float], None] | None = None,
+                   record_topics: frozenset[str] | None = None) -> FlightRun:
     """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process.
 
     ``recording``: write the MCAP file there. ``max_steps``: stop after that many steps (default: the
     scenario's duration). ``stop``: polled between chunks of steps; a signal name (e.g. ``"SIGINT"``) ends the
     flight there (``end_reason`` ``stopped``, ``interrupted``). A KeyboardInterrupt (Ctrl-C in a notebook)
     ends it too, at the end of the chunk being flown. ``progress``: called after each chunk with the
-    simulated time [s] of the last state flown and the wall time [s] the loop has taken.
+    simulated time [s] of the last state flown and the wall time [s] the loop has taken. ``record_topics``:
+    record only these (:func:`fsr_sim.contract.recording_selection`; None: all).
     """
     from fsr_estimation.config.estimator_config import estimator_config
     from fsr_estimation.core.observer import MomentumObserver
@@ -188,7 +190,8 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     if recording is not None:
         from fsr_bringup.recording.flight_recording import InProcessRecorder
 
-        recorder = InProcessRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos)
+        recorder = InProcessRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos,
+                                     record_topics)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 import textwrap
-from typing import NoReturn
+from collections.abc import Callable
+from typing import Any, NoReturn
 
 from fsr_sim.contract import EXIT_CONFIG_ERROR
 
@@ -17,6 +18,19 @@ def plain_description(doc: str) -> str:
         first = first.split("``: ", 1)[1]
     first = first.replace("``", "").replace(":mod:", "").replace("`", "")
     return textwrap.fill(first[:1].upper() + first[1:], 100)
+
+
+def argument_type(parse: Callable[[str], Any]) -> Callable[[str], Any]:
+    """``parse`` as an argparse ``type=``: its ValueError's message becomes the argument's error (argparse
+    would otherwise print only "invalid <name> value")."""
+    def checked(text: str) -> Any:
+        try:
+            return parse(text)
+        except ValueError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+
+    checked.__name__ = parse.__name__
+    return checked
 
 
 def exit_codes_text(meanings: dict[int, str]) -> str:
