@@ -110,3 +110,17 @@ def test_set_goal_replans_from_the_current_reference():
 
 def test_waypoint_type_is_the_planner_input():
     assert Waypoint(np.zeros(3), None, 1.0).hold == 0.0
+
+
+def test_a_law_is_given_the_horizon_it_declares_and_refuses_another():
+    """compute(horizon=...): a law that reads no reference ahead takes none (or an empty one), and a horizon
+    of another shape is refused naming the shape it needs."""
+    from fsr_control.core.reference import HORIZON_WIDTH
+
+    law = GeometricController(load_vehicle("quadrotor_ex4"), GEOMETRIC_GAINS)
+    state = (HOVER, np.eye(3), np.zeros(3), np.zeros(3))
+    empty = law.compute(hover_reference(), *state, horizon=np.zeros((0, HORIZON_WIDTH)))
+    np.testing.assert_array_equal(empty.force_body, law.compute(hover_reference(), *state).force_body)
+    with pytest.raises(ValueError, match=rf"reads the reference 0 samples ahead: horizon must have shape \(0, "
+                                         rf"{HORIZON_WIDTH}\), got \(5, {HORIZON_WIDTH}\)"):
+        law.compute(hover_reference(), *state, horizon=np.zeros((5, HORIZON_WIDTH)))
