@@ -43,6 +43,10 @@ from fsr_sim.contract import (  # noqa: F401 - the exit codes are the contract's
 )
 from fsr_sim.ros.node_usage import NodeUsage, wants_help
 
+# Set by the test suite for the tests not marked graph: a node built under it exits at once with
+# EXIT_FAILURE, so that `pytest -m "not graph"` provably runs no node (conftest.py).
+FORBID_NODES_ENV = "FSR_FORBID_NODES"
+
 # A node whose rcl/DDS teardown hung after its work was done (files closed, acks waited for) is ended by this
 # signal from its own watchdog (TeardownWatchdog): the runner tells it from a failure by the exit status.
 TEARDOWN_HUNG_SIGNAL = signal.SIGALRM
@@ -141,6 +145,10 @@ def run_node(make_node: Callable[[list[str]], object], argv: list[str] | None = 
         except ValueError as error:  # fsr_sim.config.validation.ConfigError is one
             print(f"[fsr] error: {error}", file=sys.stderr, flush=True)
             return EXIT_CONFIG_ERROR
+        if os.environ.get(FORBID_NODES_ENV):
+            print(f"[fsr] error: {FORBID_NODES_ENV} is set: this process may not run a ROS node (a test that is not "
+                  "marked graph started it)", file=sys.stderr, flush=True)
+            return EXIT_FAILURE
         if hasattr(node, "stop_flag"):
             node.stop_flag = stop  # lets close() keep within the signal budget
         node.get_logger().info(f"ready {process_age():.2f} s after the process started")
