@@ -135,15 +135,15 @@ def recording_selection(text: str) -> frozenset[str]:
     ``/clock``): ``sim_status`` is always kept (how the flight ended). ValueError names an unknown one."""
     from fsr_sim.config.validation import did_you_mean
 
-    known = [*recorded_topics(), CLOCK.name]
+    topic_of = {name.lstrip("/"): name for name in (*recorded_topics(), CLOCK.name)}  # "clock" -> "/clock"
     chosen = {item.strip().lstrip("/") for item in text.split(",") if item.strip()}
     for name in sorted(chosen):
-        if ("/" + name if name == CLOCK.name.lstrip("/") else name) not in known:
-            raise ValueError(f"unknown recorded topic '{name}' {did_you_mean(name, [k.lstrip('/') for k in known])}"
-                             f"(recorded: {', '.join(k.lstrip('/') for k in known)})")
+        if name not in topic_of:
+            raise ValueError(f"unknown recorded topic '{name}' {did_you_mean(name, topic_of)}"
+                             f"(recorded: {', '.join(topic_of)})")
     if not chosen:
         raise ValueError("no topic named (give a comma-separated list, e.g. odom,reference)")
-    return frozenset({"/" + n if n == CLOCK.name.lstrip("/") else n for n in chosen} | {SIM_STATUS.name})
+    return frozenset({topic_of[name] for name in chosen} | {SIM_STATUS.name})
 
 
 def stamped_streams() -> tuple[str, ...]:
