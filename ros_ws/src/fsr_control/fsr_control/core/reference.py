@@ -86,7 +86,8 @@ def polynomial_derivatives(coefficients, goal, start_time: float, duration: floa
     tau = (t - start_time) / duration
     if tau >= 1.0:
         out[:] = 0.0
-        out[0] = goal
+        for c in range(goal.shape[0]):
+            out[0, c] = goal[c]
         return
     if tau < 0.0:
         tau = 0.0

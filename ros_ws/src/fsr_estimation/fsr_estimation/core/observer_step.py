@@ -122,7 +122,8 @@ def observer_update(params: ObserverParams, state: ObserverState, velocity_world
         for i in range(6):
             residual = (momentum[i] - state.previous_momentum[i]) - ts * (previous[i] + state.previous_rate[i])
             gamma[0, i] = gamma[0, i] + gains[0] * residual
-        previous[:] = gamma[order - 1]
+        for i in range(6):
+            previous[i] = gamma[order - 1, i]
         _store_sample_terms(params, state, eta, eta_dot, force_body, torque_body)
     q = state.previous_momentum
     q[0], q[1], q[2], q[3], q[4], q[5] = mx, my, mz, ax, ay, az

@@ -94,7 +94,8 @@ def plant_time(params: PlantParams, state: PlantState) -> float:
 def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
     """Cache the actuator wrench of the held command away from surfaces (constant over the period)."""
     if params.wrench_actuation:
-        state.body_wrench[:] = state.wrench_command
+        for i in range(6):  # element by element: an array copy would need numba's allocator (core/jit.py)
+            state.body_wrench[i] = state.wrench_command[i]
     else:
         rotor_wrench(state.columns, state.speed_sq, state.body_wrench)
 
@@ -127,7 +128,8 @@ def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, wit
 @jit_inline
 def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None:  # noqa: ANN001
     """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation)."""
-    state.wrench_command[:] = wrench
+    for i in range(6):
+        state.wrench_command[i] = wrench[i]
     update_actuator_wrench(params, state)
 
 
