@@ -108,3 +108,16 @@ def test_roll_pitch_waypoints_accepted_for_tilting_vehicle_and_voliro_options(tm
                                         controller={"secondary_objective": {"type": "min_peak_speed", "exponent": 5}}))
     with pytest.raises(ConfigError, match="must be one of"):
         controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={"secondary_objective": {"type": "x"}}))
+
+
+def test_authority_margin_defaults_to_0_7_and_is_checked(tmp_path):
+    assert controller_config(load_scenario(SCENARIOS / "ex4_wrench.yaml")).authority_margin == 0.7
+    trajectory = yaml.safe_load((SCENARIOS / "ex4_wrench.yaml").read_text())["trajectory"]
+    config = controller_config(scenario_with(tmp_path, trajectory={**trajectory, "authority_margin": 1}))
+    assert config.authority_margin == 1.0
+    for value, reason in ((0, "must be in (0, 1]"), (-0.2, "must be in (0, 1]"), (1.5, "must be in (0, 1]"),
+                          ("most", "must be a number")):
+        with pytest.raises(ConfigError) as error:
+            controller_config(scenario_with(tmp_path, trajectory={**trajectory, "authority_margin": value}))
+        assert error.value.key == "trajectory.authority_margin"
+        assert reason in str(error.value) and "scenario.yaml" in str(error.value)

@@ -42,3 +42,41 @@ def test_bad_argument_is_one_line_exit_2(capsys):
     assert exit_info.value.code == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--jsn" in err and err.startswith("fsr-vehicle: error:")
+
+
+def test_json_and_markdown_print_the_authority_at_margin_1(capsys):
+    import pytest
+
+    from fsr_sim.model.authority import authority
+    from fsr_sim.model.vehicle import load_vehicle
+
+    for name in ("quadrotor_ex4", "octocopter", "tilting_quadrotor_ex5"):
+        assert main([name, "--json"]) == 0
+        data = json.loads(capsys.readouterr().out)["authority"]
+        expected = authority(load_vehicle(name)).as_dict()
+        assert data.keys() == expected.keys()
+        for key, value in expected.items():
+            assert data[key] == (None if value is None else pytest.approx(value, rel=1e-12)), key
+        assert data["margin"] == 1.0
+        assert set(data) >= {"thrust_min", "thrust_max", "roll_torque", "pitch_torque", "yaw_torque",
+                             "roll_acceleration", "pitch_acceleration", "yaw_acceleration", "tilt_max"}
+        assert (data["tilt_max"] is None) == (name != "tilting_quadrotor_ex5")
+    assert main(["quadrotor_ex4"]) == 0
+    out = capsys.readouterr().out
+    assert "Authority at hover (margin 1: the model's limits" in out
+    assert "| yaw torque (+-) | 0.1547 N m" in out and "| roll torque (+-) | 2.649 N m" in out
+
+
+def test_a_vehicle_that_cannot_hover_is_still_printed_with_the_reason(tmp_path, capsys):
+    import yaml
+
+    from fsr_sim.config.validation import builtin_config_dir
+
+    data = yaml.safe_load((builtin_config_dir("vehicles") / "quadrotor_ex4.yaml").read_text())
+    path = tmp_path / "heavy.yaml"
+    path.write_text(yaml.safe_dump({**data, "name": "heavy", "mass": 20.0}))
+    assert main([str(path), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["authority"] is None and "vehicle 'heavy' cannot hover" in data["authority_error"]
+    assert main([str(path)]) == 0
+    assert "Authority at hover: none (vehicle 'heavy' cannot hover" in capsys.readouterr().out

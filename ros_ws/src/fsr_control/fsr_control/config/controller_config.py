@@ -9,6 +9,8 @@ trajectory:
       duration: 20.0                # travel time [s] > 0
       hold: 0.0                     # optional wait after arrival [s] >= 0
   goal_duration: 10.0               # travel time [s] of a goal received at run time (`goal` topic)
+  authority_margin: 0.7            # in (0, 1]: the share of the model's authority (fsr_sim.model.authority)
+                                    # references may use; not used by the flight yet
 controller:
   type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | a law of
                                     # fsr_control.controllers.catalog.LAWS; default by vehicle
@@ -46,6 +48,7 @@ from fsr_sim.model.vehicle import Vehicle
 SECONDARY_TYPES = ("none", "min_peak_speed")
 DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
 DEFAULT_GOAL_DURATION = 10.0  # s
+DEFAULT_AUTHORITY_MARGIN = 0.7  # share of the model's authority at hover (fsr_sim.model.authority)
 
 
 @dataclass(frozen=True)
@@ -69,6 +72,7 @@ class ControllerConfig:
     allocation: str = DEFAULT_ALLOCATION  # clamp | priority (fsr_control.allocation)
     compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none)
     air_mode: bool = True  # fixed rotors, priority allocation: thrust may rise for roll/pitch torque
+    authority_margin: float = DEFAULT_AUTHORITY_MARGIN  # trajectory.authority_margin, in (0, 1]
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
@@ -171,6 +175,10 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     trajectory = scenario.section("trajectory")
     waypoints = _waypoints(trajectory, vehicle)
     goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
+    authority_margin = trajectory.number("authority_margin", DEFAULT_AUTHORITY_MARGIN)
+    if not 0.0 < authority_margin <= 1.0:
+        raise trajectory.error("authority_margin", f"must be in (0, 1] (the share of the vehicle's authority at "
+                                                   f"hover that references may use), got {authority_margin}")
     trajectory.reject_unknown()
     return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source,
-                            allocation, compensation, air_mode)
+                            allocation, compensation, air_mode, authority_margin)

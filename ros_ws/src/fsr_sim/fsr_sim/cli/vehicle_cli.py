@@ -5,7 +5,11 @@ Markdown by default; ``--json`` prints an object with ``mass``, ``inertia`` (3x3
 ``rotors`` (position, spin, tilt axis), ``allocation``
 (6 x n, squared rotor speeds -> body wrench, rows f_x f_y f_z tau_x tau_y tau_z), for a coplanar vehicle
 also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a tilting vehicle
-``allocation_static`` (6 x 2n, docs/model.md §3.2).
+``allocation_static`` (6 x 2n, docs/model.md §3.2); ``authority`` is what the rotors give at hover at margin 1
+(the model's limits, :mod:`fsr_sim.model.authority`): ``thrust_min``, ``thrust_max`` [N], ``roll_torque``,
+``pitch_torque``, ``yaw_torque`` [N m], ``roll_acceleration``, ``pitch_acceleration``, ``yaw_acceleration``
+[rad/s^2] and ``tilt_max`` [rad] (null unless fully actuated); null, with the reason in ``authority_error``, for a
+vehicle that cannot hover.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from fsr_sim.model.allocation import (
     static_tilting_allocation,
     wrench_from_rotor_speed_sq,
 )
+from fsr_sim.model.authority import Authority, authority
 from fsr_sim.model.vehicle import Vehicle, load_vehicle
 
 WRENCH_ROWS = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
@@ -59,6 +64,10 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
         "allocation_rows": list(WRENCH_ROWS),
         "allocation": wrench_from_rotor_speed_sq(vehicle).tolist(),
     }
+    try:
+        summary["authority"] = authority(vehicle, margin=1.0).as_dict()
+    except ValueError as error:  # a vehicle that cannot hover: the rest still printed
+        summary["authority"], summary["authority_error"] = None, str(error)
     if vehicle.has_servos:
         summary["tilt_angle_max"] = vehicle.tilt_angle_max
         summary["allocation_static"] = static_tilting_allocation(vehicle).tolist()
@@ -72,6 +81,23 @@ def _markdown_matrix(matrix: np.ndarray, rows: tuple[str, ...], columns: list[st
     for name, row in zip(rows, matrix, strict=True):
         lines.append(f"| {name} | " + " | ".join(f"{v:.6g}" for v in row) + " |")
     return "\n".join(lines)
+
+
+def _authority_markdown(values: Authority) -> list[str]:
+    tilt = "- (hovers level only)" if values.tilt_max is None else f"{np.rad2deg(values.tilt_max):.1f} deg"
+    return [
+        f"Authority at hover (margin {values.margin:g}: the model's limits; a scenario's "
+        "trajectory.authority_margin scales them):",
+        "",
+        "| axis | value |",
+        "|---|---|",
+        f"| hover thrust m g | {values.hover_thrust:.4g} N |",
+        f"| thrust range (zero torque) | {values.thrust_min:.4g} .. {values.thrust_max:.4g} N |",
+        f"| roll torque (+-) | {values.roll_torque:.4g} N m ({values.roll_acceleration:.4g} rad/s^2) |",
+        f"| pitch torque (+-) | {values.pitch_torque:.4g} N m ({values.pitch_acceleration:.4g} rad/s^2) |",
+        f"| yaw torque (+-) | {values.yaw_torque:.4g} N m ({values.yaw_acceleration:.4g} rad/s^2) |",
+        f"| hover tilt (roll or pitch) | {tilt} |",
+    ]
 
 
 def vehicle_markdown(vehicle: Vehicle) -> str:
@@ -113,6 +139,10 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
         out.append(
             _markdown_matrix(np.array(s["allocation_4xn"]), WRENCH_ROWS[2:], [f"u_w{i + 1}" for i in range(n)])
         )
+    if s["authority"] is None:
+        out += ["", f"Authority at hover: none ({s['authority_error']})."]
+    else:
+        out += ["", *_authority_markdown(Authority(**s["authority"]))]
     return "\n".join(out) + "\n"
 
 

@@ -8,7 +8,8 @@
 
 Modules: :mod:`~fsr_sim.model.frames` (NED/FRD, gravity), :mod:`~fsr_sim.model.so3` (rotations),
 :mod:`~fsr_sim.model.vehicle`, :mod:`~fsr_sim.model.allocation`, :mod:`~fsr_sim.model.environment`,
-:mod:`~fsr_sim.model.disturbances`, :mod:`~fsr_sim.model.rigid_body`, :mod:`~fsr_sim.model.plant`.
+:mod:`~fsr_sim.model.disturbances`, :mod:`~fsr_sim.model.rigid_body`, :mod:`~fsr_sim.model.plant`,
+:mod:`~fsr_sim.model.authority` (what the rotors give at hover; imports scipy, so not imported here).
 Importing this package imports no rclpy and reads no YAML (``load_vehicle`` reads its file on call); the
 per-step models are the compiled core of :mod:`fsr_sim.core`.
 """
