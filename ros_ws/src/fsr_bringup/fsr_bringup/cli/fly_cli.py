@@ -224,13 +224,14 @@ def main(argv: list[str] | None = None) -> int:
                   f"{result.sim_time:.3f} s in {result.wall_time:.2f} s wall; the recording is on the recorder's "
                   "host", flush=True)
             return result.exit_code
-    sim_time = result.sim_time
+    sim_time, opened = result.sim_time, None
     if recording.exists():  # the stop time the simulator recorded (what the summary reports), not the last seen
         from fsr_bringup.analysis.load import final_sim_time
-        from fsr_sim.recording.reader import RecordingError
+        from fsr_sim.recording.reader import RecordingError, open_recording
 
         try:
-            sim_time = final_sim_time(recording, [m.namespace for m in members]) or sim_time
+            opened = open_recording(recording)  # read once: for the stop time and the analysis
+            sim_time = final_sim_time(opened, [m.namespace for m in members]) or sim_time
         except RecordingError:
             pass  # reported by the analysis below
     print(
@@ -249,8 +250,8 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_analysis:
         from fsr_bringup.runner.report import analyse_and_summarise
 
-        analyse_and_summarise(recording, run_dir, [m.namespace for m in members], options, args.settling,
-                              args.after)
+        analyse_and_summarise(opened or recording, run_dir, [m.namespace for m in members], options,
+                              args.settling, args.after)
     print(f"fsr-fly: recording {recording}", flush=True)
     return result.exit_code
 

@@ -7,18 +7,21 @@ from pathlib import Path
 
 from fsr_bringup.analysis.figures import FigureOptions
 from fsr_bringup.analysis.run import analyze_recording
-from fsr_sim.recording.reader import RecordingError, open_recording
+from fsr_sim.recording.reader import Recording, RecordingError, open_recording
 
 
-def analyse_and_summarise(recording_path: Path, run_dir: Path, namespaces: list[str],
+def analyse_and_summarise(recording: Recording | Path, run_dir: Path, namespaces: list[str],
                           options: FigureOptions | None = None, settling: str = "standard",
                           after: float | None = None) -> bool:
-    """Analyse each vehicle of the recording into ``run_dir`` (``run_dir/<ns>`` for a fleet); False on error.
+    """Analyse each vehicle of the recording (a path, or the recording already read) into ``run_dir``
+    (``run_dir/<ns>`` for a fleet); False on error.
 
     ``options``: figure formats and sizes; ``settling`` / ``after``: the estimator metrics' settling-time
     definition and max-error window (:func:`fsr_bringup.analysis.metrics.flight_metrics`)."""
+    recording_path = recording.path if isinstance(recording, Recording) else recording
     try:
-        recording = open_recording(recording_path)
+        if not isinstance(recording, Recording):
+            recording = open_recording(recording)
     except RecordingError as error:
         print(f"fsr-fly: cannot analyse the recording: {error}", file=sys.stderr)
         return False
