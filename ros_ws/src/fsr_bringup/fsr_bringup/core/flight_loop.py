@@ -48,7 +48,7 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
         publish(plant, plant_state, published[0])
     for k in range(first, last + 1):
         t = (k * period_ns) * 1e-9
-        for i in range(13):
+        for i in range(plant_state.x.shape[0]):
             states[k, i] = plant_state.x[i]
         position, rotation, velocity_world, angular_velocity = read_odometry(published[k])
         row = control[k]

@@ -18,7 +18,6 @@ def analyse_and_summarise(recording: Recording | Path, run_dir: Path, namespaces
 
     ``options``: figure formats and sizes; ``settling`` / ``after``: the estimator metrics' settling-time
     definition and max-error window (:func:`fsr_bringup.analysis.metrics.flight_metrics`)."""
-    recording_path = recording.path if isinstance(recording, Recording) else recording
     try:
         if not isinstance(recording, Recording):
             recording = open_recording(recording)
@@ -26,7 +25,7 @@ def analyse_and_summarise(recording: Recording | Path, run_dir: Path, namespaces
         print(f"fsr-fly: cannot analyse the recording: {error}", file=sys.stderr)
         return False
     if recording.truncated:
-        print(f"fsr-fly: WARNING: {recording_path} is truncated (the recorder did not close it); "
+        print(f"fsr-fly: WARNING: {recording.path} is truncated (the recorder did not close it); "
               "analysing up to its last complete chunk", file=sys.stderr)
     ok = True
     for namespace in namespaces:
