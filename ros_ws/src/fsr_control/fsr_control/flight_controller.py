@@ -29,6 +29,7 @@ from fsr_control.controllers.common import CompiledLaw, WrenchCommand, pack_law
 from fsr_control.core import controller as core
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
 from fsr_control.core.reference import CHANNELS, DERIVATIVES, HORIZON_WIDTH
+from fsr_control.planning.feasibility import LegAdjustment
 from fsr_control.planning.trajectory import Reference, Trajectory
 from fsr_sim.core.so3 import Mat3, Vec3, matrix_rows
 from fsr_sim.model.allocation import SaturationReport
@@ -158,14 +159,17 @@ class FlightController:
     def tilt_saturation(self) -> SaturationReport:
         return self.actuator.tilt_saturation
 
+    @property
+    def plan_adjustments(self) -> list[LegAdjustment]:
+        """The infeasible legs and goals so far and what the planner did with each (empty: none)."""
+        return [] if self.trajectory is None else self.trajectory.adjustments
+
     def compensation_summary(self) -> dict[str, int | str]:
         """``{"mode": "none"}``, or what the compensation did (:class:`fsr_control.compensation.CompensationReport`)."""
         return {"mode": "none"} if self.compensator is None else self.compensator.report.as_dict()
 
     def _plan(self, position: np.ndarray, rotation: np.ndarray, time: float) -> None:
-        self.trajectory = Trajectory(
-            self.config.waypoints, position, rotation, full_attitude=self.vehicle.fully_actuated, start_time=time
-        )
+        self.trajectory = self.config.trajectory(self.vehicle, self.actuation, position, rotation, time)
         if self._pending_goal is not None:
             goal_position, goal_rotation, duration = self._pending_goal
             self._pending_goal = None

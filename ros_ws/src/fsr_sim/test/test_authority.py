@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from fsr_sim.model.allocation import wrench_from_rotor_speed_sq
-from fsr_sim.model.authority import authority, largest_along, rotor_inputs
+from fsr_sim.model.authority import authority, force_directions, force_set, largest_along, rotor_inputs
 from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.vehicle import load_vehicle
 
@@ -172,3 +172,25 @@ def test_fixed_rotor_solutions_are_within_the_speed_limits():
     speed_sq, tilt = inputs.rotor_commands(x)
     assert tilt is None and np.all(speed_sq >= -1e-6) and np.all(speed_sq <= v.rotor_speed_max**2 * (1 + 1e-9))
     np.testing.assert_allclose(wrench_from_rotor_speed_sq(v) @ speed_sq, hover + value * np.eye(6)[3], atol=1e-6)
+
+
+def test_the_force_set_of_the_tilting_quadrotor_against_the_hand_calculation():
+    # Along -z_b all four rotors vertical at full speed (a direction of the set: exact); along x_b only rotors 2
+    # and 4 (on the y arm) push sideways, tilted +-90 deg, so at most 2 c_f w_max^2 - a little less, as zero
+    # tau_x needs them to share a small vertical part against their drag torque; likewise along y_b.
+    v = load_vehicle("tilting_quadrotor_ex5")
+    forces = force_set(v)
+    rotor = v.c_f * v.rotor_speed_max**2
+    assert forces.reach(np.array([[0.0, 0.0, -1.0]]))[0] == pytest.approx(4.0 * rotor, rel=1e-9)
+    for axis in np.vstack((np.eye(2, 3), -np.eye(2, 3))):
+        assert 0.99 * 2.0 * rotor <= forces.reach(axis)[0] <= 2.0 * rotor
+    # supporting planes: hover is inside, with the margin too; a force beyond the support along -z is not
+    hover = np.array([[0.0, 0.0, -v.weight]])
+    assert forces.contains(hover)[0] and forces.contains(hover, margin=0.1)[0]
+    kept = forces.reach(np.array([[0.0, 0.0, -1.0]]), margin=0.7)[0]
+    assert kept == pytest.approx(authority(v, margin=0.7).thrust_max, rel=1e-9)  # shrunk towards hover alike
+    assert not forces.contains(np.array([[0.0, 0.0, -1.01 * 4.0 * rotor]]))[0]
+    directions = force_directions()
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=1e-12)
+    with pytest.raises(ValueError, match="not fully actuated"):
+        force_set(load_vehicle("quadrotor_ex4"))

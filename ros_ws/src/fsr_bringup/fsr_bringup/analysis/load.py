@@ -118,6 +118,7 @@ class RecordedFlight:
     estimator: EstimatorConfig | None = None  # the observer's model (mass, inertia) and filter, from the scenario
     compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none or unknown)
     compensation_mode: str | None = None  # the scenario's controller.compensation (None without a scenario)
+    plan_adjustments: list[dict] | None = None  # the legs the planner shaped or stretched (None: no scenario)
     odom: Odometry | None = None
     reference: Reference | None = None
     wrench_truth: Wrench | None = None
@@ -171,7 +172,7 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     scenario = recorded_scenario(recording, namespace, notes)
     config, scenario_name, estimator = _scenario(scenario, recording.path.stem, notes)
     flight = RecordedFlight(recording, namespace, scenario_name, config, estimator, notes=notes)
-    flight.compensation_mode, flight.compensation = _compensation(scenario, notes)
+    flight.compensation_mode, flight.compensation, flight.plan_adjustments = _controller(scenario, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
@@ -243,15 +244,20 @@ def _scenario(scenario: Scenario | None, fallback: str,
     return config, scenario.name, estimator
 
 
-def _compensation(scenario: Scenario | None, notes: list[str]) -> tuple[str | None, CompensationConfig | None]:
-    """(``controller.compensation`` of the recorded scenario, its validated settings or None)."""
+def _controller(scenario: Scenario | None,
+                notes: list[str]) -> tuple[str | None, CompensationConfig | None, list[dict] | None]:
+    """(``controller.compensation`` of the recorded scenario, its validated settings or None, the legs its
+    planner shaped or stretched: :attr:`fsr_control.config.controller_config.ControllerConfig.plan_adjustments`
+    as plain values)."""
     if scenario is None:
-        return None, None
+        return None, None, None
     try:
-        return ("estimate", config) if (config := controller_config(scenario).compensation) else ("none", None)
+        config = controller_config(scenario)
     except ConfigError as error:
         notes.append(f"controller section of the scenario cannot be used: {error}")
-        return None, None
+        return None, None, None
+    adjustments = [item.as_dict() | {"text": item.text()} for item in config.plan_adjustments]
+    return ("estimate" if config.compensation else "none"), config.compensation, adjustments
 
 
 def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:

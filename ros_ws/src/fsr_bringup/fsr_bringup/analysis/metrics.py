@@ -339,6 +339,7 @@ def flight_metrics(
     else:
         metrics["commanded_thrust_N"] = None
     metrics["compensation"] = compensation(flight)
+    metrics["plan_adjustments"] = flight.plan_adjustments
     if flight.config is not None and flight.config.actuation == "wrench":  # no rotors: nothing can saturate
         metrics["saturation"] = metrics[WRENCH_SHORTFALL.name] = None
         notes.append("no rotor saturation: wrench actuation applies the commanded wrench as it is")

@@ -74,6 +74,9 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("rotor speed saturation", text))
         if saturation.get("tilt"):
             rows.append(("tilt saturation", f"{saturation['tilt']['steps']} steps"))
+    adjustments = metrics.get("plan_adjustments")
+    if adjustments:
+        rows.append(("legs beyond the authority", "; ".join(item["text"] for item in adjustments)))
     compensation = metrics.get("compensation")
     if compensation:
         text = compensation["mode"]

@@ -93,6 +93,7 @@ class FlightRun:
     interrupted: bool = False
     compensation: dict[str, Any] = field(default_factory=lambda: {"mode": "none"})  # FlightController's summary
     startup_time: float | None = None  # s from the process start to the first step (None: unknown)
+    plan_adjustments: list[str] = field(default_factory=list)  # the legs and goals beyond the authority (texts)
 
     @property
     def sim_time(self) -> float:
@@ -270,4 +271,5 @@ def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, co
         force_desired=columns(c.DESIRED_FORCE), torque_desired=columns(c.DESIRED_TORQUE), scenario=scenario,
         failures=failures.get(end_reason, []), interrupted=interrupted,
         compensation=controller.compensation_summary(), startup_time=startup,
+        plan_adjustments=[item.text() for item in controller.plan_adjustments],
     )

@@ -9,8 +9,11 @@ trajectory:
       duration: 20.0                # travel time [s] > 0
       hold: 0.0                     # optional wait after arrival [s] >= 0
   goal_duration: 10.0               # travel time [s] of a goal received at run time (`goal` topic)
-  authority_margin: 0.7            # in (0, 1]: the share of the model's authority (fsr_sim.model.authority)
-                                    # references may use; not used by the flight yet
+  authority_margin: 0.7             # in (0, 1]: the share of the model's authority at hover
+                                    # (fsr_sim.model.authority) that references may use
+  feasibility: stretch              # a leg (or goal) beyond it, with rotor actuation: stretch (its angle
+                                    # shaped or the leg lengthened to the shortest feasible duration) |
+                                    # warn (flown as written) | refuse (exit 2 before take-off)
 controller:
   type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | a law of
                                     # fsr_control.controllers.catalog.LAWS; default by vehicle
@@ -30,7 +33,7 @@ take the report's values for the controller type. Unknown keys are refused with 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -38,7 +41,14 @@ from fsr_control.allocation import ALLOCATION_STRATEGIES
 from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig
 from fsr_control.controllers import voliro
 from fsr_control.controllers.catalog import LAWS
-from fsr_control.planning.trajectory import Waypoint
+from fsr_control.planning.feasibility import (
+    DEFAULT_FEASIBILITY,
+    FEASIBILITY_MODES,
+    InfeasibleReferenceError,
+    LegAdjustment,
+    reference_limits,
+)
+from fsr_control.planning.trajectory import Trajectory, Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import Section, checked_spd
 from fsr_sim.model.environment import pack_surfaces
@@ -73,6 +83,17 @@ class ControllerConfig:
     compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none)
     air_mode: bool = True  # fixed rotors, priority allocation: thrust may rise for roll/pitch torque
     authority_margin: float = DEFAULT_AUTHORITY_MARGIN  # trajectory.authority_margin, in (0, 1]
+    feasibility: str = DEFAULT_FEASIBILITY  # trajectory.feasibility: stretch | warn | refuse
+    plan_adjustments: tuple[LegAdjustment, ...] = ()  # the scenario's infeasible legs (from its initial state)
+
+    def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
+                   start_time: float = 0.0) -> Trajectory:
+        """The waypoints planned from a start pose for ``vehicle``, each leg checked against its authority
+        with rotor actuation (:mod:`fsr_control.planning.feasibility`; a commanded wrench has no rotor
+        limits, so with ``actuation: wrench`` nothing is checked)."""
+        limits = reference_limits(vehicle, self.authority_margin) if actuation == "rotors" else None
+        return Trajectory(self.waypoints, position, rotation, full_attitude=vehicle.fully_actuated,
+                          start_time=start_time, limits=limits, feasibility=self.feasibility)
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
@@ -179,6 +200,14 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     if not 0.0 < authority_margin <= 1.0:
         raise trajectory.error("authority_margin", f"must be in (0, 1] (the share of the vehicle's authority at "
                                                    f"hover that references may use), got {authority_margin}")
+    feasibility = trajectory.string("feasibility", DEFAULT_FEASIBILITY, choices=FEASIBILITY_MODES)
     trajectory.reject_unknown()
-    return ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration, scenario.source,
-                            allocation, compensation, air_mode, authority_margin)
+    config = ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration,
+                              scenario.source, allocation, compensation, air_mode, authority_margin, feasibility)
+    # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
+    sim = simulation_config(scenario)
+    try:
+        plan = config.trajectory(vehicle, actuation, sim.initial.position, sim.initial.rotation)
+    except InfeasibleReferenceError as error:
+        raise trajectory.error(f"waypoints.{error.waypoint}", str(error)) from None
+    return replace(config, plan_adjustments=tuple(plan.adjustments))

@@ -2,9 +2,11 @@
 
 A trajectory (built and replanned in Python by :class:`fsr_control.planning.trajectory.Trajectory`) is a
 table of segments, one row each (:class:`TrajectoryTable`). Segment ``s`` moves 4 channels (x, y, z and one
-angle ``theta``) over ``[t0, t0 + T]`` with polynomials in ``tau = (t - t0) / T``: its ``coefficients[s, n, c,
-k]`` are those of the ``n``-th time derivative of channel ``c`` in ``tau^k``; after the end the channels hold
-their goal with every derivative zero. The attitude turns about the segment's fixed axis ``a``:
+angle ``theta``), channel ``c`` over ``[t0, t0 + T_c]`` with polynomials in ``tau = (t - t0) / T_c``: its
+``coefficients[s, n, c, k]`` are those of the ``n``-th time derivative of channel ``c`` in ``tau^k``; after its
+end a channel holds its goal with every derivative zero. The position channels share one duration; the
+angle's is the same or, where the planner shaped it to the vehicle's authority, longer. The attitude
+turns about the segment's fixed axis ``a``:
 ``R_d = R_0 exp(theta S(a)) = R_0 + sin(theta) R_0 S + (1 - cos(theta)) R_0 S^2``, ``omega_d = a theta_dot``,
 ``omega_dot_d = a theta_ddot`` (desired body frame). A yaw-only segment (fixed rotors: ``yaw_start`` finite)
 is ``R_d = Rz(psi_0 + theta)``.
@@ -38,7 +40,7 @@ HORIZON_WIDTH = 23
 
 class TrajectoryTable(NamedTuple):
     start_time: np.ndarray  # (s,) [s]
-    duration: np.ndarray  # (s,) [s]
+    duration: np.ndarray  # (s, 4) [s] per channel (the angle may take longer than the position: shaping)
     coefficients: np.ndarray  # (s, 5, 4, 8)
     goal: np.ndarray  # (s, 4) x, y, z [m], theta [rad] at the end
     rotation_start: np.ndarray  # (s, 3, 3) R_0
@@ -79,24 +81,25 @@ def active_segment(table: TrajectoryTable, t: float) -> int:
 
 
 @jit
-def polynomial_derivatives(coefficients, goal, start_time: float, duration: float, t: float, out) -> None:  # noqa: ANN001
+def polynomial_derivatives(coefficients, goal, start_time: float, durations, t: float, out) -> None:  # noqa: ANN001
     """Value and time derivatives 1..4 at ``t`` [s] of ``c`` channels of a 7th-order segment into ``out`` (5, c):
-    ``coefficients`` (5, c, 8) in powers of ``tau`` (``t`` before the start is clamped to it), ``goal`` (c,)
-    held with zero derivatives from the end on."""
-    tau = (t - start_time) / duration
-    if tau >= 1.0:
-        out[:] = 0.0
-        for c in range(goal.shape[0]):
+    ``coefficients`` (5, c, 8) in powers of channel ``c``'s ``tau = (t - t0) / T_c`` (``durations`` (c,) [s];
+    ``t`` before the start is clamped to it), ``goal`` (c,) held with zero derivatives from each channel's end
+    on."""
+    for c in range(goal.shape[0]):
+        tau = (t - start_time) / durations[c]
+        if tau >= 1.0:
             out[0, c] = goal[c]
-        return
-    if tau < 0.0:
-        tau = 0.0
-    # tau^k, k = 0..7, by products (a pow with a constant exponent would be folded differently by LLVM)
-    tau2 = tau * tau
-    tau4 = tau2 * tau2
-    powers = (1.0, tau, tau2, tau2 * tau, tau4, tau4 * tau, tau4 * tau2, tau4 * tau2 * tau)
-    for n in range(coefficients.shape[0]):
-        for c in range(coefficients.shape[1]):
+            for n in range(1, coefficients.shape[0]):
+                out[n, c] = 0.0
+            continue
+        if tau < 0.0:
+            tau = 0.0
+        # tau^k, k = 0..7, by products (a pow with a constant exponent would be folded differently by LLVM)
+        tau2 = tau * tau
+        tau4 = tau2 * tau2
+        powers = (1.0, tau, tau2, tau2 * tau, tau4, tau4 * tau, tau4 * tau2, tau4 * tau2 * tau)
+        for n in range(coefficients.shape[0]):
             total = 0.0
             for k in range(DEGREE + 1):
                 total += coefficients[n, c, k] * powers[k]

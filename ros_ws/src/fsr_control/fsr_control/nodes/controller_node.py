@@ -158,13 +158,16 @@ class ControllerNode(Node):
         self.callbacks += 1
 
     def on_goal(self, msg: object) -> None:  # geometry_msgs/PoseStamped
+        known = len(self.controller.plan_adjustments)
         try:
             position, rotation = goal_from_message(msg)
             self.controller.set_goal(position, rotation)
-        except ValueError as error:
+        except ValueError as error:  # also a goal beyond the authority with trajectory.feasibility: refuse
             self.warn(f"dropped goal: {error}")
             return
         self.get_logger().info(f"new goal {position.tolist()} from t = {self.controller.last_stamp:.3f} s")
+        for adjustment in self.controller.plan_adjustments[known:]:
+            self.get_logger().warning(adjustment.text())
 
     def close(self) -> None:
         self.flight_end.drain(lambda: self.answered_ns, list(self.publishers_by_topic.values()))

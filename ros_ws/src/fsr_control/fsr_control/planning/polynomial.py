@@ -26,36 +26,41 @@ _FALLING = np.array([[float(np.prod(np.arange(k - n + 1, k + 1))) if k >= n else
 _END_INVERSE = np.linalg.inv(_FALLING[:4, 4:])
 
 
-def _derivative_coefficients(coefficients: np.ndarray, duration: float) -> np.ndarray:
-    """(DERIVATIVES, channels, 8): row n holds the coefficients of ``d^n x / dt^n`` in powers of tau."""
+def _derivative_coefficients(coefficients: np.ndarray, durations: np.ndarray) -> np.ndarray:
+    """(DERIVATIVES, channels, 8): row n holds the coefficients of ``d^n x / dt^n`` in powers of each channel's
+    tau (``durations`` (channels,) [s])."""
     out = np.zeros((DERIVATIVES, coefficients.shape[0], DEGREE + 1))
     for n in range(DERIVATIVES):
-        scaled = coefficients[:, n:] * _FALLING[n, n:] / duration**n
+        scaled = coefficients[:, n:] * _FALLING[n, n:] / durations[:, None]**n
         out[n, :, : DEGREE + 1 - n] = scaled
     return out
 
 
 class SepticSegment:
-    """Several channels of one 7th-order segment, evaluated together (one small matrix product).
+    """Several channels of one 7th-order segment, evaluated together.
 
-    start: array-like, shape (c,), the values at ``t0``; goal: shape (c,), the values at rest at the end;
-    start_rates: optional shape (3, c), the start's 1st..3rd time derivatives (default: at rest).
+    duration: [s], one for every channel or shape (c,), one per channel (each channel has its own ``tau``
+    and arrives at its own end); start: array-like, shape (c,), the values at ``t0``; goal: shape (c,), the
+    values at rest at the end; start_rates: optional shape (3, c), the start's 1st..3rd time derivatives
+    (default: at rest). ``duration`` / ``end_time`` are the longest channel's.
     """
 
     def __init__(
         self,
         start_time: float,
-        duration: float,
+        duration: float | np.ndarray,
         start: np.ndarray,
         goal: np.ndarray,
         start_rates: np.ndarray | None = None,
     ) -> None:
-        if not duration > 0.0:
-            raise ValueError(f"segment duration must be > 0 s, got {duration}")
         start = np.asarray(start, dtype=float)
         goal = np.asarray(goal, dtype=float)
+        durations = np.broadcast_to(np.asarray(duration, dtype=float), start.shape).copy()
+        if not np.all(durations > 0.0):
+            raise ValueError(f"segment duration must be > 0 s, got {duration}")
         self.start_time = float(start_time)
-        self.duration = float(duration)
+        self.durations = durations
+        self.duration = float(durations.max())
         self.end_time = self.start_time + self.duration
         self.goal = goal.copy()
         coefficients = np.zeros((start.size, DEGREE + 1))
@@ -65,17 +70,17 @@ class SepticSegment:
         else:
             rates = np.asarray(start_rates, dtype=float).reshape(3, start.size)
             for n in range(1, 4):
-                coefficients[:, n] = rates[n - 1] * duration**n / _FALLING[n, n]
+                coefficients[:, n] = rates[n - 1] * durations**n / _FALLING[n, n]
             # Remaining end conditions: x(1) = goal, x'(1) = x''(1) = x'''(1) = 0.
             residual = -coefficients[:, :4] @ _FALLING[:4, :4].T
             residual[:, 0] += goal
             coefficients[:, 4:] = residual @ _END_INVERSE.T
         self.coefficients = coefficients
-        self.table = np.ascontiguousarray(_derivative_coefficients(coefficients, self.duration))
+        self.table = np.ascontiguousarray(_derivative_coefficients(coefficients, durations))
 
     def evaluate(self, t: float) -> np.ndarray:
         """Shape (5, c): value and time derivatives 1..4 at ``t`` [s] (clamped to the segment's start), by the
         compiled core (:func:`fsr_control.core.reference.polynomial_derivatives`)."""
         out = np.empty((DERIVATIVES, len(self.goal)))
-        polynomial_derivatives(self.table, self.goal, self.start_time, self.duration, float(t), out)
+        polynomial_derivatives(self.table, self.goal, self.start_time, self.durations, float(t), out)
         return out

@@ -20,6 +20,13 @@ acceleration and jerk (smooth even mid-motion); the start's angular rate is proj
 (exact for yaw-only references; for a tilting vehicle replanned mid-rotation the rate about other axes
 restarts from zero).
 
+With ``limits`` (:class:`~fsr_control.planning.feasibility.ReferenceLimits`) every leg, and every goal
+replanned to, is first checked against the vehicle's authority (:mod:`fsr_control.planning.feasibility`):
+``feasibility`` ``stretch`` flies an infeasible leg with its angle shaped (the angle's polynomial lengthened,
+the position on time) or the whole leg stretched to the shortest feasible duration, ``warn`` flies it as
+written, ``refuse`` raises :class:`~fsr_control.planning.feasibility.InfeasibleReferenceError`. Each infeasible
+leg is listed in :attr:`Trajectory.adjustments`. A feasible leg is exactly the leg without a check.
+
 Construction and replanning are Python (they run once, or once per goal); sampling the reference at a time is
 the compiled core's (:mod:`fsr_control.core.reference`) on the table :meth:`Trajectory.table` packs.
 """
@@ -33,6 +40,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_control.core import reference as core
+from fsr_control.planning.feasibility import (
+    DEFAULT_FEASIBILITY,
+    InfeasibleReferenceError,
+    LegAdjustment,
+    ReferenceLimits,
+    plan_leg,
+)
 from fsr_control.planning.polynomial import SepticSegment
 from fsr_sim.model.frames import E3
 from fsr_sim.model.so3 import rotation_exp, rotation_log, skew
@@ -97,7 +111,7 @@ class _Segment:
     def __init__(
         self,
         start_time: float,
-        duration: float,
+        duration: float | np.ndarray,
         position: tuple[np.ndarray, np.ndarray],
         rotation_start: np.ndarray,
         axis: np.ndarray,
@@ -116,7 +130,22 @@ class _Segment:
         self._r0_s2 = self._r0_s @ s
         self.yaw_start = yaw_start  # set for yaw-only (fixed-rotor) references
         self.start_time = start_time
-        self.end_time = start_time + duration
+        self.end_time = self.poly.end_time
+
+
+def _pack(segments: list[_Segment]) -> core.TrajectoryTable:
+    """The core's table of ``segments``."""
+    return core.TrajectoryTable(
+        start_time=np.array([s.start_time for s in segments]),
+        duration=np.ascontiguousarray([s.poly.durations for s in segments]),
+        coefficients=np.ascontiguousarray([s.poly.table for s in segments]),
+        goal=np.ascontiguousarray([s.poly.goal for s in segments]),
+        rotation_start=np.ascontiguousarray([s.rotation_start for s in segments]),
+        r0_s=np.ascontiguousarray([s._r0_s for s in segments]),
+        r0_s2=np.ascontiguousarray([s._r0_s2 for s in segments]),
+        axis=np.ascontiguousarray([s.axis for s in segments]),
+        yaw_start=np.array([np.nan if s.yaw_start is None else s.yaw_start for s in segments]),
+    )
 
 class Trajectory:
     """Waypoints flown from a start pose; ``evaluate(t)`` gives the :class:`Reference` at ``t`` [s]."""
@@ -128,8 +157,13 @@ class Trajectory:
         start_rotation: np.ndarray,
         full_attitude: bool,
         start_time: float = 0.0,
+        limits: ReferenceLimits | None = None,
+        feasibility: str = DEFAULT_FEASIBILITY,
     ) -> None:
         self.full_attitude = full_attitude
+        self.limits = limits
+        self.feasibility = feasibility
+        self.adjustments: list[LegAdjustment] = []  # the infeasible legs and goals, in order
         position = np.array(start_position, dtype=float)
         if full_attitude:
             rotation = np.array(start_rotation, dtype=float)
@@ -143,13 +177,17 @@ class Trajectory:
         # A zero-length rest segment so that the reference is defined from the start time on.
         self._append(_Segment(t, 1.0, (position, position), rotation, E3, 0.0, yaw))
         self._segments[0].end_time = t
-        for waypoint in waypoints:
+        for index, waypoint in enumerate(waypoints, start=1):
             goal_rotation = rotation if waypoint.rotation is None else np.asarray(waypoint.rotation, dtype=float)
-            segment = self._leg(t, waypoint.duration, position, rotation, yaw, waypoint.position, goal_rotation)
+            try:
+                segment = self._checked_leg(f"leg {index}", waypoint.duration, t, position, rotation, yaw,
+                                            waypoint.position, goal_rotation)
+            except InfeasibleReferenceError as error:
+                raise InfeasibleReferenceError(str(error), waypoint=index - 1) from None
             self._append(segment)
             position = np.array(waypoint.position, dtype=float)
             rotation, yaw = self._end_attitude(segment)
-            t += waypoint.duration + waypoint.hold
+            t += segment.poly.duration + waypoint.hold
         self._table: core.TrajectoryTable | None = None
 
     @property
@@ -172,7 +210,7 @@ class Trajectory:
     def _leg(
         self,
         t0: float,
-        duration: float,
+        duration: float | np.ndarray,
         position: np.ndarray,
         rotation: np.ndarray,
         yaw: float | None,
@@ -181,7 +219,8 @@ class Trajectory:
         start_rates: np.ndarray | None = None,
         start_axis: np.ndarray | None = None,
     ) -> _Segment:
-        """A segment from a pose to a goal pose; ``start_rates`` (3, 4) carry the current motion."""
+        """A segment from a pose to a goal pose over ``duration`` [s] (one, or (4,): per channel);
+        ``start_rates`` (3, 4) carry the current motion."""
         if yaw is not None:
             goal_yaw = math.atan2(goal_rotation[1][0], goal_rotation[0][0])
             axis, angle = E3, wrap_angle(goal_yaw - yaw)
@@ -195,21 +234,31 @@ class Trajectory:
         return _Segment(t0, duration, (position, np.asarray(goal_position, dtype=float)), rotation, axis, angle,
                         yaw, start_rates)
 
+    def _checked_leg(self, label: str, duration: float, *leg: object) -> _Segment:
+        """:meth:`_leg` (arguments after the duration) through the feasibility check (module docstring)."""
+        def build(position_duration: float, angle_duration: float) -> tuple[_Segment, core.TrajectoryTable]:
+            durations = position_duration if angle_duration == position_duration else \
+                np.array((position_duration,) * 3 + (angle_duration,))
+            segment = self._leg(leg[0], durations, *leg[1:])
+            return segment, _pack([segment])
+
+        segment, adjustment = plan_leg(build, duration, label, self.limits, self.feasibility,
+                                       turns=self._turns(*leg[2:6]))
+        if adjustment is not None:
+            self.adjustments.append(adjustment)
+        return segment
+
+    def _turns(self, rotation: np.ndarray, yaw: float | None, goal_position: np.ndarray,
+               goal_rotation: np.ndarray) -> bool:
+        """Whether a leg from ``rotation`` (heading ``yaw``) to ``goal_rotation`` moves its angle."""
+        if yaw is not None:
+            return wrap_angle(math.atan2(goal_rotation[1][0], goal_rotation[0][0]) - yaw) != 0.0
+        return rotation_log(np.asarray(rotation).T @ goal_rotation)[1] != 0.0
+
     def table(self) -> core.TrajectoryTable:
         """The segments as the core's :class:`~fsr_control.core.reference.TrajectoryTable` (packed once per plan)."""
         if self._table is None:
-            segments = self._segments
-            self._table = core.TrajectoryTable(
-                start_time=np.array([s.start_time for s in segments]),
-                duration=np.array([s.poly.duration for s in segments]),
-                coefficients=np.ascontiguousarray([s.poly.table for s in segments]),
-                goal=np.ascontiguousarray([s.poly.goal for s in segments]),
-                rotation_start=np.ascontiguousarray([s.rotation_start for s in segments]),
-                r0_s=np.ascontiguousarray([s._r0_s for s in segments]),
-                r0_s2=np.ascontiguousarray([s._r0_s2 for s in segments]),
-                axis=np.ascontiguousarray([s.axis for s in segments]),
-                yaw_start=np.array([np.nan if s.yaw_start is None else s.yaw_start for s in segments]),
-            )
+            self._table = _pack(self._segments)
         return self._table
 
     def _sample(self, t: float) -> tuple[int, np.ndarray, core.ReferenceSample]:
@@ -228,7 +277,8 @@ class Trajectory:
     def replan(self, goal_position: np.ndarray, goal_rotation: np.ndarray, now: float, duration: float) -> None:
         """Plan from the reference at ``now`` [s] to a new goal pose over ``duration`` [s] (then hold).
 
-        Waypoints not yet reached are dropped. For a yaw-only trajectory only the goal's yaw is used.
+        Waypoints not yet reached are dropped. For a yaw-only trajectory only the goal's yaw is used. The goal
+        is checked like a leg (module docstring; ``refuse`` raises before anything is changed).
         """
         index, derivatives, sample = self._sample(float(now))
         active = self._segments[index]
@@ -240,8 +290,8 @@ class Trajectory:
         else:
             yaw = active.yaw_start + derivatives[0, 3]
             rotation = yaw_rotation(yaw)
-        segment = self._leg(now, duration, reference.position, rotation, yaw, goal_position, goal_rotation,
-                            start_rates, active.axis)
+        segment = self._checked_leg(f"goal at t = {now:.3f} s", duration, now, reference.position, rotation, yaw,
+                                    goal_position, goal_rotation, start_rates, active.axis)
         keep = bisect.bisect_left(self._starts, now)
         del self._segments[keep:]
         del self._starts[keep:]

@@ -44,10 +44,20 @@ feasible for every angle from 0 to ``phi``. Found by a scan in :data:`TILT_SCAN_
 to :data:`TILT_TOLERANCE` (an angle between two feasible scan points is assumed feasible); 180 deg when
 every attitude is.
 
+Force set (fully actuated vehicles only): the body forces with zero torque the rotors can give, for a
+reference that asks for a force in any body direction (a tilting vehicle accelerating sideways while level).
+For each of :data:`FORCE_DIRECTIONS` unit body directions ``a_k`` (the six axes and a Fibonacci sphere) the
+support ``b_k = max a_k . f_b`` over feasible inputs with zero torque (an LP); the set is kept as the
+half-spaces ``a_k . f <= b_k`` (:class:`ForceSet`). That is an outer approximation, exact along each
+``a_k``: between the directions it may admit a little more than the rotors give (the margin covers it).
+Supporting planes, not the hull of points along rays, because the set of fixed canted rotors is a narrow cone
+from the origin that rays in most directions miss.
+
 The margin ``0 < margin <= 1`` (``trajectory.authority_margin`` of a scenario) shrinks every number towards
 hover: torques, angular accelerations and the tilt are multiplied by it, the thrust range becomes
 ``m g + margin (T_max - m g)`` and ``m g - margin (m g - T_min)``. The feasible set is convex and contains
-hover, so these smaller numbers are feasible too.
+hover, so these smaller numbers are feasible too. The force set shrinks the same way, towards the level
+hover force ``h = -m g e3``: ``h + margin (P - h)``.
 """
 
 from __future__ import annotations
@@ -55,7 +65,6 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-from scipy.optimize import linprog
 
 from fsr_sim.model.allocation import (
     rotor_commands_from_static,
@@ -70,6 +79,7 @@ POLYGON_EDGES = 64  # inscribed polygon of a rotor's thrust disc (rotors on serv
 TILT_SCAN_STEP = np.deg2rad(5.0)  # rad: scan of the hover tilt
 TILT_TOLERANCE = 1e-4  # rad: bisection of the hover tilt
 AXES = ("roll", "pitch", "yaw")  # body FRD x, y, z
+FORCE_DIRECTIONS = 6 + 96  # the body axes and a Fibonacci sphere (force set of a fully actuated vehicle)
 
 
 @dataclass(frozen=True)
@@ -106,9 +116,93 @@ class Authority:
     yaw_acceleration: float
     tilt_max: float | None
 
+    def scaled(self, margin: float) -> Authority:
+        """These numbers (the model's: ``margin`` 1) shrunk by ``margin`` towards hover (module docstring)."""
+        if self.margin != 1.0:
+            raise ValueError(f"scaled: the authority is already scaled by a margin of {self.margin}")
+        weight = self.hover_thrust
+        return Authority(
+            margin=margin,
+            hover_thrust=weight,
+            thrust_min=weight - margin * (weight - self.thrust_min),
+            thrust_max=weight + margin * (self.thrust_max - weight),
+            roll_torque=margin * self.roll_torque,
+            pitch_torque=margin * self.pitch_torque,
+            yaw_torque=margin * self.yaw_torque,
+            roll_acceleration=margin * self.roll_acceleration,
+            pitch_acceleration=margin * self.pitch_acceleration,
+            yaw_acceleration=margin * self.yaw_acceleration,
+            tilt_max=None if self.tilt_max is None else margin * self.tilt_max,
+        )
+
     def as_dict(self) -> dict[str, float | None]:
         """The fields as plain Python numbers (JSON)."""
         return {field.name: getattr(self, field.name) for field in fields(self)}
+
+
+@dataclass(frozen=True, eq=False)
+class ForceSet:
+    """The body forces [N] (FRD) with zero torque a fully actuated vehicle's rotors give: ``normals @ f <=
+    offsets`` (module docstring, *Force set*: supporting planes); ``hover`` is the level hover force
+    ``-m g e3``."""
+
+    normals: np.ndarray  # (F, 3), unit
+    offsets: np.ndarray  # (F,)
+    hover: np.ndarray  # (3,)
+
+    def shrunk_offsets(self, margin: float) -> np.ndarray:
+        """The facets' offsets of ``h + margin (P - h)``: ``margin b + (1 - margin) a . h``."""
+        return margin * self.offsets + (1.0 - margin) * (self.normals @ self.hover)
+
+    def reach(self, directions: np.ndarray, margin: float = 1.0) -> np.ndarray:
+        """The largest ``s >= 0`` with ``s u`` in the set shrunk by ``margin``, for each unit row ``u`` of
+        ``directions`` (n, 3) [N] (0 when even a small force along ``u`` is outside it)."""
+        offsets = self.shrunk_offsets(margin)
+        along = np.atleast_2d(directions) @ self.normals.T  # (n, F): a_j . u
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bound = np.where(along > 1e-12, offsets / along, np.inf)
+        return np.maximum(bound.min(axis=1), 0.0)
+
+    def contains(self, forces: np.ndarray, margin: float = 1.0) -> np.ndarray:
+        """Whether each row of ``forces`` (n, 3) [N] lies in the set shrunk by ``margin``."""
+        return np.all(np.atleast_2d(forces) @ self.normals.T <= self.shrunk_offsets(margin) + 1e-9, axis=1)
+
+    def as_dict(self) -> dict[str, list]:
+        return {"normals": self.normals.tolist(), "offsets": self.offsets.tolist(), "hover": self.hover.tolist()}
+
+    @classmethod
+    def from_dict(cls, values: dict[str, list]) -> ForceSet:
+        return cls(*(np.array(values[key], dtype=float) for key in ("normals", "offsets", "hover")))
+
+
+def force_directions(count: int = FORCE_DIRECTIONS) -> np.ndarray:
+    """``count`` unit body directions (count, 3): the six axes, then a Fibonacci sphere of ``count - 6``."""
+    n = count - 6
+    z = 1.0 - (2.0 * np.arange(n) + 1.0) / n
+    azimuth = np.pi * (3.0 - np.sqrt(5.0)) * np.arange(n)
+    ring = np.sqrt(1.0 - z * z)
+    sphere = np.column_stack((ring * np.cos(azimuth), ring * np.sin(azimuth), z))
+    return np.vstack((np.eye(3), -np.eye(3), sphere))
+
+
+def force_set(vehicle: Vehicle) -> ForceSet:
+    """The :class:`ForceSet` of a fully actuated ``vehicle`` (module docstring)."""
+    if not vehicle.fully_actuated:
+        raise ValueError(f"vehicle '{vehicle.name}' is not fully actuated: its force is along -z_b only")
+    from scipy.optimize import linprog
+
+    inputs = rotor_inputs(vehicle)
+    force, torque = inputs.matrix[:3], inputs.matrix[3:]
+    directions = force_directions()
+    supports = np.empty(len(directions))
+    for k, direction in enumerate(directions):
+        result = linprog(-(direction @ force), A_ub=inputs.inequality if len(inputs.bound) else None,
+                         b_ub=inputs.bound if len(inputs.bound) else None, A_eq=torque, b_eq=np.zeros(3),
+                         bounds=inputs.bounds, method="highs")
+        if result.status != 0:
+            raise RuntimeError(f"force set LP for '{vehicle.name}' failed: {result.message}")
+        supports[k] = -result.fun
+    return ForceSet(directions, supports, -vehicle.weight * E3)
 
 
 @dataclass(frozen=True)
@@ -173,6 +267,8 @@ def largest_along(inputs: RotorInputs, base_wrench: np.ndarray,
     (s, x) or None
         ``s`` [the unit of ``d``] and the inputs reaching it; None when no ``s`` is feasible.
     """
+    from scipy.optimize import linprog  # here: scipy.optimize takes 0.4-0.8 s to import, and most starts hit the cache
+
     base = np.asarray(base_wrench, dtype=float).reshape(6)
     d = np.zeros(6) if direction is None else np.asarray(direction, dtype=float).reshape(6)
     m = inputs.matrix.shape[1]
@@ -270,16 +366,5 @@ def authority(vehicle: Vehicle, margin: float = 1.0) -> Authority:
         accelerations.append(_smaller_of_both_signs(inputs, hover, np.concatenate((np.zeros(3),
                                                                                    vehicle.inertia[:, k]))))
     tilt = hover_tilt_limit(inputs) if vehicle.fully_actuated else None
-    return Authority(
-        margin=margin,
-        hover_thrust=weight,
-        thrust_min=weight - margin * (weight - thrust_min),
-        thrust_max=weight + margin * (thrust_max - weight),
-        roll_torque=margin * torques[0],
-        pitch_torque=margin * torques[1],
-        yaw_torque=margin * torques[2],
-        roll_acceleration=margin * accelerations[0],
-        pitch_acceleration=margin * accelerations[1],
-        yaw_acceleration=margin * accelerations[2],
-        tilt_max=None if tilt is None else margin * tilt,
-    )
+    model = Authority(1.0, weight, thrust_min, thrust_max, *torques, *accelerations, tilt)
+    return model.scaled(margin)
