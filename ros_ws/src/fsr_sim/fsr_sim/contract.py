@@ -75,6 +75,10 @@ ODOM = Topic("odom", "nav_msgs/msg/Odometry", "STREAM", SIMULATOR, True, True, W
              "pose of `base_link_frd` in `world_ned`; twist in `base_link_frd`")
 WRENCH_TRUTH = Topic("wrench_truth", "geometry_msgs/msg/WrenchStamped", "STREAM", SIMULATOR, True, True, BODY_FRAME,
                      notes="true external wrench, body frame")
+ROTOR_STATE = Topic("rotor_state", "sensor_msgs/msg/JointState", "STREAM", SIMULATOR, True, True, BODY_FRAME,
+                    notes="the rotors' actual `rotor_i` velocity [rad/s] and `tilt_i` position [rad] of the "
+                          "published state; only with actuator dynamics (a rotor or servo lag: docs/model.md "
+                          "§3.2), else they are `rotor_cmd`'s, clamped")
 SIM_STATUS = Topic("sim_status", "std_msgs/msg/String", "LATCHED", SIMULATOR, True, False,
                    notes="JSON of a `SimStatus`: `state` (running, then finished, diverged or stopped), `reason`, "
                          "`sim_time` [s] of the last published state, `steps`, and the lockstep's record "
@@ -106,7 +110,7 @@ WRENCH_ESTIMATE = Topic("wrench_estimate", "geometry_msgs/msg/WrenchStamped", "S
 MASS_ESTIMATE = Topic("mass_estimate", "std_msgs/msg/Float64", "STREAM", ESTIMATOR, True, True,
                       notes="`m_model + f_e,z / g` [kg]")
 
-TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, WRENCH_TRUTH, SIM_STATUS, SIM_PROGRESS, ROTOR_CMD, WRENCH_CMD,
+TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, WRENCH_TRUTH, ROTOR_STATE, SIM_STATUS, SIM_PROGRESS, ROTOR_CMD, WRENCH_CMD,
                              WRENCH_SHORTFALL, REFERENCE, ATTITUDE_CMD, WRENCH_DESIRED, GOAL, WRENCH_ESTIMATE,
                              MASS_ESTIMATE)
 BY_NAME = {topic.name: topic for topic in TOPICS}

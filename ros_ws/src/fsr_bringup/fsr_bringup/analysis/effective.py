@@ -11,7 +11,8 @@ while the true plant (mass ``m``, inertia ``I``) obeys, averaged over the same s
 
     m a_k = m g e3 + <R f_a> + f_ext + f_contact
 
-with ``f_a`` the body force the rotors really produce (``f_c`` scaled per rotor by the ground/ceiling
+with ``f_a`` the body force the rotors really produce (from their speeds and tilts - ``rotor_cmd``'s, or
+``rotor_state``'s where actuator dynamics make them lag the command - scaled per rotor by the ground/ceiling
 thrust ratio; ``f_c`` itself in wrench actuation) and
 ``<.>`` the mean over the step (trapezoid of its ends). Eliminating ``a_k`` gives the effective force::
 
@@ -38,7 +39,7 @@ thrust_ratio_log`, :func:`fsr_sim.model.environment.contact_mask`), applied to t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -82,7 +83,9 @@ def actuator_wrench(config: SimulationConfig, speeds: np.ndarray, tilts: np.ndar
     speeds (n, r) commanded rotor speeds [rad/s] (NaN: 0); tilts (n, r) [rad] or None; ratios (n, r) thrust
     ratio ``T / T_OGE`` per rotor. Returns force (n, 3) [N] and torque (n, 3) [N m] in body FRD.
     """
-    plant = plant_from_config(config)
+    # the speeds and tilts are what the rotors do: applied as they are (no actuator dynamics in between)
+    vehicle = replace(config.plant_vehicle, rotor_time_constant=0.0, tilt_time_constant=0.0, tilt_rate_max=np.inf)
+    plant = plant_from_config(replace(config, plant_vehicle=vehicle))
     speeds = np.ascontiguousarray(np.nan_to_num(np.asarray(speeds, dtype=float)))
     with_tilts = tilts is not None and config.plant_vehicle.has_servos
     tilt_values = np.ascontiguousarray(np.nan_to_num(np.asarray(tilts, dtype=float))) if with_tilts else speeds
@@ -112,10 +115,16 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
         f_ext_body, tau_ext = np.zeros((n, 3)), np.zeros((n, 3))
     f_ext = np.einsum("kij,kj->ki", rotation, f_ext_body)
     # Actuator wrench at the start and at the end of each step, the command of the start held over it.
-    if config.actuation == "rotors" and flight.rotor_cmd is not None:
-        speeds = zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.speeds, target)
-        tilts = (zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.tilts, target)
-                 if flight.rotor_cmd.tilts is not None else None)
+    rotors = flight.rotor_state or flight.rotor_cmd  # the actual speeds where they lag the command
+    if config.actuation == "rotors" and rotors is not None:
+        speeds = zero_order_hold(rotors.stamp_ns, rotors.speeds, target)
+        tilts = zero_order_hold(rotors.stamp_ns, rotors.tilts, target) if rotors.tilts is not None else None
+        if rotors is flight.rotor_state and flight.rotor_cmd is not None:
+            # rotor_state's first state is before any command (rotors at rest); the first command spins them
+            # up at once (fsr_sim.core.plant.set_rotor_command), so step 0 flies rotor_cmd's first row
+            speeds[0] = zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.speeds, target[:1])[0]
+            if tilts is not None and flight.rotor_cmd.tilts is not None:
+                tilts[0] = zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.tilts, target[:1])[0]
         series = thrust_ratio_series(flight)
         ratios = series[1] * series[2] if series is not None else np.ones_like(speeds)
         # The same command acts at the end of the step, where the ratios (pose) have moved on.

@@ -30,6 +30,7 @@ from fsr_sim.contract import (
     REFERENCE,
     ROTOR,
     ROTOR_CMD,
+    ROTOR_STATE,
     SIM_STATUS,
     TILT,
     WRENCH_CMD,
@@ -128,6 +129,7 @@ class RecordedFlight:
     wrench_desired: Wrench | None = None
     wrench_estimate: Wrench | None = None
     rotor_cmd: RotorCommand | None = None
+    rotor_state: RotorCommand | None = None  # the rotors' actual speeds and tilts (only with actuator dynamics)
     mass_estimate: Scalar | None = None
     sim_status: list[SimStatus] = field(default_factory=list)
     message_counts: dict[str, int] = field(default_factory=dict)
@@ -192,6 +194,12 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
             setattr(flight, name, loader(recording, topic))
         except (LayoutError, KeyError, ValueError) as error:
             notes.append(f"cannot decode {topic}: {error}")
+    rotor_state = resolve(ROTOR_STATE.name, namespace)  # published only with actuator dynamics: no note without
+    if recording.has(rotor_state) and recording.count(rotor_state):
+        try:
+            flight.rotor_state = _rotor_command(recording, rotor_state)
+        except (LayoutError, KeyError, ValueError) as error:
+            notes.append(f"cannot decode {rotor_state}: {error}")
     status_topic = resolve(SIM_STATUS.name, namespace)
     if recording.has(status_topic):
         flight.sim_status = _statuses(recording, status_topic, notes)

@@ -25,7 +25,7 @@ from fsr_control.core.controller import FORCE, ROTOR_SPEEDS, TORQUE, ControllerP
 from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
 from fsr_sim.core.jit import jit
-from fsr_sim.core.lockstep import advance, publish
+from fsr_sim.core.lockstep import actuator_row, advance, publish
 from fsr_sim.core.odometry import read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
 
@@ -36,9 +36,10 @@ GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED = 0, 1, 2, 3  # outcomes of fly_
 def fly_steps(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
               controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
               observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
-              states, published, control, estimates) -> tuple:  # noqa: ANN001
+              states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
     """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (19),
-    ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published.
+    ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``), ``control`` (the controller's
+    output row) and ``estimates`` (7) gets what step ``k`` published.
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
     ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""
@@ -46,6 +47,7 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
     mode = controller.allocation.mode
     if first == 0:
         publish(plant, plant_state, published[0])
+        actuator_row(plant_state, actuators[0])
     for k in range(first, last + 1):
         t = (k * period_ns) * 1e-9
         for i in range(plant_state.x.shape[0]):
@@ -72,6 +74,7 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
             set_rotor_command(plant, plant_state, row[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
                               row[ROTOR_SPEEDS + n:ROTOR_SPEEDS + 2 * n], mode == TILTING)
         code = advance(plant, plant_state, published[k + 1])
+        actuator_row(plant_state, actuators[k + 1])
         if code != RUNNING:
             return DIVERGED, k, code
     return GOING_ON, last, 0

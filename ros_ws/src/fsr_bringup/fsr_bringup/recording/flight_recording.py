@@ -4,7 +4,8 @@ Per published state ``t_k`` the CDR bytes the node graph records, packed from th
 the nodes' own templates (:meth:`fsr_sim.ros.cdr_pack.StampedDoubles.pack_rows`, many steps at once):
 
 * simulator: ``odom``, ``wrench_truth`` (the published rows, :class:`fsr_sim.nodes.state_packets.StatePackets`'
-  templates) and ``sim_status`` (running at the start, the final state at the end);
+  templates), ``rotor_state`` (with actuator dynamics: the rotors' actual speeds and tilts) and ``sim_status``
+  (running at the start, the final state at the end);
 * controller: ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall``, ``reference``,
   ``attitude_cmd``, ``wrench_desired`` (slices of the controller's output rows,
   :class:`fsr_control.nodes.packets.ControllerPackets`);
@@ -23,7 +24,16 @@ from pathlib import Path
 
 import numpy as np
 
-from fsr_sim.contract import MASS_ESTIMATE, ODOM, SIM_STATUS, WRENCH_ESTIMATE, WRENCH_TRUTH, SimStatus, recorded_topics
+from fsr_sim.contract import (
+    MASS_ESTIMATE,
+    ODOM,
+    ROTOR_STATE,
+    SIM_STATUS,
+    WRENCH_ESTIMATE,
+    WRENCH_TRUTH,
+    SimStatus,
+    recorded_topics,
+)
 
 TOPIC_TYPES = {"/" + name: type_name for name, type_name in recorded_topics().items()}
 BLOCK_STEPS = 1000  # steps packed and written at once
@@ -33,8 +43,9 @@ class InProcessRecorder:
     """Streams one in-process flight into a standard ROS 2 MCAP file (``close()`` finishes the file)."""
 
     def __init__(self, path: Path, scenario_yaml: str, rotors: bool, rotor_count: int = 0,
-                 tilting: bool = False, topics: frozenset[str] | None = None) -> None:
-        """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all)."""
+                 tilting: bool = False, topics: frozenset[str] | None = None, rotor_state: bool = False) -> None:
+        """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all);
+        ``rotor_state``: the plant has actuator dynamics (the simulator then publishes ``rotor_state``)."""
         from fsr_control.nodes.packets import ControllerPackets
         from fsr_estimation.nodes.packets import EstimatePackets
         from fsr_sim.nodes.state_packets import StatePackets
@@ -42,22 +53,33 @@ class InProcessRecorder:
 
         self.writer = RecordingWriter(path, metadata={"fsr_scenario": {"yaml": scenario_yaml}})
         self.controller_packets = ControllerPackets(rotors, rotor_count, tilting)
-        self._templates = {"/" + topic: template for packets in (StatePackets(), self.controller_packets,
+        self.rotor_state = rotor_state
+        self.rotor_count = rotor_count
+        self.tilting = tilting
+        state_packets = StatePackets(rotor_count if rotor_state else 0, tilting)
+        self._templates = {"/" + topic: template for packets in (state_packets, self.controller_packets,
                                                                  EstimatePackets())
                            for topic, template in packets.templates.items()}
         self._registered: set[str] = set()
         self._topics = topics
 
     def write_steps(self, stamps_ns: np.ndarray, published: np.ndarray, control: np.ndarray,
-                    estimates: np.ndarray | None) -> None:
+                    estimates: np.ndarray | None, actuators: np.ndarray | None = None) -> None:
         """Record everything published for the states stamped ``stamps_ns`` (K,): their published rows (K, 19),
-        the controller's output rows (K, width) and the estimates (K, 7) or None (estimator off)."""
+        the controller's output rows (K, width), the estimates (K, 7) or None (estimator off) and the rotors'
+        actual speeds and tilts (K, 2n) (``rotor_state``, recorded with actuator dynamics)."""
         from fsr_sim.core.odometry import ODOM_SIZE
+        from fsr_sim.nodes.state_packets import joint_values
 
         for start in range(0, len(stamps_ns), BLOCK_STEPS):
             block = slice(start, start + BLOCK_STEPS)
             columns = [("/" + ODOM.name, published[block, :ODOM_SIZE]),
                        ("/" + WRENCH_TRUTH.name, published[block, ODOM_SIZE:])]
+            if self.rotor_state:
+                n = self.rotor_count
+                rows = actuators[block]
+                columns.append(("/" + ROTOR_STATE.name, joint_values(rows[:, :n], rows[:, n:] if self.tilting
+                                                                     else None)))
             columns += [("/" + topic, values) for topic, values in self.controller_packets.values(control[block])]
             if estimates is not None:
                 columns += [("/" + WRENCH_ESTIMATE.name, estimates[block, :6]),

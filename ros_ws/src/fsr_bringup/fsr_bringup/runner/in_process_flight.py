@@ -25,7 +25,7 @@ from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
 from fsr_sim.contract import DIVERGED, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK, FINISHED, RUNNING, STOPPED
 from fsr_sim.core.odometry import PUBLISHED_SIZE, TRUTH_FORCE, TRUTH_TORQUE
-from fsr_sim.model.plant import divergence_reason
+from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import process_age
 
@@ -52,7 +52,10 @@ class FlightRun:
     force_cmd, torque_cmd : numpy.ndarray, shape (K+1, 3)
         The body wrench commanded after allocation (what ``wrench_cmd`` carries) [N, N m].
     rotor_speeds, tilt_angles : numpy.ndarray, shape (K+1, n), or None
-        [rad/s], [rad] (None in wrench actuation / for fixed rotors).
+        Commanded [rad/s], [rad] (``rotor_cmd``; None in wrench actuation / for fixed rotors).
+    actual_rotor_speeds, actual_tilt_angles : numpy.ndarray, shape (K+1, n), or None
+        The rotors' own speeds and tilts at each state (clamped, and behind the command with actuator
+        dynamics: ``rotor_state``).
     external_force_body, external_torque_body : numpy.ndarray, shape (K+1, 3)
         The true external wrench, body frame (as ``wrench_truth``) [N, N m].
     estimate_force_body, estimate_torque_body, mass_estimate : numpy.ndarray or None
@@ -94,6 +97,8 @@ class FlightRun:
     compensation: dict[str, Any] = field(default_factory=lambda: {"mode": "none"})  # FlightController's summary
     startup_time: float | None = None  # s from the process start to the first step (None: unknown)
     plan_adjustments: list[str] = field(default_factory=list)  # the legs and goals beyond the authority (texts)
+    actual_rotor_speeds: np.ndarray | None = None
+    actual_tilt_angles: np.ndarray | None = None
 
     @property
     def sim_time(self) -> float:
@@ -185,6 +190,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     size = steps + 1
     period_ns = int(round(sim.control_period * 1e9))
     states, published = np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE))
+    actuators = np.zeros((size, 2 * n))  # the rotors' actual speeds and tilts (rotor_state)
     control = np.zeros((size, control_layout.output_size(n)))
     estimates = np.zeros((size, 7))
     recorder = None
@@ -192,7 +198,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         from fsr_bringup.recording.flight_recording import InProcessRecorder
 
         recorder = InProcessRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos,
-                                     record_topics)
+                                     record_topics, rotors and has_actuator_dynamics(plant.params))
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
@@ -210,12 +216,13 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
             last = min(count + CHUNK_STEPS - 1, steps)
             outcome, k, detail = flight_loop.fly_steps(
                 plant.params, plant.core_state, controller.params, controller.state, estimation.enabled,
-                observer.params, observer.state, count, last, steps, period_ns, states, published, control,
-                estimates)
+                observer.params, observer.state, count, last, steps, period_ns, states, published, actuators,
+                control, estimates)
             flown = k + 1 if outcome != flight_loop.CONTROLLER_FAILED else k
             if recorder is not None and flown > count:
                 recorder.write_steps(np.arange(count, flown, dtype=np.int64) * period_ns, published[count:flown],
-                                     control[count:flown], estimates[count:flown] if estimation.enabled else None)
+                                     control[count:flown], estimates[count:flown] if estimation.enabled else None,
+                                     actuators[count:flown])
             count = flown
             if progress is not None and count:
                 progress((count - 1) * period_ns * 1e-9, time.perf_counter() - start)
@@ -235,13 +242,14 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     wall = time.perf_counter() - start
     return flight_run(scenario, states[:count], published[:count], control[:count],
                       estimates[:count] if estimation.enabled else None, controller, rotors,
-                      rotors and sim.vehicle.has_servos, period_ns, end_reason, reason, wall, interrupted, startup)
+                      rotors and sim.vehicle.has_servos, period_ns, end_reason, reason, wall, interrupted, startup,
+                      actuators[:count])
 
 
 def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, control: np.ndarray,
                estimates: np.ndarray | None, controller: FlightController, rotors: bool, tilting: bool,
                period_ns: int, end_reason: str, reason: str, wall: float, interrupted: bool,
-               startup: float | None) -> FlightRun:
+               startup: float | None, actuators: np.ndarray) -> FlightRun:
     """The :class:`FlightRun` of the flight loop's arrays (rows 0..K)."""
     count = len(states)
     n = (control.shape[1] - control_layout.ROTOR_SPEEDS) // 2
@@ -260,6 +268,8 @@ def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, co
         reference_rotation=columns(c.REFERENCE_ROTATION, 9).reshape(count, 3, 3), force_cmd=columns(c.FORCE),
         torque_cmd=columns(c.TORQUE), rotor_speeds=columns(c.ROTOR_SPEEDS, n) if rotors else None,
         tilt_angles=columns(c.ROTOR_SPEEDS + n, n) if tilting else None,
+        actual_rotor_speeds=actuators[:, :n].copy() if rotors else None,
+        actual_tilt_angles=actuators[:, n:].copy() if tilting else None,
         external_force_body=published[:, TRUTH_FORCE:TRUTH_FORCE + 3].copy(),
         external_torque_body=published[:, TRUTH_TORQUE:TRUTH_TORQUE + 3].copy(),
         estimate_force_body=None if estimates is None else estimates[:, 0:3].copy(),

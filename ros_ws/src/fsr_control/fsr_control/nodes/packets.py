@@ -20,8 +20,8 @@ from fsr_sim.contract import (
     WRENCH_CMD,
     WRENCH_DESIRED,
     WRENCH_SHORTFALL,
-    joint_names,
 )
+from fsr_sim.nodes.state_packets import joint_state_template, joint_values
 from fsr_sim.ros import cdr_pack
 
 
@@ -34,15 +34,13 @@ class ControllerPackets:
         self.rotors = rotors
         self.rotor_count = rotor_count
         self.tilting = tilting
-        names = joint_names(rotor_count, tilting)
-        count = len(names)
         self.templates: dict[str, cdr_pack.StampedDoubles] = {  # topic (relative) -> its payload's template
             topic.name: cdr_pack.wrench_stamped(topic.frame)
             for topic in (WRENCH_CMD, WRENCH_SHORTFALL, WRENCH_DESIRED)}
         self.templates[REFERENCE.name] = cdr_pack.trajectory_point(REFERENCE.frame, REFERENCE.child_frame)
         self.templates[ATTITUDE_CMD.name] = cdr_pack.quaternion_stamped(ATTITUDE_CMD.frame)
         if rotors:
-            self.templates[ROTOR_CMD.name] = cdr_pack.joint_state(ROTOR_CMD.frame, names, count, count)
+            self.templates[ROTOR_CMD.name] = joint_state_template(ROTOR_CMD.frame, rotor_count, tilting)
 
     def pack(self, stamp_ns: int, row: np.ndarray) -> list[tuple[str, bytes]]:
         """Everything the controller publishes for the state stamped ``stamp_ns`` [ns], in publication order."""
@@ -56,12 +54,8 @@ class ControllerPackets:
         published: list[tuple[str, np.ndarray]] = []
         if self.rotors:
             speeds = rows[..., core.ROTOR_SPEEDS:core.ROTOR_SPEEDS + n]
-            zeros = np.zeros_like(speeds)
-            if self.tilting:
-                tilts = rows[..., core.ROTOR_SPEEDS + n:core.ROTOR_SPEEDS + 2 * n]
-                published.append((ROTOR_CMD.name, np.concatenate((zeros, tilts, speeds, zeros), axis=-1)))
-            else:
-                published.append((ROTOR_CMD.name, np.concatenate((zeros, speeds), axis=-1)))
+            tilts = rows[..., core.ROTOR_SPEEDS + n:core.ROTOR_SPEEDS + 2 * n] if self.tilting else None
+            published.append((ROTOR_CMD.name, joint_values(speeds, tilts)))
         published.append((WRENCH_CMD.name, rows[..., core.FORCE:core.FORCE + 6]))
         published.append((WRENCH_SHORTFALL.name, rows[..., core.SHORTFALL:core.SHORTFALL + 6]))
         published.append((REFERENCE.name, rows[..., core.REFERENCE_POSITION:

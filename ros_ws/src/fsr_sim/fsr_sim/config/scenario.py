@@ -13,7 +13,7 @@ Overrides use dotted paths with YAML values: ``apply_override(data, "disturbance
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -242,6 +242,12 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     plant = root.section("plant")
     mass = plant.number("mass", vehicle.mass, strictly_positive=True)
     inertia = checked_spd(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
+    actuator_dynamics = {  # the true plant's, beside the vehicle file's (the controller knows none of them)
+        "rotor_time_constant": plant.number("rotor_time_constant", vehicle.rotor_time_constant, minimum=0.0),
+        "tilt_time_constant": plant.number("tilt_time_constant", vehicle.tilt_time_constant, minimum=0.0),
+        "tilt_rate_max": float(np.deg2rad(plant.number("tilt_rate_max_deg_s", strictly_positive=True)))
+        if plant.has("tilt_rate_max_deg_s") else vehicle.tilt_rate_max,
+    }
     plant.reject_unknown()
 
     environment = environment_from_section(root.section("environment"))
@@ -268,7 +274,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     return SimulationConfig(
         name=scenario.name,
         vehicle=vehicle,
-        plant_vehicle=vehicle.with_mass_properties(mass, inertia),
+        plant_vehicle=replace(vehicle.with_mass_properties(mass, inertia), **actuator_dynamics),
         duration=duration,
         physics_dt=physics_dt,
         physics_substeps=substeps,

@@ -52,6 +52,10 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
     tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
     contact_height = root.number("contact_height", 0.1, minimum=0.0)
     top_height = root.number("top_height", contact_height, minimum=0.0)  # default: symmetric about the CoM
+    rotor_time_constant = root.number("rotor_time_constant", 0.0, minimum=0.0)
+    tilt_time_constant = root.number("tilt_time_constant", 0.0, minimum=0.0)
+    tilt_rate_max = np.deg2rad(root.number("tilt_rate_max_deg_s", strictly_positive=True)) \
+        if root.has("tilt_rate_max_deg_s") else np.inf  # absent: no rate limit
 
     if root.has("layout") == root.has("rotors"):
         raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
@@ -79,6 +83,9 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
             top_height=top_height,
             description=description,
             thrust_axes=thrust_axes,
+            rotor_time_constant=rotor_time_constant,
+            tilt_time_constant=tilt_time_constant,
+            tilt_rate_max=float(tilt_rate_max),
         )
     except InvalidValueError as error:  # a check of the model itself (e.g. a tilt axis along the thrust axis)
         key = {"tilt_axes": "rotors.tilt_axis", "positions": "rotors.position",

@@ -27,6 +27,15 @@ def publish(params: PlantParams, state: PlantState, out) -> None:  # noqa: ANN00
 
 
 @jit_inline
+def actuator_row(state: PlantState, out) -> None:  # noqa: ANN001
+    """The rotors' actual speeds [rad/s] then tilts [rad] into ``out`` (2n,): ``rotor_state``'s numbers."""
+    n = state.speeds.shape[0]
+    for i in range(n):
+        out[i] = state.speeds[i]
+        out[n + i] = state.tilts[i]
+
+
+@jit_inline
 def advance(params: PlantParams, state: PlantState, out) -> int:  # noqa: ANN001
     """Step the plant one control period with the held command; publish the new state into ``out`` (19,)
     if it is finite. Returns the divergence code (``RUNNING``: go on)."""

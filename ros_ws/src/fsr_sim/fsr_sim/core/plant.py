@@ -5,7 +5,8 @@ Inputs are held over a step (zero-order hold) while the state-dependent parts (t
 time-varying disturbances) are evaluated at every RK4 stage. Two actuations:
 
 * rotors: speeds ``w_i`` [rad/s] clamped to the vehicle's limits (saturation recorded) and, for a tilting
-  vehicle, tilts ``alpha_i`` [rad] clamped to ``+-tilt_max``, applied at once; ``f_b = sum c_f r_i u_w,i z_i``,
+  vehicle, tilts ``alpha_i`` [rad] clamped to ``+-tilt_max``, applied at once - or, with actuator dynamics
+  (:func:`advance_actuators`), approached by a first-order lag; ``f_b = sum c_f r_i u_w,i z_i``,
   ``tau_b = sum u_w,i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the thrust ratio ``r_i`` of
   :mod:`fsr_sim.core.surfaces` (drag torque is not scaled);
 * wrench: the commanded body wrench directly; surfaces then only act through contact.
@@ -66,13 +67,20 @@ class PlantParams(NamedTuple):
     disturbance_knots: np.ndarray  # (k, KNOT_WIDTH)
     crash_speed: float  # [m/s]
     sensors: SensorParams  # the stage between the true state and odom (fsr_sim.core.sensors)
+    rotor_lag: bool  # speeds follow their command through a first-order lag (advance_actuators)
+    speed_decay: float  # exp(-dt / tau_w) of the rotor time constant tau_w
+    tilt_lag: bool  # tilts follow their command through a lag and/or a rate limit
+    tilt_decay: float  # exp(-dt / tau_alpha) (0: no lag)
+    tilt_step_max: float  # [rad] per RK4 step: tilt_rate_max dt (inf: no rate limit)
 
 
 class PlantState(NamedTuple):
     """What changes (float64 arrays, modified in place)."""
 
     x: np.ndarray  # (13,) rigid-body state, fsr_sim.core.rigid_body layout
-    speeds: np.ndarray  # (n,) applied rotor speeds [rad/s] (clamped)
+    speeds: np.ndarray  # (n,) applied rotor speeds [rad/s] (clamped): the rotors' actual speeds
+    speed_command: np.ndarray  # (n,) commanded speeds, clamped [rad/s] (NaN until the first command)
+    tilt_command: np.ndarray  # (n,) commanded tilts, clamped [rad] (NaN until the first command)
     speed_sq: np.ndarray  # (n,) |w| w [(rad/s)^2]
     tilts: np.ndarray  # (n,) applied tilt angles [rad]
     wrench_command: np.ndarray  # (6,) commanded body force [N] and torque [N m] (wrench actuation)
@@ -103,15 +111,22 @@ def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
 @jit_inline
 def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, with_tilts: bool) -> bool:  # noqa: ANN001
     """Hold rotor speeds (n,) [rad/s] (and, ``with_tilts`` on a tilting vehicle, tilts (n,) [rad]) until the
-    next command; speeds are clamped to the limits. True if anything saturated (recorded)."""
+    next command; speeds are clamped to the limits. True if anything saturated (recorded).
+
+    With actuator dynamics the command is what the rotors (servos) approach (:func:`advance_actuators`); the
+    first command is also their state at the start (the flight starts with the rotors spun up)."""
     n = speeds.shape[0]
     excess = state.ratios  # scratch until the next stage
+    first = not state.speed_command[0] == state.speed_command[0]  # NaN: never commanded
     for i in range(n):
         clamped, excess[i] = clamped_speed(abs(speeds[i]) * speeds[i], params.speed_min, params.speed_max)
-        state.speeds[i] = clamped
-        state.speed_sq[i] = abs(clamped) * clamped
+        state.speed_command[i] = clamped
+        if first or not params.rotor_lag:
+            state.speeds[i] = clamped
+            state.speed_sq[i] = abs(clamped) * clamped
     saturated = record_saturation(state.saturation, plant_time(params, state), excess)
     if params.tilting and with_tilts:
+        first_tilt = not state.tilt_command[0] == state.tilt_command[0]
         limit = params.tilt_max
         for i in range(n):
             tilt = tilts[i]
@@ -119,10 +134,41 @@ def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, wit
                 tilt = -limit
             elif tilt > limit:
                 tilt = limit
-            state.tilts[i] = tilt
+            state.tilt_command[i] = tilt
+            if first_tilt or not params.tilt_lag:
+                state.tilts[i] = tilt
         tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
     update_actuator_wrench(params, state)
     return saturated
+
+
+@jit_inline
+def advance_actuators(params: PlantParams, state: PlantState) -> None:
+    """Actuator dynamics over one RK4 step ``dt`` (after it: the inputs are held over each step).
+
+    Rotor speed, first-order lag with time constant ``tau_w`` towards the command ``w_c`` (exact for a held
+    command): ``w <- w_c + (w - w_c) exp(-dt / tau_w)``; tilt, a lag with ``tau_alpha`` the same way, then its
+    change limited to ``tilt_rate_max dt``. Both stay within their limits (the commands are clamped and the
+    lag moves between the state and the command)."""
+    if params.rotor_lag:
+        decay = params.speed_decay
+        for i in range(state.speeds.shape[0]):
+            target = state.speed_command[i]
+            speed = target + (state.speeds[i] - target) * decay
+            state.speeds[i] = speed
+            state.speed_sq[i] = abs(speed) * speed
+    if params.tilting and params.tilt_lag and state.tilt_command[0] == state.tilt_command[0]:
+        step_max = params.tilt_step_max
+        for i in range(state.tilts.shape[0]):
+            current, target = state.tilts[i], state.tilt_command[i]
+            change = (target - current) * (1.0 - params.tilt_decay)
+            if change > step_max:
+                change = step_max
+            elif change < -step_max:
+                change = -step_max
+            state.tilts[i] = current + change
+        tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
+    update_actuator_wrench(params, state)
 
 
 @jit_inline
@@ -135,10 +181,12 @@ def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None: 
 
 @jit_inline
 def cut_thrust(params: PlantParams, state: PlantState) -> None:
-    """Failsafe: all rotors stopped, zero wrench (tilts are kept)."""
+    """Failsafe: all rotors stopped, zero wrench (tilts are kept); with a rotor lag they spin down."""
     state.wrench_command[:] = 0.0
-    state.speeds[:] = 0.0
-    state.speed_sq[:] = 0.0
+    state.speed_command[:] = 0.0
+    if not params.rotor_lag:
+        state.speeds[:] = 0.0
+        state.speed_sq[:] = 0.0
     update_actuator_wrench(params, state)
 
 
@@ -225,6 +273,8 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
     for sub in range(params.substeps):
         rk4_step(params, state, time + sub * params.dt)
         apply_contact(params, state)
+        if not params.wrench_actuation and (params.rotor_lag or params.tilt_lag):
+            advance_actuators(params, state)
     if status[GROUND_CAPPED] != 0.0 or status[CEILING_CAPPED] != 0.0:
         status[GROUND_CAP_STEPS] += status[GROUND_CAPPED]
         status[CEILING_CAP_STEPS] += status[CEILING_CAPPED]

@@ -81,14 +81,25 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
         sensors=(odometry_noise or OdometryNoise()).pack(),
+        rotor_lag=vehicle.rotor_time_constant > 0.0,
+        speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
+        tilt_lag=vehicle.has_servos and (vehicle.tilt_time_constant > 0.0 or math.isfinite(vehicle.tilt_rate_max)),
+        tilt_decay=math.exp(-dt / vehicle.tilt_time_constant) if vehicle.tilt_time_constant > 0.0 else 0.0,
+        tilt_step_max=float(vehicle.tilt_rate_max * dt),
     )
+
+
+def has_actuator_dynamics(params: core.PlantParams) -> bool:
+    """Whether the rotors' speeds or tilts lag their commands (then ``rotor_state`` is published)."""
+    return not params.wrench_actuation and (params.rotor_lag or params.tilt_lag)
 
 
 def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.PlantState:
     """A :class:`~fsr_sim.core.plant.PlantState` at rest in ``state_vector`` (13,), no command yet."""
     n = params.vertical_columns.shape[0]
     state = core.PlantState(
-        x=np.array(state_vector, dtype=float), speeds=np.zeros(n), speed_sq=np.zeros(n), tilts=np.zeros(n),
+        x=np.array(state_vector, dtype=float), speeds=np.zeros(n), speed_command=np.full(n, np.nan),
+        tilt_command=np.full(n, np.nan), speed_sq=np.zeros(n), tilts=np.zeros(n),
         wrench_command=np.zeros(6), columns=params.vertical_columns.copy(),
         body_wrench=np.zeros(6), ratios=np.ones(n), work=np.zeros((5, STATE_SIZE)),
         status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),

@@ -65,6 +65,13 @@ class Vehicle:
         [m], distance from the centre of mass up to the top of the vehicle (ceiling contact).
     thrust_axes : array-like, shape (n, 3), optional
         Each rotor's fixed thrust axis ``z_0,i`` (body FRD, normalised), at servo tilt 0; None: ``-z_b`` for all.
+    rotor_time_constant : float
+        [s], >= 0: each rotor's speed follows its command through a first-order lag ``w' = (w_c - w) / tau``
+        (0: at once).
+    tilt_time_constant : float
+        [s], >= 0: the same for each servo's tilt (0: at once).
+    tilt_rate_max : float
+        [rad/s], > 0: the servos' rate limit (inf: none).
 
     Raises
     ------
@@ -88,6 +95,9 @@ class Vehicle:
     top_height: float = 0.1  # [m] top of the vehicle above the centre of mass (ceiling contact)
     description: str = ""
     thrust_axes: np.ndarray | None = None  # (n, 3) unit; None -> -z_b for every rotor
+    rotor_time_constant: float = 0.0  # [s] first-order lag of the rotor speeds (0: they follow at once)
+    tilt_time_constant: float = 0.0  # [s] first-order lag of the tilts (rotors on servos; 0: none)
+    tilt_rate_max: float = np.inf  # [rad/s] servo rate limit (inf: none)
 
     def __post_init__(self) -> None:
         def put(name: str, value: object) -> None:
@@ -100,11 +110,16 @@ class Vehicle:
             if not value > 0.0 or not np.isfinite(value):
                 raise InvalidValueError(name, f"must be > 0, got {value}")
             put(name, value)
-        for name in ("c_m", "rotor_speed_min", "contact_height", "top_height"):
+        for name in ("c_m", "rotor_speed_min", "contact_height", "top_height", "rotor_time_constant",
+                     "tilt_time_constant"):
             value = float(getattr(self, name))
             if not value >= 0.0 or not np.isfinite(value):
                 raise InvalidValueError(name, f"must be >= 0, got {value}")
             put(name, value)
+        rate = float(self.tilt_rate_max)
+        if not rate > 0.0 or np.isnan(rate):
+            raise InvalidValueError("tilt_rate_max", f"must be > 0 (inf: no limit), got {rate}")
+        put("tilt_rate_max", rate)
         if self.rotor_speed_max <= self.rotor_speed_min:
             raise InvalidValueError("rotor_speed_max", f"must be > rotor_speed_min ({self.rotor_speed_min}), got "
                                                   f"{self.rotor_speed_max}")

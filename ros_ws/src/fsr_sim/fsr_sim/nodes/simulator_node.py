@@ -52,6 +52,7 @@ from fsr_sim.contract import (
     FINISHED,
     ODOM,
     ROTOR_CMD,
+    ROTOR_STATE,
     RUNNING,
     SIM_PROGRESS,
     SIM_STATUS,
@@ -63,7 +64,7 @@ from fsr_sim.contract import (
 from fsr_sim.core import lockstep
 from fsr_sim.core.odometry import PUBLISHED_SIZE
 from fsr_sim.core.plant import RUNNING as PLANT_RUNNING
-from fsr_sim.model.plant import divergence_reason
+from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.nodes.commands import RotorCommandReader, wrench_command_raw
 from fsr_sim.nodes.lockstep import (
     AHEAD,
@@ -101,15 +102,17 @@ class SimulatorNode(Node):
         self.params = parse_parameters(values)
         self.scenario, self.config = load_simulation(self.params)
         self.plant = plant_from_config(self.config)
-        self.messages = StatePackets()
-        self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         vehicle = self.config.plant_vehicle
+        self.publish_rotor_state = has_actuator_dynamics(self.plant.params)
+        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos)
+        self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.has_servos)
 
         command = WRENCH_CMD if self.config.actuation == "wrench" else ROTOR_CMD
         self.command_topic = command.name
         self.odom_pub = publisher(self, ODOM)
         self.wrench_pub = publisher(self, WRENCH_TRUTH)
+        self.rotor_state_pub = publisher(self, ROTOR_STATE) if self.publish_rotor_state else None
         self.clock_pub = publisher(self, CLOCK) if self.params.publish_clock else None
         self.progress_pub = publisher(self, SIM_PROGRESS)
         self.status_pub = publisher(self, SIM_STATUS)
@@ -394,11 +397,15 @@ class SimulatorNode(Node):
         self._send_state()
 
     def _send_state(self) -> None:
-        """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``)."""
+        """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``) and, with
+        actuator dynamics, ``rotor_state``."""
         messages, plant = self.messages, self.plant
         messages.fill_from_row(plant.stamp_ns, self.published)
         self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
         self.wrench_pub.publish(messages.wrench)
+        if self.rotor_state_pub is not None:
+            state = plant.core_state
+            self.rotor_state_pub.publish(messages.rotor_state(plant.stamp_ns, state.speeds, state.tilts))
         if self.clock_pub is not None:
             self.clock_pub.publish(messages.clock)
         if plant.step_index % PROGRESS_STEPS == 0 or plant.step_index >= self.config.step_count:

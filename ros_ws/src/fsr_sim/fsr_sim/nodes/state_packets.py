@@ -1,5 +1,6 @@
 """The simulator's per-step messages as packed CDR bytes (what the simulator node publishes and an in-process
-recording writes): ``odom``, ``wrench_truth`` and ``/clock`` of one state.
+recording writes): ``odom``, ``wrench_truth``, ``/clock`` and (with actuator dynamics) ``rotor_state`` of one
+state; :func:`joint_state_template` and :func:`joint_values` lay out ``rotor_state`` and ``rotor_cmd`` alike.
 
 The values are the published row of the compiled core (:mod:`fsr_sim.core.odometry`: ``odom``, then
 ``wrench_truth`` force ``R^T f_ext,world`` and torque), the same as :class:`fsr_sim.nodes.state_messages.
@@ -10,21 +11,41 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_sim.contract import ODOM, WRENCH_TRUTH
+from fsr_sim.contract import ODOM, ROTOR_STATE, WRENCH_TRUTH, joint_names
 from fsr_sim.core.odometry import ODOM_SIZE
 from fsr_sim.model.odometry import published_row
 from fsr_sim.ros import cdr_pack
+
+
+def joint_state_template(frame_id: str, rotor_count: int, tilting: bool) -> cdr_pack.StampedDoubles:
+    """The ``sensor_msgs/JointState`` of the rotors (:func:`fsr_sim.contract.joint_names`): a position and a
+    velocity per joint."""
+    names = joint_names(rotor_count, tilting)
+    return cdr_pack.joint_state(frame_id, names, len(names), len(names))
+
+
+def joint_values(speeds: np.ndarray, tilts: np.ndarray | None) -> np.ndarray:
+    """The numbers of :func:`joint_state_template` for rotor speeds (..., n) [rad/s] and tilts (..., n) [rad]
+    (None: fixed rotors): positions (0 for a rotor, the tilt for a tilt joint), then velocities (the speed for
+    a rotor, 0 for a tilt joint)."""
+    zeros = np.zeros_like(speeds)
+    if tilts is None:
+        return np.concatenate((zeros, speeds), axis=-1)
+    return np.concatenate((zeros, tilts, speeds, zeros), axis=-1)
 
 
 class StatePackets:
     """Packs the state stamped ``stamp_ns``: after :meth:`fill_from_row`, ``odom``, ``wrench`` and ``clock`` hold
     the CDR payloads of ``odom``, ``wrench_truth`` and ``/clock``."""
 
-    def __init__(self) -> None:
+    def __init__(self, rotor_count: int = 0, tilting: bool = False) -> None:
         self._odom = cdr_pack.odometry(ODOM.frame, ODOM.child_frame)
         self._wrench = cdr_pack.wrench_stamped(WRENCH_TRUTH.frame)
         self._clock = cdr_pack.clock()
         self.templates = {ODOM.name: self._odom, WRENCH_TRUTH.name: self._wrench}  # topic (relative) -> template
+        self.tilting = tilting
+        if rotor_count:
+            self.templates[ROTOR_STATE.name] = joint_state_template(ROTOR_STATE.frame, rotor_count, tilting)
         self.odom = self.wrench = self.clock = b""
         self.stamp_ns = -1
 
@@ -41,3 +62,8 @@ class StatePackets:
         self.wrench = self._wrench.pack(stamp_ns, values[ODOM_SIZE:])
         self.clock = self._clock.pack(stamp_ns, ())
         self.stamp_ns = stamp_ns
+
+    def rotor_state(self, stamp_ns: int, speeds: np.ndarray, tilts: np.ndarray) -> bytes:
+        """The ``rotor_state`` payload of the rotors' actual speeds (n,) [rad/s] and tilts (n,) [rad]."""
+        values = joint_values(speeds, tilts if self.tilting else None)
+        return self.templates[ROTOR_STATE.name].pack(stamp_ns, values.tolist())
