@@ -33,7 +33,7 @@ def test_recording_has_the_graph_topics(tmp_path):
 
 
 BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
-            "step_disturbance", "wind_rejection")
+            "step_disturbance", "wind_rejection", "wind_rejection_turbulent")
 
 
 @pytest.mark.parametrize("name", BUILT_IN)

@@ -21,7 +21,7 @@ from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 
 BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
-            "step_disturbance", "wind_rejection")
+            "step_disturbance", "wind_rejection", "wind_rejection_turbulent")
 
 
 def tour(folder: Path) -> None:

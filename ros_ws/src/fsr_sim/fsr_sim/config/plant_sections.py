@@ -12,6 +12,7 @@ import numpy as np
 from fsr_sim.config.validation import Section, checked_array
 from fsr_sim.model.disturbances import ZERO3, DisturbanceProfile
 from fsr_sim.model.environment import GROUND_MODELS, Environment, Surface
+from fsr_sim.model.turbulence import DrydenTurbulence
 
 
 def environment_from_section(section: Section) -> Environment:
@@ -43,9 +44,19 @@ def environment_from_section(section: Section) -> Environment:
 
 
 
-def disturbance_from_section(section: Section) -> DisturbanceProfile:
+def disturbance_from_section(section: Section) -> DisturbanceProfile | DrydenTurbulence:
     """Parse one entry of the scenario's ``disturbances`` list (unknown keys refused)."""
-    kind = section.string("kind", choices=("constant", "step", "sinusoid", "table"))
+    kind = section.string("kind", choices=("constant", "step", "sinusoid", "table", "dryden"))
+    if kind == "dryden":
+        turbulence = DrydenTurbulence(
+            wind_speed=section.number("wind_speed", minimum=0.0),
+            altitude=section.number("altitude", strictly_positive=True),
+            airspeed=section.number("airspeed", strictly_positive=True) if section.has("airspeed") else None,
+            mean=section.vector("mean", 3, [0.0, 0.0, 0.0]),
+            seed=section.integer("seed", 0, minimum=0, maximum=2**32 - 1),
+        )
+        section.reject_unknown()
+        return turbulence
     frame = section.string("frame", "world", choices=("world", "body"))
     if kind == "table":
         times = section.raw("time")

@@ -36,6 +36,7 @@ from fsr_sim.model.environment import Environment
 from fsr_sim.model.plant import Plant
 from fsr_sim.model.sensors import OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx
+from fsr_sim.model.turbulence import DrydenTurbulence
 from fsr_sim.model.vehicle import Vehicle
 
 SECTION_GROUP = "fsr.scenario_sections"
@@ -193,6 +194,7 @@ class SimulationConfig:
     initial: InitialState
     environment: Environment
     disturbances: list[DisturbanceProfile] = field(default_factory=list)
+    turbulence: list[DrydenTurbulence] = field(default_factory=list)  # the disturbances of kind dryden
     lockstep: bool = True
     lockstep_timeout: float = 1.0
     failsafe: str = "hold"
@@ -242,22 +244,29 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     plant = root.section("plant")
     mass = plant.number("mass", vehicle.mass, strictly_positive=True)
     inertia = checked_spd(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
-    actuator_dynamics = {  # the true plant's, beside the vehicle file's (the controller knows none of them)
+    plant_overrides = {  # actuator dynamics and drag of the true plant (the controller knows none of them)
         "rotor_time_constant": plant.number("rotor_time_constant", vehicle.rotor_time_constant, minimum=0.0),
         "tilt_time_constant": plant.number("tilt_time_constant", vehicle.tilt_time_constant, minimum=0.0),
         "tilt_rate_max": float(np.deg2rad(plant.number("tilt_rate_max_deg_s", strictly_positive=True)))
         if plant.has("tilt_rate_max_deg_s") else vehicle.tilt_rate_max,
+        "drag_coefficients": plant.vector("drag_coefficients", 3, vehicle.drag_coefficients.tolist()),
     }
+    if np.any(plant_overrides["drag_coefficients"] < 0.0):
+        raise plant.error("drag_coefficients", f"must be >= 0, got {plant_overrides['drag_coefficients'].tolist()}")
     plant.reject_unknown()
 
     environment = environment_from_section(root.section("environment"))
     disturbance_list = root.raw("disturbances", [])
     if not isinstance(disturbance_list, list):
         raise root.error("disturbances", f"must be a list, got {type(disturbance_list).__name__}")
-    disturbances = [
-        disturbance_from_section(Section(item, f"disturbances.{i}", source))
-        for i, item in enumerate(disturbance_list)
-    ]
+    parsed = [disturbance_from_section(Section(item, f"disturbances.{i}", source))
+              for i, item in enumerate(disturbance_list)]
+    disturbances = [item for item in parsed if isinstance(item, DisturbanceProfile)]
+    turbulence = [item for item in parsed if isinstance(item, DrydenTurbulence)]
+    if turbulence and not np.any(plant_overrides["drag_coefficients"] > 0.0):
+        index = next(i for i, item in enumerate(parsed) if isinstance(item, DrydenTurbulence))
+        raise root.error(f"disturbances.{index}", "a dryden turbulence pushes through the vehicle's drag, and its "
+                         "drag_coefficients are all zero: set plant.drag_coefficients (or the vehicle file's)")
 
     lockstep = root.section("lockstep")
     lockstep_enabled = lockstep.boolean("enabled", True)
@@ -274,7 +283,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     return SimulationConfig(
         name=scenario.name,
         vehicle=vehicle,
-        plant_vehicle=replace(vehicle.with_mass_properties(mass, inertia), **actuator_dynamics),
+        plant_vehicle=replace(vehicle.with_mass_properties(mass, inertia), **plant_overrides),
         duration=duration,
         physics_dt=physics_dt,
         physics_substeps=substeps,
@@ -282,6 +291,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
         initial=InitialState(position, rotation_from_euler_zyx(rpy), velocity, angular_velocity),
         environment=environment,
         disturbances=disturbances,
+        turbulence=turbulence,
         lockstep=lockstep_enabled,
         lockstep_timeout=timeout,
         failsafe=failsafe,
@@ -313,5 +323,5 @@ def plant_from_config(config: SimulationConfig) -> Plant:
         config.plant_vehicle, dt=config.physics_dt, actuation=config.actuation, position=initial.position,
         rotation=initial.rotation, velocity=initial.velocity, angular_velocity=initial.angular_velocity,
         environment=config.environment, disturbances=config.disturbances, substeps=config.physics_substeps,
-        odometry_noise=config.odometry_noise,
+        odometry_noise=config.odometry_noise, turbulence=config.turbulence,
     )

@@ -50,6 +50,7 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
     if speed_max <= speed_min:
         raise root.error("rotor_speed_max", f"must be > rotor_speed_min ({speed_min}), got {speed_max}")
     tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
+    drag = root.vector("drag_coefficients", 3, [0.0, 0.0, 0.0])
     contact_height = root.number("contact_height", 0.1, minimum=0.0)
     top_height = root.number("top_height", contact_height, minimum=0.0)  # default: symmetric about the CoM
     rotor_time_constant = root.number("rotor_time_constant", 0.0, minimum=0.0)
@@ -86,6 +87,7 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
             rotor_time_constant=rotor_time_constant,
             tilt_time_constant=tilt_time_constant,
             tilt_rate_max=float(tilt_rate_max),
+            drag_coefficients=drag,
         )
     except InvalidValueError as error:  # a check of the model itself (e.g. a tilt axis along the thrust axis)
         key = {"tilt_axes": "rotors.tilt_axis", "positions": "rotors.position",

@@ -1,5 +1,5 @@
 """The true plant per step (compiled core): rigid body + rotors (with ground/ceiling effect) + disturbances +
-contact.
+contact, and the drag of Dryden gusts (:mod:`fsr_sim.core.turbulence`).
 
 Inputs are held over a step (zero-order hold) while the state-dependent parts (thrust ratios near surfaces,
 time-varying disturbances) are evaluated at every RK4 stage. Two actuations:
@@ -33,6 +33,7 @@ from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, 
 from fsr_sim.core.sensors import SensorParams
 from fsr_sim.core.so3 import mat_vec3
 from fsr_sim.core.surfaces import Surfaces, ceiling_rest_z, ground_rest_z, has_thrust_effects, thrust_ratios
+from fsr_sim.core.turbulence import TurbulenceParams, advance_gusts, drag_force
 
 MAX_SPEED = 100.0  # m/s: beyond this the simulation is considered diverged
 MAX_SPIN = 200.0  # rad/s
@@ -72,6 +73,7 @@ class PlantParams(NamedTuple):
     tilt_lag: bool  # tilts follow their command through a lag and/or a rate limit
     tilt_decay: float  # exp(-dt / tau_alpha) (0: no lag)
     tilt_step_max: float  # [rad] per RK4 step: tilt_rate_max dt (inf: no rate limit)
+    turbulence: TurbulenceParams  # Dryden gusts and the drag they push with (fsr_sim.core.turbulence)
 
 
 class PlantState(NamedTuple):
@@ -90,6 +92,8 @@ class PlantState(NamedTuple):
     work: np.ndarray  # (5, 13) scratch: RK4 rates k1..k4 and the stage state
     status: np.ndarray  # (STATUS_SIZE,) step index, contact, impacts, surface-cap counts
     saturation: np.ndarray  # rotor-speed saturation record (fsr_sim.core.rotors)
+    gust_states: np.ndarray  # (m, 3, 2) turbulence filter states
+    gusts: np.ndarray  # (m, 3) gust velocities [m/s] world NED, held over the RK4 step
 
 
 @jit_inline
@@ -205,6 +209,9 @@ def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple: 
     else:
         fx, fy, fz, tx, ty, tz = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
     fx, fy, fz = mat_vec3(rotation, (fx, fy, fz))
+    if state.gusts.shape[0]:
+        dx, dy, dz = drag_force(params.turbulence, state.gusts, (x[3], x[4], x[5]), rotation)
+        fx, fy, fz = fx + dx, fy + dy, fz + dz
     if params.disturbances.shape[0]:
         (ex, ey, ez), (ux, uy, uz) = external_wrench(params.disturbances, params.disturbance_knots, t, rotation)
         return (fx + ex, fy + ey, fz + ez), (tx + ux, ty + uy, tz + uz)
@@ -275,6 +282,9 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
         apply_contact(params, state)
         if not params.wrench_actuation and (params.rotor_lag or params.tilt_lag):
             advance_actuators(params, state)
+        if state.gusts.shape[0]:
+            advance_gusts(params.turbulence, state.gust_states, state.gusts,
+                          int(status[STEP_INDEX]) * params.substeps + sub)
     if status[GROUND_CAPPED] != 0.0 or status[CEILING_CAPPED] != 0.0:
         status[GROUND_CAP_STEPS] += status[GROUND_CAPPED]
         status[CEILING_CAP_STEPS] += status[CEILING_CAPPED]
@@ -303,9 +313,16 @@ def divergence(params: PlantParams, state: PlantState) -> int:
 
 @jit_inline
 def plant_external_wrench(params: PlantParams, state: PlantState) -> tuple:
-    """The true external wrench now: (force world NED [N], torque body FRD [N m])."""
-    return external_wrench(params.disturbances, params.disturbance_knots, plant_time(params, state),
-                           state_rotation(state.x))
+    """The true external wrench now: (force world NED [N], torque body FRD [N m]): the disturbances' and the
+    turbulence's drag."""
+    x = state.x
+    rotation = state_rotation(x)
+    force, torque = external_wrench(params.disturbances, params.disturbance_knots, plant_time(params, state),
+                                    rotation)
+    if state.gusts.shape[0]:
+        dx, dy, dz = drag_force(params.turbulence, state.gusts, (x[3], x[4], x[5]), rotation)
+        force = (force[0] + dx, force[1] + dy, force[2] + dz)
+    return force, torque
 
 
 @jit

@@ -42,7 +42,7 @@ from fsr_sim.core.rigid_body import STATE_SIZE
 from fsr_sim.core.surfaces import has_thrust_effects
 from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.checks import InvalidValueError, finite_array
-from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances, total_external_wrench
+from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances
 from fsr_sim.model.environment import Environment, pack_surfaces, thrust_ratio_log
 from fsr_sim.model.rigid_body import (
     ANGULAR_VELOCITY,
@@ -54,6 +54,7 @@ from fsr_sim.model.rigid_body import (
 )
 from fsr_sim.model.sensors import OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
+from fsr_sim.model.turbulence import DrydenTurbulence, pack_turbulence
 from fsr_sim.model.vehicle import Vehicle
 
 MAX_SPEED = core.MAX_SPEED
@@ -64,7 +65,8 @@ ACTUATIONS = ("rotors", "wrench")
 
 def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, environment: Environment,
                disturbances: Sequence[DisturbanceProfile], crash_speed: float,
-               odometry_noise: OdometryNoise | None = None) -> core.PlantParams:
+               odometry_noise: OdometryNoise | None = None,
+               turbulence: Sequence[DrydenTurbulence] = ()) -> core.PlantParams:
     """The core's :class:`~fsr_sim.core.plant.PlantParams` of a checked vehicle and environment."""
     n = vehicle.rotor_count
     if vehicle.has_servos:
@@ -86,6 +88,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         tilt_lag=vehicle.has_servos and (vehicle.tilt_time_constant > 0.0 or math.isfinite(vehicle.tilt_rate_max)),
         tilt_decay=math.exp(-dt / vehicle.tilt_time_constant) if vehicle.tilt_time_constant > 0.0 else 0.0,
         tilt_step_max=float(vehicle.tilt_rate_max * dt),
+        turbulence=pack_turbulence(turbulence, vehicle.drag_coefficients, dt),
     )
 
 
@@ -103,6 +106,7 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
         wrench_command=np.zeros(6), columns=params.vertical_columns.copy(),
         body_wrench=np.zeros(6), ratios=np.ones(n), work=np.zeros((5, STATE_SIZE)),
         status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),
+        gust_states=params.turbulence.initial_states.copy(), gusts=params.turbulence.initial_gusts.copy(),
     )
     core_rotors.reset_saturation(state.saturation)
     if params.tilting:
@@ -182,6 +186,7 @@ class Plant:
         crash_speed: float = DEFAULT_CRASH_SPEED,
         attitude_rpy_deg: ArrayLike | None = None,
         odometry_noise: OdometryNoise | None = None,
+        turbulence: Sequence[DrydenTurbulence] = (),
     ) -> None:
         if actuation not in ACTUATIONS:
             raise InvalidValueError("actuation", f"must be one of {', '.join(ACTUATIONS)}, got '{actuation}'")
@@ -202,8 +207,9 @@ class Plant:
         self.disturbances = list(disturbances)
         self.crash_speed = crash_speed
         self.odometry_noise = odometry_noise or OdometryNoise()
+        self.turbulence = list(turbulence)
         self.params = pack_plant(vehicle, dt, substeps, actuation, self.environment, self.disturbances, crash_speed,
-                                 self.odometry_noise)
+                                 self.odometry_noise, self.turbulence)
         self.core_state = new_plant_state(self.params, pack_state(
             finite_array(position, (3,), "position"), rotation, finite_array(velocity, (3,), "velocity"),
             finite_array(angular_velocity, (3,), "angular_velocity"),
@@ -357,8 +363,10 @@ class Plant:
 
     # ----- dynamics ---------------------------------------------------------------------------------
     def external_wrench(self) -> tuple[np.ndarray, np.ndarray]:
-        """True external wrench now: (force world NED [N], torque body FRD [N m])."""
-        return total_external_wrench(self.disturbances, self.time, self.rotation)
+        """True external wrench now: (force world NED [N], torque body FRD [N m]): the disturbances' and the
+        turbulence's drag."""
+        force, torque = core.plant_external_wrench(self.params, self.core_state)
+        return np.array(force), np.array(torque)
 
     def thrust_ratios(self) -> np.ndarray:
         """Ground/ceiling thrust ratio of each rotor at the current pose (1 away from surfaces)."""

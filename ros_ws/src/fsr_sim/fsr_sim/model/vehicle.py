@@ -15,7 +15,7 @@ YAML file by :func:`load_vehicle` (the file format: :mod:`fsr_sim.config.vehicle
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +72,9 @@ class Vehicle:
         [s], >= 0: the same for each servo's tilt (0: at once).
     tilt_rate_max : float
         [rad/s], > 0: the servos' rate limit (inf: none).
+    drag_coefficients : array-like, shape (3,)
+        ``d`` [N s^2/m^2] >= 0 per body axis: the air relative to the vehicle ``r`` (body) pushes with
+        ``d_k r_k |r_k|`` (only where a scenario has turbulence, docs/model.md §3.4).
 
     Raises
     ------
@@ -98,6 +101,7 @@ class Vehicle:
     rotor_time_constant: float = 0.0  # [s] first-order lag of the rotor speeds (0: they follow at once)
     tilt_time_constant: float = 0.0  # [s] first-order lag of the tilts (rotors on servos; 0: none)
     tilt_rate_max: float = np.inf  # [rad/s] servo rate limit (inf: none)
+    drag_coefficients: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s^2/m^2] per body axis
 
     def __post_init__(self) -> None:
         def put(name: str, value: object) -> None:
@@ -124,6 +128,10 @@ class Vehicle:
             raise InvalidValueError("rotor_speed_max", f"must be > rotor_speed_min ({self.rotor_speed_min}), got "
                                                   f"{self.rotor_speed_max}")
         put("inertia", symmetric_positive_definite(self.inertia, "inertia"))
+        drag = finite_array(self.drag_coefficients, (3,), "drag_coefficients")
+        if np.any(drag < 0.0):
+            raise InvalidValueError("drag_coefficients", f"must be >= 0, got {drag.tolist()}")
+        put("drag_coefficients", drag)
         positions = np.array(self.positions, dtype=float)
         if positions.ndim != 2 or positions.shape[0] < 3:
             raise InvalidValueError("positions", f"expected shape (n, 3) with n >= 3, got {positions.shape}")
