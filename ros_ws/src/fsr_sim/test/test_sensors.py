@@ -31,14 +31,14 @@ def test_an_off_stage_leaves_the_row_as_it_is_and_an_on_stage_keeps_a_unit_quate
     row = np.arange(PUBLISHED_SIZE, dtype=float)
     row[3:7] = (0.0, 0.6, 0.0, 0.8)
     kept = row.copy()
-    sensors.sense(OdometryNoise().pack(), 5, row)
+    sensors.sense(OdometryNoise().pack(0.001), 5, row, np.zeros(12))
     assert np.array_equal(row, kept)
-    noisy = OdometryNoise(0.1, 0.05, 0.1, 0.1, seed=9).pack()
-    sensors.sense(noisy, 5, row)
+    noisy = OdometryNoise(0.1, 0.05, 0.1, 0.1, seed=9).pack(0.001)
+    sensors.sense(noisy, 5, row, np.zeros(12))
     assert abs(np.linalg.norm(row[3:7]) - 1.0) < 1e-15 and row[6] >= 0.0
     assert np.array_equal(row[13:], kept[13:])  # wrench_truth is never noisy
     again = kept.copy()
-    sensors.sense(noisy, 5, again)
+    sensors.sense(noisy, 5, again, np.zeros(12))
     assert np.array_equal(row, again)  # determined by (seed, step) alone
 
 

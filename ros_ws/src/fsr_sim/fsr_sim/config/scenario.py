@@ -274,7 +274,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     failsafe = lockstep.string("failsafe", "hold", choices=("hold", "cut"))
     real_time_factor = lockstep.number("real_time_factor", 1.0, strictly_positive=True)
     lockstep.reject_unknown()
-    odometry_noise = _odometry_noise(root.section("sensors"))
+    odometry_noise = _odometry_noise(root.section("sensors"), physics_dt * substeps)
     root.reject_unknown(known=(*PLANT_KEYS, *registered_sections()))
 
     duration_steps = duration / (physics_dt * substeps)
@@ -300,16 +300,29 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     )
 
 
-def _odometry_noise(sensors: Section) -> OdometryNoise:
-    """``sensors.odometry``: white noise on ``odom`` (:class:`fsr_sim.model.sensors.OdometryNoise`; angles in
-    degrees here)."""
+def _odometry_noise(sensors: Section, period: float) -> OdometryNoise:
+    """``sensors.odometry``: what ``odom`` measures (:class:`fsr_sim.model.sensors.OdometryNoise`; angles in
+    degrees here, the rate in Hz: a whole divisor of the control rate ``1 / period``)."""
     odometry = sensors.section("odometry")
+    every = 1
+    if odometry.has("rate_hz"):
+        rate = odometry.number("rate_hz", strictly_positive=True)
+        every = round(1.0 / (period * rate))
+        if every < 1 or abs(every * period * rate - 1.0) > 1e-9:
+            raise odometry.error("rate_hz", f"must divide the control rate {1.0 / period:g} Hz by a whole number, "
+                                            f"got {rate:g}")
     noise = OdometryNoise(
         position_std=odometry.number("position_std", 0.0, minimum=0.0),
         attitude_std=np.deg2rad(odometry.number("attitude_std_deg", 0.0, minimum=0.0)),
         velocity_std=odometry.number("velocity_std", 0.0, minimum=0.0),
         angular_velocity_std=odometry.number("angular_velocity_std", 0.0, minimum=0.0),
         seed=odometry.integer("seed", 0, minimum=0, maximum=2**32 - 1),
+        position_bias_walk=odometry.number("position_bias_walk", 0.0, minimum=0.0),
+        attitude_bias_walk=np.deg2rad(odometry.number("attitude_bias_walk_deg", 0.0, minimum=0.0)),
+        velocity_bias_walk=odometry.number("velocity_bias_walk", 0.0, minimum=0.0),
+        angular_velocity_bias_walk=odometry.number("angular_velocity_bias_walk", 0.0, minimum=0.0),
+        delay_steps=odometry.integer("delay_steps", 0, minimum=0),
+        every_steps=every,
     )
     odometry.reject_unknown()
     sensors.reject_unknown()

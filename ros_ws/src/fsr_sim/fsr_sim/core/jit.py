@@ -75,16 +75,19 @@ def _writable(folder: Path) -> bool:
         return False
 
 
-def cache_base() -> Path:
-    """The folder that holds one keyed cache folder per version of the core's sources (module docstring)."""
-    base = os.environ.get("FSR_NUMBA_CACHE_BASE") or os.environ.get("NUMBA_CACHE_DIR")
-    if base:
-        return Path(base)
+def fsr_cache(name: str) -> Path:
+    """``$XDG_CACHE_HOME/fsr/<name>`` (``~/.cache/fsr/<name>``; the temporary directory without a home)."""
     try:
         home_cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     except RuntimeError:  # no home directory
         home_cache = Path(tempfile.gettempdir())
-    return home_cache / "fsr" / "numba"
+    return home_cache / "fsr" / name
+
+
+def cache_base() -> Path:
+    """The folder that holds one keyed cache folder per version of the core's sources (module docstring)."""
+    base = os.environ.get("FSR_NUMBA_CACHE_BASE") or os.environ.get("NUMBA_CACHE_DIR")
+    return Path(base) if base else fsr_cache("numba")
 
 
 def cache_folder(base: Path) -> Path:

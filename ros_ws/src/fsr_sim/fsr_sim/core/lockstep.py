@@ -15,7 +15,7 @@ import math
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.odometry import publish_state
 from fsr_sim.core.plant import STEP_INDEX, PlantParams, PlantState, divergence, plant_external_wrench, plant_step
-from fsr_sim.core.sensors import sense
+from fsr_sim.core.sensors import measure
 
 
 @jit_inline
@@ -23,7 +23,7 @@ def publish(params: PlantParams, state: PlantState, out) -> None:  # noqa: ANN00
     """The published row (19,) of the current state: ``odom`` as the sensor stage measures it
     (:mod:`fsr_sim.core.sensors`; the true state when it is off) and the true ``wrench_truth``."""
     publish_state(state.x, plant_external_wrench(params, state), out)
-    sense(params.sensors, int(state.status[STEP_INDEX]), out)
+    measure(params.sensors, state.sensor_memory, int(state.status[STEP_INDEX]), out)
 
 
 @jit_inline

@@ -94,6 +94,7 @@ class PlantState(NamedTuple):
     saturation: np.ndarray  # rotor-speed saturation record (fsr_sim.core.rotors)
     gust_states: np.ndarray  # (m, 3, 2) turbulence filter states
     gusts: np.ndarray  # (m, 3) gust velocities [m/s] world NED, held over the RK4 step
+    sensor_memory: np.ndarray  # the sensor stage's bias, held measurement and delay line (fsr_sim.core.sensors)
 
 
 @jit_inline

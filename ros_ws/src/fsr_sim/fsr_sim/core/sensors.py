@@ -26,12 +26,25 @@ POSITION, ATTITUDE, VELOCITY, ANGULAR_VELOCITY = 0, 3, 6, 9  # first channel of 
 
 
 class SensorParams(NamedTuple):
-    enabled: bool  # any standard deviation > 0
+    enabled: bool  # any standard deviation or bias walk > 0
     seed: int  # 0 .. 2^32 - 1
     position_std: float  # [m], world NED
     attitude_std: float  # [rad], body rotation vector
     velocity_std: float  # [m/s], body
     angular_velocity_std: float  # [rad/s], body
+    walks: tuple  # bias random walks (position, attitude, velocity, angular velocity) [unit / sqrt(s)]
+    period: float  # [s] between published states
+    delay: int  # published states the measurement is late by
+    every: int  # a new measurement every this many published states (the others hold it)
+
+
+MEMORY_STEP, MEMORY_BIAS, MEMORY_HELD, MEMORY_HISTORY = 0, 1, 13, 26  # sensor memory layout (see measure)
+BIAS_CHANNEL = 12  # the bias walks' generator channels: 12 .. 23
+
+
+def memory_size(delay: int) -> int:
+    """Floats of :func:`measure`'s memory for a delay of ``delay`` states."""
+    return MEMORY_HISTORY + 13 * (delay + 1)
 
 
 @jit
@@ -55,19 +68,21 @@ def standard_normal(seed: int, step: int, channel: int) -> float:
 
 
 @jit_inline
-def sense(params: SensorParams, step: int, out) -> None:  # noqa: ANN001
+def sense(params: SensorParams, step: int, out, bias) -> None:  # noqa: ANN001
     """Turn the true published ``odom`` (the first 13 numbers of ``out``, :mod:`fsr_sim.core.odometry`) of step
-    ``step`` into the measured one; nothing when the stage is off."""
+    ``step`` into the measured one: white noise plus ``bias`` (12,: position, attitude rotation vector,
+    velocity, angular velocity); nothing when the stage is off."""
     if not params.enabled:
         return
     seed = params.seed
     for i in range(3):
-        out[i] += params.position_std * standard_normal(seed, step, POSITION + i)
-        out[7 + i] += params.velocity_std * standard_normal(seed, step, VELOCITY + i)
-        out[10 + i] += params.angular_velocity_std * standard_normal(seed, step, ANGULAR_VELOCITY + i)
-    nx = params.attitude_std * standard_normal(seed, step, ATTITUDE)
-    ny = params.attitude_std * standard_normal(seed, step, ATTITUDE + 1)
-    nz = params.attitude_std * standard_normal(seed, step, ATTITUDE + 2)
+        out[i] += params.position_std * standard_normal(seed, step, POSITION + i) + bias[POSITION + i]
+        out[7 + i] += params.velocity_std * standard_normal(seed, step, VELOCITY + i) + bias[VELOCITY + i]
+        out[10 + i] += (params.angular_velocity_std * standard_normal(seed, step, ANGULAR_VELOCITY + i)
+                        + bias[ANGULAR_VELOCITY + i])
+    nx = params.attitude_std * standard_normal(seed, step, ATTITUDE) + bias[ATTITUDE]
+    ny = params.attitude_std * standard_normal(seed, step, ATTITUDE + 1) + bias[ATTITUDE + 1]
+    nz = params.attitude_std * standard_normal(seed, step, ATTITUDE + 2) + bias[ATTITUDE + 2]
     angle = math.sqrt(nx * nx + ny * ny + nz * nz)
     if angle > 0.0:  # q (x) Exp(n): the rotation vector n in the body frame, quaternions [x, y, z, w]
         s = math.sin(0.5 * angle) / angle
@@ -81,3 +96,42 @@ def sense(params: SensorParams, step: int, out) -> None:  # noqa: ANN001
         if qw < 0.0:  # odom's sign convention: w >= 0
             norm = -norm
         out[3], out[4], out[5], out[6] = qx / norm, qy / norm, qz / norm, qw / norm
+
+
+@jit_inline
+def measure(params: SensorParams, memory, step: int, out) -> None:  # noqa: ANN001
+    """The whole sensor stage on the published row ``out`` of step ``step`` (``memory``: :func:`memory_size`
+    floats, ``memory[MEMORY_STEP]`` = -1 at the start):
+
+    1. bias random walks: per step, ``b <- b + walk sqrt(T) n`` per channel (once per step, however often the
+       step is published), then white noise plus the bias (:func:`sense`);
+    2. delay: the row published at step ``k`` is the measurement of step ``k - delay`` (of step 0 before);
+    3. rate: a new measurement every ``every`` steps, held in between.
+    ``wrench_truth`` (the rest of the row) stays the true one, of step ``k``."""
+    if params.enabled:
+        if step > memory[MEMORY_STEP]:
+            scale = math.sqrt(params.period)
+            for group in range(4):
+                walk = params.walks[group] * scale
+                if walk > 0.0:
+                    for i in range(3):
+                        channel = 3 * group + i
+                        memory[MEMORY_BIAS + channel] += walk * standard_normal(params.seed, step,
+                                                                                BIAS_CHANNEL + channel)
+            memory[MEMORY_STEP] = step
+        sense(params, step, out, memory[MEMORY_BIAS:MEMORY_HELD])
+    if params.delay > 0:
+        slots = params.delay + 1
+        write = MEMORY_HISTORY + 13 * (step % slots)
+        for i in range(13):
+            memory[write + i] = out[i]
+        read = MEMORY_HISTORY + (13 * ((step - params.delay) % slots) if step >= params.delay else 0)
+        for i in range(13):
+            out[i] = memory[read + i]
+    if params.every > 1:
+        if step % params.every == 0:
+            for i in range(13):
+                memory[MEMORY_HELD + i] = out[i]
+        else:
+            for i in range(13):
+                out[i] = memory[MEMORY_HELD + i]

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_sim.core.jit import fsr_cache
 from fsr_sim.model import allocation
 from fsr_sim.model.authority import Authority, ForceSet, authority, force_set
 from fsr_sim.model.vehicle import Vehicle
@@ -32,13 +33,7 @@ _MEMORY: dict[str, tuple[Authority, ForceSet | None]] = {}
 def cache_folder() -> Path:
     """Where the numbers are kept (module docstring)."""
     folder = os.environ.get("FSR_AUTHORITY_CACHE")
-    if folder:
-        return Path(folder)
-    try:
-        home_cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    except RuntimeError:  # no home directory
-        home_cache = Path(tempfile.gettempdir())
-    return home_cache / "fsr" / "authority"
+    return Path(folder) if folder else fsr_cache("authority")
 
 
 def vehicle_key(vehicle: Vehicle) -> str:

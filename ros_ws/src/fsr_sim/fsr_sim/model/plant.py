@@ -39,6 +39,7 @@ from fsr_sim.contract import body_force_of_thrust, thrust_of
 from fsr_sim.core import plant as core
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.core.rigid_body import STATE_SIZE
+from fsr_sim.core.sensors import MEMORY_STEP, memory_size
 from fsr_sim.core.surfaces import has_thrust_effects
 from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.checks import InvalidValueError, finite_array
@@ -82,7 +83,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         tilting=vehicle.has_servos, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
-        sensors=(odometry_noise or OdometryNoise()).pack(),
+        sensors=(odometry_noise or OdometryNoise()).pack(float(dt) * int(substeps)),
         rotor_lag=vehicle.rotor_time_constant > 0.0,
         speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
         tilt_lag=vehicle.has_servos and (vehicle.tilt_time_constant > 0.0 or math.isfinite(vehicle.tilt_rate_max)),
@@ -107,7 +108,9 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
         body_wrench=np.zeros(6), ratios=np.ones(n), work=np.zeros((5, STATE_SIZE)),
         status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),
         gust_states=params.turbulence.initial_states.copy(), gusts=params.turbulence.initial_gusts.copy(),
+        sensor_memory=np.zeros(memory_size(params.sensors.delay)),
     )
+    state.sensor_memory[MEMORY_STEP] = -1.0
     core_rotors.reset_saturation(state.saturation)
     if params.tilting:
         core_rotors.tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
