@@ -42,7 +42,7 @@ def make_control_law(config: ControllerConfig, vehicle: Vehicle) -> CompiledLaw:
     """The law ``config.type`` names (:data:`fsr_control.controllers.catalog.LAWS`) on the nominal ``vehicle``."""
     law = LAWS[config.type]
     return CompiledLaw(pack_law(vehicle, config.gains, law.kind, tuple(law.default_gains), config.angular_feedforward,
-                                law.horizon_steps, law.horizon_dt))
+                                law.horizon_steps, law.horizon_dt, config.acceleration_filter_hz))
 
 
 def seconds_from_ns(stamp_ns: int) -> float:

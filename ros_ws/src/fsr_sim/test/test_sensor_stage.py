@@ -79,3 +79,14 @@ def test_the_node_graph_measures_what_one_process_measures(tmp_path):
     for topic in ("/odom", "/wrench_cmd", "/wrench_estimate"):
         assert graph.count(topic) == 301
         assert [d for _, d in graph.raw(topic)] == [d for _, d in local.raw(topic)], topic
+
+
+def test_a_low_pass_on_the_measured_acceleration_flies_the_geometric_law_through_velocity_noise():
+    from fsr_bringup import simulate
+
+    noisy = {"sensors.odometry.velocity_std": 0.002, "sensors.odometry.seed": 0}
+    raw = simulate("ex4_geometric", set=noisy)
+    filtered = simulate("ex4_geometric", set={**noisy, "controller.acceleration_filter_hz": 2.0})
+    assert raw.end_reason == "diverged"  # the 1 kHz velocity difference amplifies 2 mm/s a thousandfold
+    assert filtered.end_reason == "finished"
+    assert np.linalg.norm(filtered.position - filtered.reference_position, axis=1).max() < 5e-3

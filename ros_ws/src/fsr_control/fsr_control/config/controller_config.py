@@ -23,6 +23,8 @@ controller:
   allocation: priority              # beyond the rotor limits: priority (yaw gives way first) | clamp
   air_mode: true                    # fixed rotors, priority: the thrust may rise to make room for roll/pitch
                                     # torque (true) | the thrust is kept and the torque scaled (false)
+  acceleration_filter_hz: 0         # geometric: low-pass cutoff [Hz] on the measured acceleration its rates
+                                    # use (0: none, the report's law); for noisy odom and sharp disturbances
   compensation: none                # none | estimate: cancel the external wrench the controller's own
                                     # observer estimates (needs estimator.enabled; fsr_control.compensation)
 ```
@@ -83,6 +85,7 @@ class ControllerConfig:
     compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none)
     air_mode: bool = True  # fixed rotors, priority allocation: thrust may rise for roll/pitch torque
     authority_margin: float = DEFAULT_AUTHORITY_MARGIN  # trajectory.authority_margin, in (0, 1]
+    acceleration_filter_hz: float = 0.0  # controller.acceleration_filter_hz (0: the measured acceleration raw)
     feasibility: str = DEFAULT_FEASIBILITY  # trajectory.feasibility: stretch | warn | refuse
     plan_adjustments: tuple[LegAdjustment, ...] = ()  # the scenario's infeasible legs (from its initial state)
 
@@ -177,6 +180,7 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
         raise controller.error("allocation", f"'{vehicle.name}' is fully actuated with fixed rotors: only 'clamp' "
                                              "(the priority rules are for thrust-and-torque vehicles)")
     air_mode = controller.boolean("air_mode", True)
+    acceleration_filter_hz = controller.number("acceleration_filter_hz", 0.0, minimum=0.0)
     feedforward = "consistent"
     secondary = SecondaryObjectiveConfig()
     if controller_type == "voliro":
@@ -203,7 +207,8 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     feasibility = trajectory.string("feasibility", DEFAULT_FEASIBILITY, choices=FEASIBILITY_MODES)
     trajectory.reject_unknown()
     config = ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration,
-                              scenario.source, allocation, compensation, air_mode, authority_margin, feasibility)
+                              scenario.source, allocation, compensation, air_mode, authority_margin,
+                              acceleration_filter_hz=acceleration_filter_hz, feasibility=feasibility)
     # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     sim = simulation_config(scenario)
     try:

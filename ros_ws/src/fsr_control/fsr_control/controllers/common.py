@@ -93,14 +93,16 @@ def compensation_of(compensation: Compensation | None) -> laws.Compensation:
 
 def pack_law(vehicle: Vehicle, gains: dict[str, np.ndarray], kind: int, gain_names: tuple[str, str, str, str],
              angular_feedforward: str = "consistent", horizon_steps: int = 0,
-             horizon_dt: float = 0.0) -> laws.LawParams:
+             horizon_dt: float = 0.0, acceleration_cutoff: float = 0.0) -> laws.LawParams:
     """The core's :class:`~fsr_control.core.laws.LawParams` for the law ``kind``: ``gains[name]`` (3, 3) for
     each of ``gain_names`` in the core's slot order (``k_p``, ``k_v``, ``k_r``, ``k_w``; Voliro's ``k_d`` is its
-    ``k_v``) and the reference horizon the law reads (``horizon_steps`` samples ``horizon_dt`` [s] apart)."""
+    ``k_v``), the reference horizon the law reads (``horizon_steps`` samples ``horizon_dt`` [s] apart) and the
+    cutoff [Hz] of the low-pass on the measured acceleration (0: none)."""
     k_p, k_v, k_r, k_w = (np.ascontiguousarray(np.asarray(gains[name], dtype=float).reshape(3, 3))
                           for name in gain_names)
     return laws.LawParams(kind, float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float), k_p, k_v,
-                          k_r, k_w, angular_feedforward == "report", int(horizon_steps), float(horizon_dt))
+                          k_r, k_w, angular_feedforward == "report", int(horizon_steps), float(horizon_dt),
+                          float(acceleration_cutoff))
 
 
 class CompiledLaw:

@@ -16,6 +16,7 @@ to cancel (:class:`Compensation`), and return ``(status, force_body, torque_body
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -36,9 +37,9 @@ from fsr_sim.core.so3 import (
     matrix_rows,
 )
 
-# LawState.memory entries: the geometric law's previous sample (measured acceleration)
-HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY = 0, 1, 2  # velocity: 3 entries
-MEMORY_SIZE = 5
+# LawState.memory entries: the geometric law's previous sample and its filtered measured acceleration
+HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY, FILTERED_ACCELERATION = 0, 1, 2, 5  # vectors: 3 entries
+MEMORY_SIZE = 8
 
 
 # LawParams.kind
@@ -56,6 +57,7 @@ class LawParams(NamedTuple):
     report_feedforward: bool  # Voliro: the report's angular feed-forward
     horizon_steps: int  # reference samples ahead the law reads (0: none)
     horizon_dt: float  # their spacing [s]
+    acceleration_cutoff: float  # [Hz] of the first-order low-pass on the measured acceleration (0: none)
 
 
 class Compensation(NamedTuple):
@@ -89,18 +91,30 @@ def linear_feedback(k_a: Mat3, e_a: Vec3, k_b: Mat3, e_b: Vec3, scale: float, fe
 
 @jit_inline
 def _measured_acceleration(memory, t: float, velocity_world: Vec3, thrust: float, mass: float,  # noqa: ANN001
-                           z_b: Vec3) -> Vec3:
+                           z_b: Vec3, cutoff: float) -> Vec3:
     """Acceleration [m/s^2] from consecutive velocities (includes unmodelled forces); the model's
-    ``g e3 - u_T z_b / m`` at the first step or when time does not advance."""
+    ``g e3 - u_T z_b / m`` at the first step or when time does not advance. With a ``cutoff`` [Hz] > 0, through
+    a first-order low-pass ``a_f <- a_f + (1 - exp(-2 pi f_c dt)) (a - a_f)`` (from the model's value at the
+    first step): a difference of measured velocities amplifies their noise by ``1 / dt``."""
     has_previous, previous_time = memory[HAS_PREVIOUS] != 0.0, memory[PREVIOUS_TIME]
     vx, vy, vz = memory[PREVIOUS_VELOCITY], memory[PREVIOUS_VELOCITY + 1], memory[PREVIOUS_VELOCITY + 2]
     memory[HAS_PREVIOUS], memory[PREVIOUS_TIME] = 1.0, t
     memory[PREVIOUS_VELOCITY], memory[PREVIOUS_VELOCITY + 1], memory[PREVIOUS_VELOCITY + 2] = velocity_world
     if has_previous and t > previous_time:
         dt = t - previous_time
-        return ((velocity_world[0] - vx) / dt, (velocity_world[1] - vy) / dt, (velocity_world[2] - vz) / dt)
+        raw = ((velocity_world[0] - vx) / dt, (velocity_world[1] - vy) / dt, (velocity_world[2] - vz) / dt)
+        if cutoff <= 0.0:
+            return raw
+        gain = 1.0 - math.exp(-2.0 * math.pi * cutoff * dt)
+        f = FILTERED_ACCELERATION
+        memory[f] += gain * (raw[0] - memory[f])
+        memory[f + 1] += gain * (raw[1] - memory[f + 1])
+        memory[f + 2] += gain * (raw[2] - memory[f + 2])
+        return memory[f], memory[f + 1], memory[f + 2]
     scale = thrust / mass
-    return (-scale * z_b[0], -scale * z_b[1], GRAVITY - scale * z_b[2])
+    model = (-scale * z_b[0], -scale * z_b[1], GRAVITY - scale * z_b[2])
+    memory[FILTERED_ACCELERATION], memory[FILTERED_ACCELERATION + 1], memory[FILTERED_ACCELERATION + 2] = model
+    return model
 
 
 @jit_inline
@@ -125,7 +139,7 @@ def geometric_law(params: LawParams, memory, t: float, reference: ReferenceSampl
     # R_d and its rates: differentiate a with the measured acceleration and the model's jerk of this thrust.
     w = angular_velocity
     z_b_dot = mat_vec3(r, (w[1], -w[0], 0.0))  # R S(w) e3
-    acceleration = _measured_acceleration(memory, t, velocity_world, thrust, m, z_b)
+    acceleration = _measured_acceleration(memory, t, velocity_world, thrust, m, z_b, params.acceleration_cutoff)
     acc_d, jerk_d = reference.acceleration, reference.jerk
     e_a = (acceleration[0] - acc_d[0], acceleration[1] - acc_d[1], acceleration[2] - acc_d[2])
     a_dot = linear_feedback(k_p, e_v, k_v, e_a, m, jerk_d)
