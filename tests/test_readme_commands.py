@@ -94,7 +94,13 @@ def as_run(command: str) -> str:
 
 
 def test_my_flight_yaml_example_is_a_valid_scenario(workdir):
-    assert load_scenario(workdir / "my_flight.yaml").name == "my_flight"
+    from fsr_control.config.controller_config import controller_config
+    from fsr_estimation.config.estimator_config import estimator_config
+    from fsr_sim.config.scenario import simulation_config
+
+    scenario = load_scenario(workdir / "my_flight.yaml")
+    assert scenario.name == "my_flight"
+    simulation_config(scenario), controller_config(scenario), estimator_config(scenario)  # every key valid
 
 
 @pytest.mark.graph  # fsr-fly flies node graphs
