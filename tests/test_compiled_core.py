@@ -13,8 +13,12 @@ import numpy as np
 import pytest
 
 FLY = str(Path(sys.executable).parent / "fsr-fly")
+REALISM = {"duration": 2.0, "plant.rotor_time_constant": 0.02, "sensors.odometry.position_std": 0.001,
+           "sensors.odometry.position_bias_walk": 0.001, "sensors.odometry.delay_steps": 2,
+           "sensors.odometry.rate_hz": 500, "controller.acceleration_filter_hz": 20.0}
 FLIGHTS = (("ex3_estimation", {}), ("ex4_geometric", {"actuation": "rotors"}), ("ex5_voliro", {}),
-           ("octo_ground_effect", {}))
+           ("octo_ground_effect", {}), ("wind_rejection_turbulent", REALISM),  # gusts, rotor lag, sensor stage
+           ("ex5_voliro", {"duration": 2.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120}))
 FINAL_STATES = """
 import json, sys
 import numpy as np
@@ -34,7 +38,8 @@ def final_states(disable_jit: bool) -> np.ndarray:
 @pytest.mark.slow
 def test_compiled_and_cpython_flights_are_bit_identical():
     """The same source, compiled (fastmath off) and under CPython (NUMBA_DISABLE_JIT=1): identical final states
-    of whole flights (ex3, ex4 with rotors, ex5, the octocopter through its ground effect)."""
+    of whole flights (ex3, ex4 with rotors, ex5, the octocopter through its ground effect; turbulence, actuator
+    dynamics and the sensor stage)."""
     compiled, python = final_states(False), final_states(True)
     assert np.array_equal(compiled, python), np.abs(compiled - python).max()
 

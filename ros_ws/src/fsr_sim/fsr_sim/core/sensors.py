@@ -2,9 +2,10 @@
 measurement of the state, in the simulator node and the in-process loop alike (:func:`fsr_sim.core.lockstep.
 publish` applies it to the published row).
 
-Today's model: white Gaussian noise per published state, per channel, with standard deviations
-(:class:`SensorParams`): position world NED [m]; attitude as a body rotation vector ``n`` [rad]
-(``R_meas = R Exp(n)``); body linear velocity [m/s]; body angular velocity [rad/s]. With every standard deviation
+The model (:func:`measure`, :class:`SensorParams`): white Gaussian noise per published state, per channel, plus a
+bias per channel that walks randomly, on position world NED [m], attitude as a body rotation vector ``n`` [rad]
+(``R_meas = R Exp(n)``), body linear velocity [m/s] and body angular velocity [rad/s]; then a delay (in
+published states) and a lower rate (a new measurement every ``every`` states, held between). With everything
 zero (the default) the stage is off and ``odom`` is the true state, bit for bit. ``wrench_truth`` stays true.
 
 The numbers come from a counter-based generator: the standard normal of (seed, step, channel) is a 32-bit integer
