@@ -280,14 +280,13 @@ def plan_leg(
     label: str,
     limits: ReferenceLimits | None,
     mode: str,
-    turns: bool,
 ) -> tuple[object, LegAdjustment | None]:
     """A leg the vehicle can fly, by ``mode`` (:data:`FEASIBILITY_MODES`), and what was done if it was not.
 
     ``build(position_duration, angle_duration)`` makes the leg and a one-row table of it; ``duration`` [s] is
-    the written one; ``turns``: the leg moves its angle (only then can shaping the angle help). A feasible
-    leg (or no ``limits``) is built with ``duration`` exactly, as without a check. Otherwise ``stretch``
-    builds it with the shortest durations (module docstring), ``warn`` as written, ``refuse`` raises.
+    the written one. A feasible leg (or no ``limits``) is built with ``duration`` exactly, as without a check.
+    Otherwise ``stretch`` builds it with the shortest durations (module docstring; the angle shaped alone only if
+    the leg moves it), ``warn`` as written, ``refuse`` raises.
 
     Raises
     ------
@@ -301,7 +300,7 @@ def plan_leg(
     shortfalls = leg_demand(table, 0, limits).shortfalls(limits)
     if not shortfalls:
         return segment, None
-
+    turns = table.goal[0, core.CHANNELS - 1] != 0.0  # the leg moves its angle: only then can shaping it help
     position, angle, action = _shortest(build, duration, limits, turns)
     without_margin = False
     if position is None and limits.allowed.margin < 1.0:

@@ -242,18 +242,10 @@ class Trajectory:
             segment = self._leg(leg[0], durations, *leg[1:])
             return segment, _pack([segment])
 
-        segment, adjustment = plan_leg(build, duration, label, self.limits, self.feasibility,
-                                       turns=self._turns(*leg[2:6]))
+        segment, adjustment = plan_leg(build, duration, label, self.limits, self.feasibility)
         if adjustment is not None:
             self.adjustments.append(adjustment)
         return segment
-
-    def _turns(self, rotation: np.ndarray, yaw: float | None, goal_position: np.ndarray,
-               goal_rotation: np.ndarray) -> bool:
-        """Whether a leg from ``rotation`` (heading ``yaw``) to ``goal_rotation`` moves its angle."""
-        if yaw is not None:
-            return wrap_angle(math.atan2(goal_rotation[1][0], goal_rotation[0][0]) - yaw) != 0.0
-        return rotation_log(np.asarray(rotation).T @ goal_rotation)[1] != 0.0
 
     def table(self) -> core.TrajectoryTable:
         """The segments as the core's :class:`~fsr_control.core.reference.TrajectoryTable` (packed once per plan)."""
