@@ -30,7 +30,7 @@ from fsr_sim.config.validation import (
     resolve_config_path,
     yaml_error_text,
 )
-from fsr_sim.config.vehicle_file import load_vehicle_file
+from fsr_sim.config.vehicle_file import dynamics_and_drag, load_vehicle_file
 from fsr_sim.model.disturbances import DisturbanceProfile
 from fsr_sim.model.environment import Environment
 from fsr_sim.model.plant import Plant
@@ -244,15 +244,9 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     plant = root.section("plant")
     mass = plant.number("mass", vehicle.mass, strictly_positive=True)
     inertia = checked_spd(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
-    plant_overrides = {  # actuator dynamics and drag of the true plant (the controller knows none of them)
-        "rotor_time_constant": plant.number("rotor_time_constant", vehicle.rotor_time_constant, minimum=0.0),
-        "tilt_time_constant": plant.number("tilt_time_constant", vehicle.tilt_time_constant, minimum=0.0),
-        "tilt_rate_max": float(np.deg2rad(plant.number("tilt_rate_max_deg_s", strictly_positive=True)))
-        if plant.has("tilt_rate_max_deg_s") else vehicle.tilt_rate_max,
-        "drag_coefficients": plant.vector("drag_coefficients", 3, vehicle.drag_coefficients.tolist()),
-    }
-    if np.any(plant_overrides["drag_coefficients"] < 0.0):
-        raise plant.error("drag_coefficients", f"must be >= 0, got {plant_overrides['drag_coefficients'].tolist()}")
+    # actuator dynamics and drag of the true plant (the controller knows none of them)
+    plant_overrides = dynamics_and_drag(plant, {name: getattr(vehicle, name) for name in (
+        "rotor_time_constant", "tilt_time_constant", "tilt_rate_max", "drag_coefficients")})
     plant.reject_unknown()
 
     environment = environment_from_section(root.section("environment"))

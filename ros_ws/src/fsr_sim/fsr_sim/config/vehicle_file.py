@@ -50,13 +50,10 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
     if speed_max <= speed_min:
         raise root.error("rotor_speed_max", f"must be > rotor_speed_min ({speed_min}), got {speed_max}")
     tilt_max = np.deg2rad(root.number("tilt_angle_max_deg", 180.0, strictly_positive=True, maximum=180.0))
-    drag = root.vector("drag_coefficients", 3, [0.0, 0.0, 0.0])
     contact_height = root.number("contact_height", 0.1, minimum=0.0)
     top_height = root.number("top_height", contact_height, minimum=0.0)  # default: symmetric about the CoM
-    rotor_time_constant = root.number("rotor_time_constant", 0.0, minimum=0.0)
-    tilt_time_constant = root.number("tilt_time_constant", 0.0, minimum=0.0)
-    tilt_rate_max = np.deg2rad(root.number("tilt_rate_max_deg_s", strictly_positive=True)) \
-        if root.has("tilt_rate_max_deg_s") else np.inf  # absent: no rate limit
+    dynamics = dynamics_and_drag(root, {"rotor_time_constant": 0.0, "tilt_time_constant": 0.0,
+                                        "tilt_rate_max": np.inf, "drag_coefficients": np.zeros(3)})
 
     if root.has("layout") == root.has("rotors"):
         raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
@@ -84,15 +81,29 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
             top_height=top_height,
             description=description,
             thrust_axes=thrust_axes,
-            rotor_time_constant=rotor_time_constant,
-            tilt_time_constant=tilt_time_constant,
-            tilt_rate_max=float(tilt_rate_max),
-            drag_coefficients=drag,
+            **dynamics,
         )
     except InvalidValueError as error:  # a check of the model itself (e.g. a tilt axis along the thrust axis)
         key = {"tilt_axes": "rotors.tilt_axis", "positions": "rotors.position",
                "thrust_axes": "rotors.axis"}.get(error.name, error.name)
         raise ConfigError(key, error.reason, source) from None
+
+
+def dynamics_and_drag(section: Section, defaults: dict[str, Any]) -> dict[str, Any]:
+    """The actuator dynamics and the drag of a vehicle file, or of a scenario's ``plant`` section over its
+    vehicle's: ``rotor_time_constant`` [s] >= 0, ``tilt_time_constant`` [s] >= 0, ``tilt_rate_max_deg_s`` > 0
+    (absent: ``defaults``'), ``drag_coefficients`` (3 numbers >= 0) - as :class:`Vehicle` fields (``defaults``
+    too: ``tilt_rate_max`` in rad/s)."""
+    drag = section.vector("drag_coefficients", 3, np.asarray(defaults["drag_coefficients"]).tolist())
+    if np.any(drag < 0.0):
+        raise section.error("drag_coefficients", f"must be >= 0, got {drag.tolist()}")
+    return {
+        "rotor_time_constant": section.number("rotor_time_constant", defaults["rotor_time_constant"], minimum=0.0),
+        "tilt_time_constant": section.number("tilt_time_constant", defaults["tilt_time_constant"], minimum=0.0),
+        "tilt_rate_max": float(np.deg2rad(section.number("tilt_rate_max_deg_s", strictly_positive=True)))
+        if section.has("tilt_rate_max_deg_s") else defaults["tilt_rate_max"],  # absent: no rate limit (inf)
+        "drag_coefficients": drag,
+    }
 
 
 Rotors = tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]  # positions, spins, thrust, tilt axes

@@ -31,7 +31,7 @@ from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.rigid_body import rigid_body_rates, rk4_combine, stage_state, state_rotation
 from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, scaled_rotor_wrench, tilted_columns
 from fsr_sim.core.sensors import SensorParams
-from fsr_sim.core.so3 import mat_vec3
+from fsr_sim.core.so3 import Mat3, mat_vec3
 from fsr_sim.core.surfaces import Surfaces, ceiling_rest_z, ground_rest_z, has_thrust_effects, thrust_ratios
 from fsr_sim.core.turbulence import TurbulenceParams, advance_gusts, drag_force
 
@@ -68,9 +68,9 @@ class PlantParams(NamedTuple):
     disturbance_knots: np.ndarray  # (k, KNOT_WIDTH)
     crash_speed: float  # [m/s]
     sensors: SensorParams  # the stage between the true state and odom (fsr_sim.core.sensors)
-    rotor_lag: bool  # speeds follow their command through a first-order lag (advance_actuators)
+    rotor_lag: bool  # rotor actuation: speeds follow their command through a first-order lag (advance_actuators)
     speed_decay: float  # exp(-dt / tau_w) of the rotor time constant tau_w
-    tilt_lag: bool  # tilts follow their command through a lag and/or a rate limit
+    tilt_lag: bool  # rotor actuation, on servos: tilts follow their command through a lag and/or a rate limit
     tilt_decay: float  # exp(-dt / tau_alpha) (0: no lag)
     tilt_step_max: float  # [rad] per RK4 step: tilt_rate_max dt (inf: no rate limit)
     turbulence: TurbulenceParams  # Dryden gusts and the drag they push with (fsr_sim.core.turbulence)
@@ -162,7 +162,7 @@ def advance_actuators(params: PlantParams, state: PlantState) -> None:
             speed = target + (state.speeds[i] - target) * decay
             state.speeds[i] = speed
             state.speed_sq[i] = abs(speed) * speed
-    if params.tilting and params.tilt_lag and state.tilt_command[0] == state.tilt_command[0]:
+    if params.tilt_lag and state.tilt_command[0] == state.tilt_command[0]:
         step_max = params.tilt_step_max
         for i in range(state.tilts.shape[0]):
             current, target = state.tilts[i], state.tilt_command[i]
@@ -210,13 +210,22 @@ def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple: 
     else:
         fx, fy, fz, tx, ty, tz = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
     fx, fy, fz = mat_vec3(rotation, (fx, fy, fz))
-    if state.gusts.shape[0]:
-        dx, dy, dz = drag_force(params.turbulence, state.gusts, (x[3], x[4], x[5]), rotation)
-        fx, fy, fz = fx + dx, fy + dy, fz + dz
-    if params.disturbances.shape[0]:
-        (ex, ey, ez), (ux, uy, uz) = external_wrench(params.disturbances, params.disturbance_knots, t, rotation)
+    if params.disturbances.shape[0] or state.gusts.shape[0]:
+        (ex, ey, ez), (ux, uy, uz) = external_wrench_at(params, state, t, x, rotation)
         return (fx + ex, fy + ey, fz + ez), (tx + ux, ty + uy, tz + uz)
     return (fx, fy, fz), (tx, ty, tz)
+
+
+@jit_inline
+def external_wrench_at(params: PlantParams, state: PlantState, t: float, x, rotation: Mat3) -> tuple:  # noqa: ANN001
+    """The external wrench at time ``t`` in state ``x`` (attitude rows ``rotation``): the disturbances' plus the
+    turbulence's drag, (force world NED [N], torque body FRD [N m]); what the plant feels and what
+    ``wrench_truth`` publishes."""
+    force, torque = external_wrench(params.disturbances, params.disturbance_knots, t, rotation)
+    if state.gusts.shape[0]:
+        dx, dy, dz = drag_force(params.turbulence, state.gusts, (x[3], x[4], x[5]), rotation)
+        force = (force[0] + dx, force[1] + dy, force[2] + dz)
+    return force, torque
 
 
 @jit_inline
@@ -281,7 +290,7 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
     for sub in range(params.substeps):
         rk4_step(params, state, time + sub * params.dt)
         apply_contact(params, state)
-        if not params.wrench_actuation and (params.rotor_lag or params.tilt_lag):
+        if params.rotor_lag or params.tilt_lag:
             advance_actuators(params, state)
         if state.gusts.shape[0]:
             advance_gusts(params.turbulence, state.gust_states, state.gusts,
@@ -316,14 +325,7 @@ def divergence(params: PlantParams, state: PlantState) -> int:
 def plant_external_wrench(params: PlantParams, state: PlantState) -> tuple:
     """The true external wrench now: (force world NED [N], torque body FRD [N m]): the disturbances' and the
     turbulence's drag."""
-    x = state.x
-    rotation = state_rotation(x)
-    force, torque = external_wrench(params.disturbances, params.disturbance_knots, plant_time(params, state),
-                                    rotation)
-    if state.gusts.shape[0]:
-        dx, dy, dz = drag_force(params.turbulence, state.gusts, (x[3], x[4], x[5]), rotation)
-        force = (force[0] + dx, force[1] + dy, force[2] + dz)
-    return force, torque
+    return external_wrench_at(params, state, plant_time(params, state), state.x, state_rotation(state.x))
 
 
 @jit

@@ -84,9 +84,10 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
         sensors=(odometry_noise or OdometryNoise()).pack(float(dt) * int(substeps)),
-        rotor_lag=vehicle.rotor_time_constant > 0.0,
+        rotor_lag=actuation == "rotors" and vehicle.rotor_time_constant > 0.0,
         speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
-        tilt_lag=vehicle.has_servos and (vehicle.tilt_time_constant > 0.0 or math.isfinite(vehicle.tilt_rate_max)),
+        tilt_lag=actuation == "rotors" and vehicle.has_servos and (vehicle.tilt_time_constant > 0.0
+                                                                   or math.isfinite(vehicle.tilt_rate_max)),
         tilt_decay=math.exp(-dt / vehicle.tilt_time_constant) if vehicle.tilt_time_constant > 0.0 else 0.0,
         tilt_step_max=float(vehicle.tilt_rate_max * dt),
         turbulence=pack_turbulence(turbulence, vehicle.drag_coefficients, dt),
@@ -95,7 +96,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
 
 def has_actuator_dynamics(params: core.PlantParams) -> bool:
     """Whether the rotors' speeds or tilts lag their commands (then ``rotor_state`` is published)."""
-    return not params.wrench_actuation and (params.rotor_lag or params.tilt_lag)
+    return params.rotor_lag or params.tilt_lag
 
 
 def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.PlantState:
