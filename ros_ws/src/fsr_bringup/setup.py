@@ -13,13 +13,15 @@ setup(
     ],
     install_requires=[
         "setuptools", "numpy", "matplotlib", "PyYAML", "mcap", "mcap-ros2-support", "ros-rosidl-parser",
+        "pandas", "dask[distributed]",
         "fsr_sim", "fsr_control", "fsr_estimation",
     ],
     extras_require={"test": ["pytest"]},  # fsr_bringup.testing (the graph-test pytest plugin)
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",
-    description="Runner (fsr-fly), MCAP recorder (fsr-record), analysis (fsr-analyze), in-process closed loop",
+    description="Runner (fsr-fly), MCAP recorder (fsr-record), analysis (fsr-analyze), in-process closed loop, "
+                "sweeps (fsr-sweep)",
     license="Apache-2.0",
     tests_require=["pytest"],
     entry_points={
@@ -28,6 +30,7 @@ setup(
             "fsr-record = fsr_bringup.recording.recorder_node:main",
             "fsr-analyze = fsr_bringup.cli.analyze_cli:main",
             "fsr-compile = fsr_bringup.cli.compile_cli:main",
+            "fsr-sweep = fsr_bringup.cli.sweep_cli:main",
         ],
     },
 )

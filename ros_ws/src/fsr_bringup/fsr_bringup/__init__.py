@@ -1,6 +1,7 @@
 """fsr_bringup: fsr-fly (node graph or in-process), fsr-record, fsr-analyze, and the Python API.
 
-``from fsr_bringup import simulate`` (:func:`fsr_bringup.api.simulate`).
+``from fsr_bringup import simulate`` (:func:`fsr_bringup.api.simulate`), ``from fsr_bringup import sweep``
+(:func:`fsr_bringup.sweeps.run.sweep`: many flights as one table).
 """
 
 from typing import Any
@@ -12,7 +13,11 @@ def __getattr__(name: str) -> Any:
         from fsr_bringup import api
 
         return getattr(api, "FlightRun" if name == "FlightRun" else "simulate")
+    if name == "sweep":
+        from fsr_bringup.sweeps.run import sweep
+
+        return sweep
     raise AttributeError(f"module 'fsr_bringup' has no attribute '{name}'")
 
 
-__all__ = ["FlightRun", "simulate"]
+__all__ = ["FlightRun", "simulate", "sweep"]

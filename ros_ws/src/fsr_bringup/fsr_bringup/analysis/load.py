@@ -143,6 +143,8 @@ class RecordedFlight:
 def zero_order_hold(stamp_ns: np.ndarray, values: np.ndarray, target_ns: np.ndarray) -> np.ndarray:
     """Zero-order hold of ``values`` (sorted by ``stamp_ns``) at ``target_ns``: the last value at or
     before each target; NaN before the first sample. Exact stamp matches (lockstep) pick that sample."""
+    if stamp_ns is target_ns:  # the same stamps (a flight in memory): every sample is its own partner
+        return np.array(values, dtype=float)
     index = np.searchsorted(stamp_ns, target_ns, side="right") - 1
     out = values[np.clip(index, 0, None)].astype(float)
     out[index < 0] = np.nan

@@ -67,8 +67,9 @@ class Console:
     """Prefixed node output (hidden by ``quiet``) and the flight's progress: a line rewritten in place on a
     terminal, else (a CI log, a pipe) a plain line every :data:`PLAIN_PROGRESS_EVERY_S` of wall time."""
 
-    def __init__(self, quiet: bool = False) -> None:
+    def __init__(self, quiet: bool = False, prog: str = "fsr-fly") -> None:
         self.quiet = quiet
+        self.prog = prog
         self.tty = sys.stdout.isatty()
         self.lock = threading.Lock()
         self.progress_line = ""
@@ -91,7 +92,7 @@ class Console:
             if self.tty and self.progress_line:
                 sys.stdout.write("\r\033[K")
                 sys.stdout.flush()
-            sys.stderr.write(f"fsr-fly: {text}\n")
+            sys.stderr.write(f"{self.prog}: {text}\n")
             sys.stderr.flush()
             if self.tty and self.progress_line:
                 sys.stdout.write(self.progress_line)
@@ -103,7 +104,7 @@ class Console:
                 now = time.monotonic()
                 if now - self.last_plain >= PLAIN_PROGRESS_EVERY_S:
                     self.last_plain = now
-                    sys.stdout.write(f"fsr-fly: {text}\n")
+                    sys.stdout.write(f"{self.prog}: {text}\n")
                     sys.stdout.flush()
                 return
             self.progress_line = text

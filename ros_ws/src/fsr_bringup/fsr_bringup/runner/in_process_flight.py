@@ -99,6 +99,11 @@ class FlightRun:
     plan_adjustments: list[str] = field(default_factory=list)  # the legs and goals beyond the authority (texts)
     actual_rotor_speeds: np.ndarray | None = None
     actual_tilt_angles: np.ndarray | None = None
+    reference_angular_velocity_world: np.ndarray | None = None  # (K+1, 3) ``R_d omega_d`` [rad/s], world
+    wrench_shortfall: np.ndarray | None = None  # (K+1, 6) demanded minus commanded body wrench [N, N m]
+    simulation: Any = None  # the flight's validated plant side (fsr_sim.config.scenario.SimulationConfig)
+    estimator: Any = None  # its estimator config (fsr_estimation.config.estimator_config.EstimatorConfig)
+    actuator_dynamics: bool = False  # the rotors lag their commands (the graph then publishes rotor_state)
 
     @property
     def sim_time(self) -> float:
@@ -159,6 +164,97 @@ class _Stopped(KeyboardInterrupt):
         self.signal_name = signal_name
 
 
+@dataclass
+class FlightSetup:
+    """A flight ready to fly: its validated configs, the packed objects the compiled loop steps, and the arrays
+    it writes (row ``k`` = step ``k``; :func:`fsr_bringup.core.flight_loop.fly_steps`)."""
+
+    scenario: Scenario
+    simulation: Any  # fsr_sim.config.scenario.SimulationConfig
+    estimation: Any  # fsr_estimation.config.estimator_config.EstimatorConfig
+    plant: Any  # fsr_sim.model.plant.Plant
+    controller: FlightController
+    observer: Any  # fsr_estimation.core.observer.MomentumObserver
+    steps: int
+    period_ns: int
+    arrays: FlightArrays
+
+    @property
+    def rotors(self) -> bool:
+        return self.simulation.actuation == "rotors"
+
+    def fly(self, first: int, last: int) -> tuple[int, int, int]:
+        """Steps ``first..last`` in the compiled loop: ``(outcome, k, detail)`` of ``fly_steps``."""
+        a = self.arrays
+        return flight_loop.fly_steps(
+            self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
+            self.estimation.enabled, self.observer.params, self.observer.state, first, last, self.steps,
+            self.period_ns, a.states, a.published, a.actuators, a.control, a.estimates)
+
+    def flown(self, outcome: int, k: int) -> int:
+        """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""
+        return k + 1 if outcome != flight_loop.CONTROLLER_FAILED else k
+
+    def end(self, outcome: int, k: int, detail: int) -> tuple[str, str] | None:
+        """``(end_reason, reason)`` of a divergence or a failed law (``fly``'s outcome), None otherwise."""
+        if outcome == flight_loop.DIVERGED:
+            return DIVERGED, divergence_reason(detail, self.plant.params, self.plant.core_state)
+        if outcome == flight_loop.CONTROLLER_FAILED:
+            return DIVERGED, f"no command at t = {k * self.period_ns * 1e-9:.4f} s: {ATTITUDE_ERRORS[detail]}"
+        return None
+
+    def run(self, count: int, end_reason: str, reason: str, wall: float, interrupted: bool = False,
+            startup: float | None = None, copy: bool = True) -> FlightRun:
+        """The :class:`FlightRun` of rows ``0..count-1`` (``copy=False``: views of the arrays where it can)."""
+        a = self.arrays
+        return flight_run(self, a.states[:count], a.published[:count], a.control[:count],
+                          a.estimates[:count] if self.estimation.enabled else None, end_reason, reason, wall,
+                          interrupted, startup, a.actuators[:count], copy)
+
+
+@dataclass
+class FlightArrays:
+    """The rows the compiled loop writes for ``size`` states of a vehicle with ``rotors`` rotors (reused by the
+    flights of a sweep: ``fits``)."""
+
+    states: np.ndarray  # (size, 13)
+    published: np.ndarray  # (size, PUBLISHED_SIZE): odom and wrench_truth
+    actuators: np.ndarray  # (size, 2 rotors): the rotors' actual speeds and tilts (rotor_state)
+    control: np.ndarray  # (size, controller output): the controller's output row
+    estimates: np.ndarray  # (size, 7)
+
+    @classmethod
+    def make(cls, size: int, rotors: int) -> FlightArrays:
+        return cls(np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE)), np.zeros((size, 2 * rotors)),
+                   np.zeros((size, control_layout.output_size(rotors))), np.zeros((size, 7)))
+
+    def fits(self, size: int, rotors: int) -> bool:
+        return len(self.states) >= size and self.actuators.shape[1] == 2 * rotors
+
+
+def prepare_flight(scenario: Any, max_steps: int | None = None, arrays: FlightArrays | None = None) -> FlightSetup:
+    """Validate ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) into the packed
+    objects of one flight of its duration (or ``max_steps``), writing into ``arrays`` if they fit."""
+    from fsr_estimation.config.estimator_config import estimator_config
+    from fsr_estimation.core.observer import MomentumObserver
+
+    scenario = getattr(scenario, "scenario", scenario)
+    sim = simulation_config(scenario)
+    config = controller_config(scenario)
+    estimation = estimator_config(scenario)
+    plant = plant_from_config(sim)
+    controller = FlightController(config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation)
+    observer = MomentumObserver(estimation.mass, estimation.inertia, estimation.c0, estimation.r,
+                                sim.control_period) if estimation.enabled else MomentumObserver(1.0, (1, 1, 1),
+                                                                                               1.0, 1, 1.0)
+    steps = sim.step_count if max_steps is None else min(sim.step_count, int(max_steps))
+    n = sim.vehicle.rotor_count
+    if arrays is None or not arrays.fits(steps + 1, n):
+        arrays = FlightArrays.make(steps + 1, n)
+    return FlightSetup(scenario, sim, estimation, plant, controller, observer, steps,
+                       int(round(sim.control_period * 1e9)), arrays)
+
+
 def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None,
                    stop: Callable[[], str | None] | None = None,
                    progress: Callable[[float, float], None] | None = None,
@@ -172,33 +268,15 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     simulated time [s] of the last state flown and the wall time [s] the loop has taken. ``record_topics``:
     record only these (:func:`fsr_sim.contract.recording_selection`; None: all).
     """
-    from fsr_estimation.config.estimator_config import estimator_config
-    from fsr_estimation.core.observer import MomentumObserver
-
-    scenario = getattr(scenario, "scenario", scenario)
-    sim = simulation_config(scenario)
-    config = controller_config(scenario)
-    estimation = estimator_config(scenario)
-    plant = plant_from_config(sim)
-    controller = FlightController(config, sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation)
-    observer = MomentumObserver(estimation.mass, estimation.inertia, estimation.c0, estimation.r,
-                                sim.control_period) if estimation.enabled else MomentumObserver(1.0, (1, 1, 1),
-                                                                                               1.0, 1, 1.0)
-    rotors = sim.actuation == "rotors"
+    setup = prepare_flight(scenario, max_steps)
+    sim, steps, period_ns, a = setup.simulation, setup.steps, setup.period_ns, setup.arrays
     n = sim.vehicle.rotor_count
-    steps = sim.step_count if max_steps is None else min(sim.step_count, int(max_steps))
-    size = steps + 1
-    period_ns = int(round(sim.control_period * 1e9))
-    states, published = np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE))
-    actuators = np.zeros((size, 2 * n))  # the rotors' actual speeds and tilts (rotor_state)
-    control = np.zeros((size, control_layout.output_size(n)))
-    estimates = np.zeros((size, 7))
     recorder = None
     if recording is not None:
         from fsr_bringup.recording.flight_recording import InProcessRecorder
 
-        recorder = InProcessRecorder(Path(recording), scenario.dump(), rotors, n, sim.vehicle.has_servos,
-                                     record_topics, rotors and has_actuator_dynamics(plant.params))
+        recorder = InProcessRecorder(Path(recording), setup.scenario.dump(), setup.rotors, n, sim.vehicle.has_servos,
+                                     record_topics, setup.rotors and has_actuator_dynamics(setup.plant.params))
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
@@ -213,24 +291,17 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
             signal_name = stop() if stop is not None else None
             if signal_name:
                 raise _Stopped(signal_name)
-            last = min(count + CHUNK_STEPS - 1, steps)
-            outcome, k, detail = flight_loop.fly_steps(
-                plant.params, plant.core_state, controller.params, controller.state, estimation.enabled,
-                observer.params, observer.state, count, last, steps, period_ns, states, published, actuators,
-                control, estimates)
-            flown = k + 1 if outcome != flight_loop.CONTROLLER_FAILED else k
+            outcome, k, detail = setup.fly(count, min(count + CHUNK_STEPS - 1, steps))
+            flown = setup.flown(outcome, k)
             if recorder is not None and flown > count:
-                recorder.write_steps(np.arange(count, flown, dtype=np.int64) * period_ns, published[count:flown],
-                                     control[count:flown], estimates[count:flown] if estimation.enabled else None,
-                                     actuators[count:flown])
+                recorder.write_steps(np.arange(count, flown, dtype=np.int64) * period_ns, a.published[count:flown],
+                                     a.control[count:flown],
+                                     a.estimates[count:flown] if setup.estimation.enabled else None,
+                                     a.actuators[count:flown])
             count = flown
             if progress is not None and count:
                 progress((count - 1) * period_ns * 1e-9, time.perf_counter() - start)
-            if outcome == flight_loop.DIVERGED:
-                end_reason, reason = DIVERGED, divergence_reason(detail, plant.params, plant.core_state)
-            elif outcome == flight_loop.CONTROLLER_FAILED:
-                end_reason, reason = DIVERGED, f"no command at t = {k * period_ns * 1e-9:.4f} s: " \
-                                               f"{ATTITUDE_ERRORS[detail]}"
+            end_reason, reason = setup.end(outcome, k, detail) or (end_reason, reason)
     except KeyboardInterrupt as stopped:  # Ctrl-C (fsr-fly also turns SIGTERM into one)
         end_reason, reason, interrupted = STOPPED, f"received {getattr(stopped, 'signal_name', 'SIGINT')}", True
     finally:
@@ -239,47 +310,52 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
                 recorder.status(max(count - 1, 0) * period_ns, end_reason, reason, max(count - 1, 0))
             finally:
                 recorder.close()
-    wall = time.perf_counter() - start
-    return flight_run(scenario, states[:count], published[:count], control[:count],
-                      estimates[:count] if estimation.enabled else None, controller, rotors,
-                      rotors and sim.vehicle.has_servos, period_ns, end_reason, reason, wall, interrupted, startup,
-                      actuators[:count])
+    return setup.run(count, end_reason, reason, time.perf_counter() - start, interrupted, startup)
 
 
-def flight_run(scenario: Scenario, states: np.ndarray, published: np.ndarray, control: np.ndarray,
-               estimates: np.ndarray | None, controller: FlightController, rotors: bool, tilting: bool,
-               period_ns: int, end_reason: str, reason: str, wall: float, interrupted: bool,
-               startup: float | None, actuators: np.ndarray) -> FlightRun:
-    """The :class:`FlightRun` of the flight loop's arrays (rows 0..K)."""
+def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, control: np.ndarray,
+               estimates: np.ndarray | None, end_reason: str, reason: str, wall: float, interrupted: bool,
+               startup: float | None, actuators: np.ndarray, copy: bool = True) -> FlightRun:
+    """The :class:`FlightRun` of the flight loop's arrays (rows 0..K); ``copy=False``: views of them where it
+    can (the state is always a copy), valid until the arrays are written again."""
     count = len(states)
     n = (control.shape[1] - control_layout.ROTOR_SPEEDS) // 2
+    rotors = setup.rotors
+    tilting = rotors and setup.simulation.vehicle.has_servos
+    controller = setup.controller
     state = states.copy()
     state[state[:, 9] < 0.0, 6:10] *= -1.0  # odom's sign (w >= 0); the true state, not odom's measurement
 
     def columns(at: int, width: int = 3) -> np.ndarray:
-        return control[:, at:at + width].copy()
+        return control[:, at:at + width].copy() if copy else control[:, at:at + width]
+
+    def own(values: np.ndarray) -> np.ndarray:
+        return values.copy() if copy else values
 
     failures = {DIVERGED: [f"flight diverged: {reason}"], STOPPED: [f"flight interrupted ({reason})"]}
     c = control_layout
     return FlightRun(
-        time=np.arange(count, dtype=np.int64) * period_ns * 1e-9, state=state,
+        time=np.arange(count, dtype=np.int64) * setup.period_ns * 1e-9, state=state,
         reference_position=columns(c.REFERENCE_POSITION), reference_velocity=columns(c.REFERENCE_VELOCITY),
         reference_acceleration=columns(c.REFERENCE_ACCELERATION),
         reference_rotation=columns(c.REFERENCE_ROTATION, 9).reshape(count, 3, 3), force_cmd=columns(c.FORCE),
         torque_cmd=columns(c.TORQUE), rotor_speeds=columns(c.ROTOR_SPEEDS, n) if rotors else None,
         tilt_angles=columns(c.ROTOR_SPEEDS + n, n) if tilting else None,
-        actual_rotor_speeds=actuators[:, :n].copy() if rotors else None,
-        actual_tilt_angles=actuators[:, n:].copy() if tilting else None,
-        external_force_body=published[:, TRUTH_FORCE:TRUTH_FORCE + 3].copy(),
-        external_torque_body=published[:, TRUTH_TORQUE:TRUTH_TORQUE + 3].copy(),
-        estimate_force_body=None if estimates is None else estimates[:, 0:3].copy(),
-        estimate_torque_body=None if estimates is None else estimates[:, 3:6].copy(),
-        mass_estimate=None if estimates is None else estimates[:, 6].copy(),
+        actual_rotor_speeds=own(actuators[:, :n]) if rotors else None,
+        actual_tilt_angles=own(actuators[:, n:]) if tilting else None,
+        external_force_body=own(published[:, TRUTH_FORCE:TRUTH_FORCE + 3]),
+        external_torque_body=own(published[:, TRUTH_TORQUE:TRUTH_TORQUE + 3]),
+        estimate_force_body=None if estimates is None else own(estimates[:, 0:3]),
+        estimate_torque_body=None if estimates is None else own(estimates[:, 3:6]),
+        mass_estimate=None if estimates is None else own(estimates[:, 6]),
         saturation=controller.saturation.as_dict(), tilt_saturation=controller.tilt_saturation.as_dict(),
         end_reason=end_reason, reason=reason, wall_time=wall,
         rotation_commanded=columns(c.COMMANDED_ROTATION, 9).reshape(count, 3, 3),
-        force_desired=columns(c.DESIRED_FORCE), torque_desired=columns(c.DESIRED_TORQUE), scenario=scenario,
+        force_desired=columns(c.DESIRED_FORCE), torque_desired=columns(c.DESIRED_TORQUE), scenario=setup.scenario,
         failures=failures.get(end_reason, []), interrupted=interrupted,
         compensation=controller.compensation_summary(), startup_time=startup,
         plan_adjustments=[item.text() for item in controller.plan_adjustments],
+        reference_angular_velocity_world=columns(c.REFERENCE_ANGULAR_VELOCITY_WORLD),
+        wrench_shortfall=columns(c.SHORTFALL, 6), simulation=setup.simulation, estimator=setup.estimation,
+        actuator_dynamics=rotors and has_actuator_dynamics(setup.plant.params),
     )

@@ -30,9 +30,26 @@ from fsr_sim.model.vehicle import Vehicle
 
 
 def load_vehicle_file(name_or_path: str | Path) -> Vehicle:
-    """A built-in vehicle name or a YAML path -> :class:`Vehicle` (ConfigError naming file and key)."""
+    """A built-in vehicle name or a YAML path -> :class:`Vehicle` (ConfigError naming file and key).
+
+    A file whose text was validated before in this process is not validated again (a run's set-up reads the
+    vehicle several times, a sweep once per flight; :class:`Vehicle` is frozen, so the one object is shared)."""
     path = resolve_config_path(str(name_or_path), "vehicles")
-    return vehicle_from_mapping(load_yaml_file(path), source=str(path), default_name=path.stem)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError:
+        text = None  # load_yaml_file names the error
+    key = (str(path), text)
+    vehicle = _VEHICLES.get(key) if text is not None else None
+    if vehicle is None:
+        vehicle = vehicle_from_mapping(load_yaml_file(path), source=str(path), default_name=path.stem)
+        if len(_VEHICLES) >= 64:
+            _VEHICLES.clear()
+        _VEHICLES[key] = vehicle
+    return vehicle
+
+
+_VEHICLES: dict[tuple[str, str | None], Vehicle] = {}
 
 
 def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: str = "vehicle") -> Vehicle:

@@ -15,6 +15,7 @@ YAML file by :func:`load_vehicle` (the file format: :mod:`fsr_sim.config.vehicle
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -164,11 +165,11 @@ class Vehicle:
         """The rotors tilt on servos: ``rotor_cmd`` carries a tilt angle per rotor."""
         return self.tilt_axes is not None
 
-    @property
+    @functools.cached_property
     def fully_actuated(self) -> bool:
         """The rotors can produce any body wrench (the allocation has rank 6): canted fixed rotors or servos. Such
         a vehicle can hold any attitude (the Voliro controller); the others produce thrust along ``-z_b`` and a
-        torque (the geometric controller)."""
+        torque (the geometric controller). Worked out once per object (it is frozen)."""
         from fsr_sim.model.allocation import actuation_matrix  # allocation imports this module
 
         return bool(np.linalg.matrix_rank(actuation_matrix(self), tol=1e-9) == 6)

@@ -1,0 +1,45 @@
+"""A flight flown in this process (:class:`fsr_bringup.runner.in_process_flight.FlightRun`) as the analysis'
+:class:`fsr_bringup.analysis.load.RecordedFlight`, without writing or reading a recording: the metrics of
+:mod:`fsr_bringup.analysis.metrics` then apply to it as they are.
+
+The topics are filled with what the graph would publish at each step ``t_k``, with one difference: ``odom`` is
+the *true* state (what the recording carries with the sensor stage off; with sensor noise, bias, delay or a
+reduced rate, a recording's ``odom`` is the measurement instead).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fsr_bringup.analysis.load import Attitude, Odometry, RecordedFlight, Reference, RotorCommand, Scalar, Wrench
+
+
+def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun (import cycle)
+    """The topics of ``run`` at its states' stamps (module docstring); ``run`` must come from
+    :func:`fsr_bringup.api.simulate` or a sweep (it carries its validated configs)."""
+    if run.simulation is None:
+        raise ValueError("this run carries no validated scenario (fly it with fsr_bringup.simulate)")
+    sim = run.simulation
+    stamp_ns = np.rint(run.time * 1e9).astype(np.int64)
+    t = run.time
+    rotation = run.rotation
+    flight = RecordedFlight(None, "/", sim.name, sim, run.estimator)  # type: ignore[arg-type]
+    flight.odom = Odometry(stamp_ns, t, run.position, run.state[:, 6:10], rotation, run.velocity,
+                           run.angular_velocity)
+    # the metrics read the attitudes as rotation matrices: the quaternions are not made (None)
+    flight.reference = Reference(stamp_ns, t, run.reference_position, None, run.reference_rotation,  # type: ignore[arg-type]
+                                 run.reference_velocity, run.reference_acceleration,
+                                 run.reference_angular_velocity_world)
+    flight.attitude_cmd = Attitude(stamp_ns, t, None, run.rotation_commanded)  # type: ignore[arg-type]
+    flight.wrench_truth = Wrench(stamp_ns, t, run.external_force_body, run.external_torque_body)
+    flight.wrench_cmd = Wrench(stamp_ns, t, run.force_cmd, run.torque_cmd)
+    flight.wrench_desired = Wrench(stamp_ns, t, run.force_desired, run.torque_desired)
+    flight.wrench_shortfall = Wrench(stamp_ns, t, run.wrench_shortfall[:, :3], run.wrench_shortfall[:, 3:])
+    if run.rotor_speeds is not None:
+        flight.rotor_cmd = RotorCommand(stamp_ns, t, run.rotor_speeds, run.tilt_angles)
+        if run.actuator_dynamics:
+            flight.rotor_state = RotorCommand(stamp_ns, t, run.actual_rotor_speeds, run.actual_tilt_angles)
+    if run.estimate_force_body is not None:
+        flight.wrench_estimate = Wrench(stamp_ns, t, run.estimate_force_body, run.estimate_torque_body)
+        flight.mass_estimate = Scalar(stamp_ns, t, run.mass_estimate)
+    return flight

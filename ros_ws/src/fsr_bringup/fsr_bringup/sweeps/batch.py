@@ -1,0 +1,83 @@
+"""A batch of a sweep's flights, flown in one process: what a local worker process and a Dask worker run.
+
+Each flight is set up from the sweep's scenario and its own ``set`` values (validated like any flight: a value
+refused is an ``invalid`` row naming the key), flown whole by the compiled loop in one call (nothing passes
+through Python per step) into arrays this process reuses from flight to flight, and measured
+(:func:`fsr_bringup.sweeps.metrics.flight_row`). A flight that diverges is a row with its reason; the batch goes on.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fsr_bringup.runner.in_process_flight import FlightArrays, prepare_flight
+from fsr_bringup.sweeps.axes import flight_scenario
+from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, flight_row, invalid_row
+from fsr_sim.config.scenario import Scenario
+from fsr_sim.config.validation import ConfigError
+from fsr_sim.contract import FINISHED
+
+
+@dataclass
+class Batch:
+    """Flights ``(number, set values)`` of one sweep, and what every flight shares (picklable)."""
+
+    data: dict[str, Any]  # the sweep's scenario mapping (its fixed values and duration applied)
+    source: str
+    base_dir: str
+    flights: list[tuple[int, dict[str, Any]]]
+    band: float = DEFAULT_BAND_M
+
+
+@dataclass
+class BatchResult:
+    rows: list[tuple[int, dict[str, Any]]]  # (flight number, metrics row)
+    steps: int  # vehicle-steps flown
+    wall: float  # s
+    worker: str  # host:pid that flew it
+
+
+_ARRAYS: list[FlightArrays] = []  # this process' arrays, reused by its next flights
+
+
+def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M) -> tuple[dict[str, Any], int]:
+    """The metrics row of one flight and the steps it flew."""
+    try:
+        scenario = flight_scenario(base, values)
+    except ConfigError as error:
+        return invalid_row(str(error)), 0
+    try:
+        setup = prepare_flight(scenario, arrays=_ARRAYS[0] if _ARRAYS else None)
+    except ConfigError as error:
+        return invalid_row(str(scenario.attribute(error))), 0
+    except ValueError as error:  # a model refusing its values (e.g. an observer filter) names them
+        return invalid_row(str(error)), 0
+    _ARRAYS[:] = [setup.arrays]
+    start = time.perf_counter()
+    outcome, k, detail = setup.fly(0, setup.steps)
+    count = setup.flown(outcome, k)
+    end_reason, reason = setup.end(outcome, k, detail) or (FINISHED, "")
+    if count < 2:  # no step flown: nothing to measure
+        row = invalid_row(reason)
+        row["end_reason"] = end_reason
+        return row, max(count - 1, 0)
+    run = setup.run(count, end_reason, reason, time.perf_counter() - start, copy=False)
+    return flight_row(run, band), count - 1
+
+
+def fly_batch(batch: Batch) -> BatchResult:
+    """Fly every flight of ``batch`` (module docstring)."""
+    import os
+    import socket
+
+    start = time.perf_counter()
+    base = Scenario(data=batch.data, source=batch.source, base_dir=Path(batch.base_dir))
+    rows, steps = [], 0
+    for number, values in batch.flights:
+        row, flown = fly_one(base, values, batch.band)
+        rows.append((number, row))
+        steps += flown
+    return BatchResult(rows, steps, time.perf_counter() - start, f"{socket.gethostname()}:{os.getpid()}")

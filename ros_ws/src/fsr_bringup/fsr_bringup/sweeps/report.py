@@ -1,0 +1,219 @@
+"""What ``fsr-sweep`` writes from a sweep's table: ``results.csv`` (and ``results.parquet`` when pyarrow is
+installed), ``summary.md`` and figures, in the conventions of :mod:`fsr_bringup.analysis.figures` (one journal
+column wide, 8 pt, Okabe-Ito colours, labels with units).
+
+Figures (PNG):
+
+* ``heatmap.png``: with two or more numeric grid axes, the ranked metric (mean over the other axes and the
+  samples) over the first two, a cell per pair; cells whose flights all diverged are hatched and marked "div";
+* ``<key>.png`` for each scalar swept key: the metric of every flight against the key's value (finished flights
+  as dots, diverged ones as red crosses along the top of the axis);
+* ``ecdf.png``: with 10 or more flights, the empirical CDF of the position error (RMS and peak) and of the
+  metric, over the finished flights, the share that diverged in the legend.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+
+from fsr_bringup.analysis.figures import OKABE_ITO, ONE_COLUMN_IN, PNG_DPI, RC
+from fsr_bringup.sweeps.metrics import INVALID, METRIC_COLUMNS
+from fsr_sim.contract import DIVERGED, FINISHED
+
+UNITS = {"_m": "m", "_deg": "deg", "_s": "s", "_rad_s": "rad/s", "_N": "N", "_N_m": "N m", "_fraction": "-"}
+QUANTILES = (0.0, 0.05, 0.5, 0.95, 1.0)
+LISTED = 10  # flights listed per section of summary.md
+
+
+def metric_label(name: str) -> str:
+    """``position_error_rms_m`` -> ``position error rms [m]``."""
+    for suffix, unit in sorted(UNITS.items(), key=lambda item: -len(item[0])):
+        if name.endswith(suffix):
+            return f"{name[: -len(suffix)].replace('_', ' ')} [{unit}]"
+    return name.replace("_", " ")
+
+
+def numeric_metrics(table: Any) -> list[str]:
+    return [c for c in METRIC_COLUMNS if c in table.columns and table[c].dtype.kind == "f" and c != "flown_s"]
+
+
+def _scalar_keys(table: Any, keys: list[str]) -> list[str]:
+    return [k for k in keys if table[k].map(lambda v: isinstance(v, (int, float))).all()]
+
+
+def ranked(table: Any, metric: str) -> Any:
+    """The finished flights, best (smallest ``metric``) first; NaN last."""
+    done = table[table["end_reason"] == FINISHED]
+    return done.sort_values(metric, kind="stable", na_position="last")
+
+
+def write_tables(table: Any, out: Path) -> list[Path]:
+    """``results.csv`` (and ``results.parquet`` with pyarrow)."""
+    paths = [out / "results.csv"]
+    table.to_csv(paths[0])
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        return paths
+    frame = table.copy()
+    for key in table.attrs.get("keys", []):  # list-valued keys: as text (Parquet wants one type per column)
+        if frame[key].dtype == object:
+            frame[key] = frame[key].map(repr)
+    frame.attrs = {}
+    frame.to_parquet(out / "results.parquet")
+    return [*paths, out / "results.parquet"]
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else f"{value:.4g}"
+    return str(value)
+
+
+def _rows(frame: Any, columns: list[str]) -> list[str]:
+    lines = ["| flight | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
+    for number, row in frame.iterrows():
+        lines.append(f"| {number} | " + " | ".join(_cell(row[c]).replace("|", "/") for c in columns) + " |")
+    return lines
+
+
+def summary_markdown(table: Any, metric: str, command: str | None = None) -> str:
+    """The summary: counts and speed, divergences, quantiles of every metric, the best and worst flights."""
+    a = table.attrs
+    keys = a.get("keys", [])
+    finished = int((table["end_reason"] == FINISHED).sum())
+    diverged = table[table["end_reason"] == DIVERGED]
+    invalid = table[table["end_reason"] == INVALID]
+    wall = a.get("wall_s", float("nan"))
+    steps = a.get("vehicle_steps", 0)
+    lines = [f"# Sweep of {a.get('scenario', '?')}", ""]
+    if command:
+        lines += ["```", command, "```", ""]
+    lines += [
+        f"- flights: {len(table)} ({finished} finished, {len(diverged)} diverged, {len(invalid)} invalid)",
+        f"- swept: {', '.join(keys)} (seed {a.get('seed', 0)})",
+        f"- {steps} vehicle-steps in {wall:.2f} s on {a.get('workers', '?')} worker(s): "
+        f"{len(table) / wall:.1f} flights/s, {steps / wall:.3g} vehicle-steps/s "
+        f"(start-up {a.get('startup_s', 0):.2f} s)",
+        f"- ranked by {metric} (smallest first)", "",
+    ]
+    if len(diverged) or len(invalid):
+        lines += ["## Flights that did not finish", ""]
+        lines += _rows(pd_head(diverged, invalid), [*keys, "end_reason", "end_detail"]) + [""]
+    metrics = numeric_metrics(table)
+    done = table[table["end_reason"] == FINISHED]
+    if len(done):
+        lines += ["## Quantiles over the finished flights", "",
+                  "| metric | min | 5 % | median | 95 % | max |", "|---|---|---|---|---|---|"]
+        for name in metrics:
+            values = done[name].replace([np.inf, -np.inf], np.nan).dropna()
+            if len(values):
+                q = values.quantile(list(QUANTILES))
+                lines.append(f"| {name} | " + " | ".join(f"{v:.4g}" for v in q) + " |")
+        lines.append("")
+        order = ranked(table, metric)
+        columns = [*keys, metric, "position_error_peak_m", "saturated_fraction"]
+        columns = list(dict.fromkeys(c for c in columns if c in table.columns))
+        lines += [f"## Best {min(LISTED, len(order))}", ""] + _rows(order.head(LISTED), columns) + [""]
+        lines += [f"## Worst {min(LISTED, len(order))}", ""] + _rows(order.tail(LISTED)[::-1], columns) + [""]
+    return "\n".join(lines)
+
+
+def pd_head(*frames: Any) -> Any:
+    import pandas as pd
+
+    return pd.concat(frames).sort_index().head(LISTED)
+
+
+def _figure(height_in: float, width_in: float = ONE_COLUMN_IN) -> Figure:
+    return Figure(figsize=(width_in, height_in), constrained_layout=True)
+
+
+def heatmap_figure(table: Any, metric: str) -> Figure | None:
+    grid = [k for k in table.attrs.get("grid", []) if k in _scalar_keys(table, table.attrs.get("grid", []))]
+    if len(grid) < 2:
+        return None
+    x_key, y_key = grid[0], grid[1]
+    values = table.assign(_m=table[metric].where(table["end_reason"] == FINISHED))
+    mean = values.groupby([y_key, x_key])["_m"].mean().unstack(x_key)
+    xs, ys = list(mean.columns), list(mean.index)
+    fig = _figure(2.6)
+    ax = fig.add_subplot()
+    data = mean.to_numpy(dtype=float)
+    shown = np.log10(data) if np.nanmin(data, initial=np.inf) > 0 and np.nanmax(data, initial=0) / max(
+        np.nanmin(data, initial=np.inf), 1e-300) > 100 else data
+    image = ax.imshow(shown, origin="lower", aspect="auto", cmap="viridis")
+    bar = fig.colorbar(image, ax=ax)
+    bar.set_label(("log10 " if shown is not data else "") + metric_label(metric))
+    for (i, j), value in np.ndenumerate(data):
+        if math.isnan(value):
+            ax.text(j, i, "div", ha="center", va="center", color=OKABE_ITO["vermillion"], fontsize=7)
+    ax.set_xticks(range(len(xs)), [f"{v:g}" for v in xs])
+    ax.set_yticks(range(len(ys)), [f"{v:g}" for v in ys])
+    ax.set_xlabel(x_key)
+    ax.set_ylabel(y_key)
+    return fig
+
+
+def key_figure(table: Any, key: str, metric: str) -> Figure:
+    fig = _figure(2.2)
+    ax = fig.add_subplot()
+    done = table["end_reason"] == FINISHED
+    ax.plot(table.loc[done, key], table.loc[done, metric], ".", color=OKABE_ITO["blue"], ms=3,
+            label=f"finished ({int(done.sum())})")
+    failed = table["end_reason"] == DIVERGED
+    if failed.any():
+        top = np.nanmax(table.loc[done, metric].replace(np.inf, np.nan)) if done.any() else 1.0
+        ax.plot(table.loc[failed, key], np.full(int(failed.sum()), top if np.isfinite(top) else 1.0), "x",
+                color=OKABE_ITO["vermillion"], ms=4, label=f"diverged ({int(failed.sum())})")
+    ax.set_xlabel(key)
+    ax.set_ylabel(metric_label(metric))
+    ax.grid(True)
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=2)
+    return fig
+
+
+def ecdf_figure(table: Any, metric: str) -> Figure | None:
+    if len(table) < 10:
+        return None
+    names = list(dict.fromkeys(["position_error_rms_m", "position_error_peak_m", metric]))
+    fig = _figure(1.6 * len(names))
+    done = table[table["end_reason"] == FINISHED]
+    share = 1.0 - len(done) / len(table)
+    for i, name in enumerate(names):
+        ax = fig.add_subplot(len(names), 1, i + 1)
+        values = np.sort(done[name].replace([np.inf, -np.inf], np.nan).dropna().to_numpy(dtype=float))
+        if len(values):
+            ax.step(values, np.arange(1, len(values) + 1) / len(table), where="post", color=OKABE_ITO["blue"],
+                    label=f"finished; {share:.1%} diverged or invalid")
+        ax.set_xlabel(metric_label(name))
+        ax.set_ylabel("share of flights [-]")
+        ax.set_ylim(0.0, 1.0)
+        ax.grid(True)
+        if i == 0:
+            ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0))
+    return fig
+
+
+def write_figures(table: Any, out: Path, metric: str) -> list[Path]:
+    """The figures of the module docstring that apply; returns their paths."""
+    figures: dict[str, Figure | None] = {}
+    with matplotlib.rc_context(RC):
+        figures["heatmap"] = heatmap_figure(table, metric)
+        for key in _scalar_keys(table, table.attrs.get("keys", [])):
+            figures[key] = key_figure(table, key, metric)
+        figures["ecdf"] = ecdf_figure(table, metric)
+        paths = []
+        for name, fig in figures.items():
+            if fig is not None:
+                path = out / f"{name}.png"
+                fig.savefig(path, dpi=PNG_DPI, metadata={"Title": f"fsr sweep of {table.attrs.get('scenario')}: "
+                                                                  f"{name}", "Software": "fsr-sweep"})
+                paths.append(path)
+    return paths
