@@ -55,7 +55,7 @@ COMPENSATION_MODES = ("none", "estimate")
 PERIOD_TOLERANCE = core.PERIOD_TOLERANCE
 __all__ = ["CONTACT_TOLERANCE", "COMPENSATION_MODES", "CompensationConfig", "CompensationReport", "WrenchCompensator"]
 # Largest c0 * T accepted with compensation (the observer alone takes c0 T < 2). Measured with the report's gains,
-# in-process: c0 in 1..100 and r in 1..5 never diverge (scripts/sweep_compensation.py, c0 T <= 0.1), ex3 flies
+# in-process: c0 in 1..100 and r in 1..5 never diverge (fsr-sweep grids of docs/estimation.md, c0 T <= 0.1), ex3 flies
 # at c0 T = 0.5 and 0.7 (r = 1..5) and diverges at c0 T = 1.0 (r = 1 and 5) and 1.9: half of that, refused above.
 MAX_C0_PERIOD = 0.5
 
