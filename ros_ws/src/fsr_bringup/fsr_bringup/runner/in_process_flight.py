@@ -183,6 +183,11 @@ class FlightSetup:
     def rotors(self) -> bool:
         return self.simulation.actuation == "rotors"
 
+    @property
+    def actuator_dynamics(self) -> bool:
+        """The rotors lag their commands (the graph then publishes ``rotor_state``)."""
+        return self.rotors and has_actuator_dynamics(self.plant.params)
+
     def fly(self, first: int, last: int) -> tuple[int, int, int]:
         """Steps ``first..last`` in the compiled loop: ``(outcome, k, detail)`` of ``fly_steps``."""
         a = self.arrays
@@ -276,7 +281,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         from fsr_bringup.recording.flight_recording import InProcessRecorder
 
         recorder = InProcessRecorder(Path(recording), setup.scenario.dump(), setup.rotors, n, sim.vehicle.has_servos,
-                                     record_topics, setup.rotors and has_actuator_dynamics(setup.plant.params))
+                                     record_topics, setup.actuator_dynamics)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
@@ -357,5 +362,5 @@ def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, co
         plan_adjustments=[item.text() for item in controller.plan_adjustments],
         reference_angular_velocity_world=columns(c.REFERENCE_ANGULAR_VELOCITY_WORLD),
         wrench_shortfall=columns(c.SHORTFALL, 6), simulation=setup.simulation, estimator=setup.estimation,
-        actuator_dynamics=rotors and has_actuator_dynamics(setup.plant.params),
+        actuator_dynamics=setup.actuator_dynamics,
     )

@@ -105,7 +105,7 @@ def summary_markdown(table: Any, metric: str, command: str | None = None) -> str
     ]
     if len(diverged) or len(invalid):
         lines += ["## Flights that did not finish", ""]
-        lines += _rows(pd_head(diverged, invalid), [*keys, "end_reason", "end_detail"]) + [""]
+        lines += _rows(table[table["end_reason"] != FINISHED].head(LISTED), [*keys, "end_reason", "end_detail"]) + [""]
     metrics = numeric_metrics(table)
     done = table[table["end_reason"] == FINISHED]
     if len(done):
@@ -125,18 +125,12 @@ def summary_markdown(table: Any, metric: str, command: str | None = None) -> str
     return "\n".join(lines)
 
 
-def pd_head(*frames: Any) -> Any:
-    import pandas as pd
-
-    return pd.concat(frames).sort_index().head(LISTED)
-
-
 def _figure(height_in: float, width_in: float = ONE_COLUMN_IN) -> Figure:
     return Figure(figsize=(width_in, height_in), constrained_layout=True)
 
 
 def heatmap_figure(table: Any, metric: str) -> Figure | None:
-    grid = [k for k in table.attrs.get("grid", []) if k in _scalar_keys(table, table.attrs.get("grid", []))]
+    grid = _scalar_keys(table, table.attrs.get("grid", []))
     if len(grid) < 2:
         return None
     x_key, y_key = grid[0], grid[1]

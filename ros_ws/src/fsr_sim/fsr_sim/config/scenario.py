@@ -225,7 +225,7 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
     """Parse and check the plant-side sections of ``scenario`` (once per :class:`Scenario` object: a run's
     set-up asks for them from every package; a scenario's mapping is not changed once made - overrides make a
     new one - and the config is checked again if it has been)."""
-    fingerprint = _fingerprint(scenario.data)
+    fingerprint = repr(scenario.data)
     cached = _SIMULATION_CONFIGS.get(id(scenario))
     if cached is not None and cached[0] is scenario and cached[1] == fingerprint:
         return cached[2]
@@ -237,10 +237,6 @@ def simulation_config(scenario: Scenario) -> SimulationConfig:
 
 
 _SIMULATION_CONFIGS: dict[int, tuple[Scenario, str, SimulationConfig]] = {}
-
-
-def _fingerprint(data: Any) -> str:
-    return repr(data)
 
 
 def _simulation_config(scenario: Scenario) -> SimulationConfig:
