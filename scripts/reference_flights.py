@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsr_sim.contract import SIM_STATUS, resolve
+from fsr_sim.contract import RECORDER, SIM_STATUS, resolve, topic_named
 
 # (key, scenario, --set values): every built-in scenario as shipped, and the variants its options open.
 FLIGHTS: list[tuple[str, str, dict]] = [
@@ -43,14 +43,16 @@ FLIGHTS: list[tuple[str, str, dict]] = [
 
 
 def recorded_fields(path: Path) -> dict[str, np.ndarray]:
-    """``{topic/field: values}`` of every numeric field of every topic with a header stamp (rows by stamp)."""
+    """``{topic/field: values}`` of every numeric field of every topic with a header stamp (rows by stamp) that the
+    flight's nodes publish (the viewer's topics the recording derives from them apart)."""
     from fsr_sim.recording.cdr_columns import stamped_columns
     from fsr_sim.recording.reader import open_recording
 
     recording = open_recording(path)
     fields = {}
     for topic in sorted(recording.topics):
-        if topic == resolve(SIM_STATUS.name):
+        contract_topic = topic_named(topic)
+        if topic == resolve(SIM_STATUS.name) or contract_topic is not None and contract_topic.publisher == RECORDER:
             continue
         stamps, columns = stamped_columns(recording, topic)
         fields[f"{topic}/stamp"] = stamps

@@ -255,6 +255,20 @@ def test_three_vehicles_fly_under_their_namespaces(tmp_path):
         notes = "\n".join(metrics["notes"])
         assert metrics["scenario"] == name and "cannot be used" not in notes and "skipped" not in notes, notes
         assert metrics["saturation"] is not None and metrics["mass"]["true_kg"] is not None, metrics
+    # each vehicle's frames and markers are its own: uav1/base_link_frd under world_ned, /uav1/markers
+    from mcap_ros2.reader import read_ros2_messages
+
+    static = {(t.header.frame_id, t.child_frame_id) for m in read_ros2_messages(out, topics=["/tf_static"])
+              for t in m.ros_msg.transforms}
+    moving = {(t.header.frame_id, t.child_frame_id) for m in read_ros2_messages(out, topics=["/tf"])
+              for t in m.ros_msg.transforms}
+    for namespace in goals:
+        prefix = namespace.strip("/") + "/"
+        assert (f"{prefix}base_link_frd", f"{prefix}base_link") in static
+        assert ("world_ned", f"{prefix}base_link_frd") in moving
+        assert recording.count(f"{namespace}/markers") == 301  # 6 s at 50 Hz, and t = 0
+    assert ("uav2/base_link_frd", "uav2/rotor_1_link") in static  # fixed rotors: static
+    assert ("uav3/base_link_frd", "uav3/rotor_1_link") in moving  # the tilting quadrotor's: with its tilts
     missing = analyze_recording(recording, tmp_path / "uav9", namespace="/uav9", figures=False).metrics["notes"]
     assert any("the fleet in the metadata has no vehicle under /uav9 (it has /uav1, /uav2, /uav3)" in n
                for n in missing), missing

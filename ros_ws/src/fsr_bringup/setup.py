@@ -32,5 +32,9 @@ setup(
             "fsr-compile = fsr_bringup.cli.compile_cli:main",
             "fsr-sweep = fsr_bringup.cli.sweep_cli:main",
         ],
+        # Scenario sections this package validates (fsr_sim.config.scenario.registered_sections).
+        "fsr.scenario_sections": [
+            "visualization = fsr_bringup.visualization.config:visualization_config",
+        ],
     },
 )

@@ -20,6 +20,22 @@ from typing import Any
 # ----- frames (docs/model.md §2) ---------------------------------------------------------------------------
 WORLD_FRAME = "world_ned"  # x north, y east, z down
 BODY_FRAME = "base_link_frd"  # x forward, y right, z down
+MAP_FRAME = "map"  # ENU (REP 103: x east, y north, z up), the parent of WORLD_FRAME in /tf_static
+BODY_FLU_FRAME = "base_link"  # x forward, y left, z up (REP 103), a child of BODY_FRAME in /tf_static
+
+
+def rotor_frame(index: int) -> str:
+    """Frame of rotor ``index`` (0-based), a child of BODY_FRAME at the rotor's centre, turned from the body by the
+    shortest rotation that takes ``z_b`` to the rotor's thrust axis reversed (the identity for a rotor lifting
+    along ``-z_b``)."""
+    return f"rotor_{index + 1}_link"
+
+
+def frame_prefix(namespace: str) -> str:
+    """What a vehicle's frame ids start with in ``/tf`` and ``/tf_static`` (``uav1/`` under ``/uav1``, nothing at
+    the root): several vehicles of one recording keep apart frames. WORLD_FRAME and MAP_FRAME are shared."""
+    namespace = namespace.strip("/")
+    return f"{namespace}/" if namespace else ""
 
 
 # ----- the rotors' joint names in rotor_cmd ------------------------------------------------------------------
@@ -52,6 +68,7 @@ def joint_names(rotor_count: int, tilting: bool) -> list[str]:
 
 # ----- topics ----------------------------------------------------------------------------------------------
 SIMULATOR, CONTROLLER, ESTIMATOR, USER = "simulator", "controller", "estimator", "user"
+RECORDER = "recorder"  # the topics the recording derives from the others (fsr_bringup.recording.derived)
 
 
 @dataclass(frozen=True)
@@ -109,10 +126,20 @@ WRENCH_ESTIMATE = Topic("wrench_estimate", "geometry_msgs/msg/WrenchStamped", "S
                         BODY_FRAME, notes="body frame (`R_b^T f_e`, `Q^-T tau_e`): comparable with `wrench_truth`")
 MASS_ESTIMATE = Topic("mass_estimate", "std_msgs/msg/Float64", "STREAM", ESTIMATOR, True, True,
                       notes="`m_model + f_e,z / g` [kg]")
+TF = Topic("/tf", "tf2_msgs/msg/TFMessage", "STREAM", RECORDER, True, False,
+           notes="`world_ned` -> `base_link_frd` of every `odom` (same stamp and pose); the frames of tilting rotors "
+                 "with the markers. Written into the recording (no tf2_msgs in the pip wheels: not over DDS)")
+TF_STATIC = Topic("/tf_static", "tf2_msgs/msg/TFMessage", "LATCHED", RECORDER, True, False,
+                  notes="`map` (ENU) -> `world_ned`, `base_link_frd` -> `base_link` (FLU) and the fixed rotors' "
+                        "frames, once at the start of the recording")
+MARKERS = Topic("markers", "visualization_msgs/msg/MarkerArray", "STREAM", RECORDER, True, False, WORLD_FRAME,
+                notes="the vehicle in `world_ned` at `visualization.marker_rate` [Hz] of simulated time: arms, "
+                      "rotors (colour: speed between its limits), thrust arrows, true and estimated external force, "
+                      "planned path, goal, reference, ground and ceiling")
 
 TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, WRENCH_TRUTH, ROTOR_STATE, SIM_STATUS, SIM_PROGRESS, ROTOR_CMD, WRENCH_CMD,
                              WRENCH_SHORTFALL, REFERENCE, ATTITUDE_CMD, WRENCH_DESIRED, GOAL, WRENCH_ESTIMATE,
-                             MASS_ESTIMATE)
+                             MASS_ESTIMATE, TF, TF_STATIC, MARKERS)
 BY_NAME = {topic.name: topic for topic in TOPICS}
 
 
@@ -130,16 +157,23 @@ def topic_named(name: str) -> Topic | None:
 
 
 def recorded_topics() -> dict[str, str]:
-    """Relative name -> type of every topic the recorder keeps under a vehicle namespace (``/clock`` apart)."""
-    return {t.name: t.type for t in TOPICS if t.recorded and t.name != CLOCK.name}
+    """Relative name -> type of every topic the recorder subscribes to under a vehicle namespace (``/clock``
+    apart; the derived topics, :func:`derived_topics`, are not subscribed to)."""
+    return {t.name: t.type for t in TOPICS if t.recorded and t.name != CLOCK.name and t.publisher != RECORDER}
+
+
+def derived_topics() -> dict[str, str]:
+    """Name -> type of the topics a recording derives from the others (``/tf``, ``/tf_static``, ``markers``)."""
+    return {t.name: t.type for t in TOPICS if t.publisher == RECORDER}
 
 
 def recording_selection(text: str) -> frozenset[str]:
     """The topics to record from a comma-separated list of recorded topics (``odom,reference``; ``clock`` is
-    ``/clock``): ``sim_status`` is always kept (how the flight ended). ValueError names an unknown one."""
+    ``/clock``, ``tf`` is ``/tf``): ``sim_status`` is always kept (how the flight ended). ValueError names an
+    unknown one."""
     from fsr_sim.config.validation import did_you_mean
 
-    topic_of = {name.lstrip("/"): name for name in (*recorded_topics(), CLOCK.name)}  # "clock" -> "/clock"
+    topic_of = {name.lstrip("/"): name for name in (*recorded_topics(), CLOCK.name, *derived_topics())}
     chosen = {item.strip().lstrip("/") for item in text.split(",") if item.strip()}
     for name in sorted(chosen):
         if name not in topic_of:

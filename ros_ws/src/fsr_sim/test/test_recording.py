@@ -205,3 +205,50 @@ def test_unchunked_file_from_another_writer_is_read(tmp_path):
     assert not recording.truncated and recording.topics == {"/odom": "nav_msgs/msg/Odometry"}
     assert [stamp for stamp, _ in recording.messages("odom")] == [k * 1_000_000 for k in range(5)]
     assert recording.messages("odom")[3][1].pose.pose.position.x == pytest.approx(0.003)
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_block_with_sparse_topics_after_the_dense_ones_is_the_step_by_step_file(tmp_path, fast):
+    """A block whose every-step topics come first and whose sparse ones follow (an in-process flight: its
+    topics, then the markers and a second message size on /tf) is the file write_batch writes step by step, byte
+    for byte (sequence numbers in written order, also on a topic given by two entries)."""
+    import numpy as np
+
+    from fsr_sim.ros import cdr_pack
+
+    odom, other_odom = cdr_pack.odometry("world_ned", "base_link_frd"), cdr_pack.odometry("map", "rotor_1_link")
+    wrench, mass = cdr_pack.wrench_stamped("base_link_frd"), cdr_pack.float64()
+    rng = np.random.default_rng(11)
+    steps = 700
+    stamps = np.arange(steps, dtype=np.int64) * 1_000_000
+    odom_values, other_values, wrench_values, mass_values = (rng.normal(size=(steps, n)) for n in (13, 13, 6, 1))
+    sparse, second = np.arange(0, steps, 20), np.arange(0, steps, 20)[::2]
+    files = []
+    for block in (False, True):
+        path = tmp_path / f"run_{block}.mcap"
+        writer = RecordingWriter(path, chunk_size=64 * 1024, fast_path=fast)
+        for topic, type_name in (("/odom", "nav_msgs/msg/Odometry"), ("/mass", "std_msgs/msg/Float64"),
+                                 ("/wrench", "geometry_msgs/msg/WrenchStamped")):
+            writer.add_topic(topic, type_name)
+        if block:
+            for low, high in ((0, 333), (333, steps)):
+                window = slice(low, high)
+                mine, theirs = (s[(s >= low) & (s < high)] for s in (sparse, second))
+                writer.write_block(stamps[window], [
+                    ("/odom", None, odom.pack_rows(stamps[window], odom_values[window])),
+                    ("/mass", None, mass.pack_rows(stamps[window], mass_values[window])),
+                    ("/wrench", mine - low, wrench.pack_rows(stamps[mine], wrench_values[mine])),
+                    ("/odom", theirs - low, other_odom.pack_rows(stamps[theirs], other_values[theirs]))])
+        else:
+            for k in range(steps):
+                stamp = int(stamps[k])
+                batch = [("/odom", odom.pack(stamp, odom_values[k].tolist())),
+                         ("/mass", mass.pack(0, mass_values[k].tolist()))]
+                if k in set(sparse.tolist()):
+                    batch.append(("/wrench", wrench.pack(stamp, wrench_values[k].tolist())))
+                if k in set(second.tolist()):
+                    batch.append(("/odom", other_odom.pack(stamp, other_values[k].tolist())))
+                writer.write_batch(batch, stamp)
+        writer.close()
+        files.append(path.read_bytes())
+    assert files[0] == files[1]

@@ -17,11 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_bringup.recording.metadata import scenario_from_text
 from fsr_control.compensation import CompensationConfig
 from fsr_control.config.controller_config import controller_config
 from fsr_estimation.config.estimator_config import EstimatorConfig, estimator_config
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
-from fsr_sim.config.validation import ConfigError, parse_yaml_mapping
+from fsr_sim.config.validation import ConfigError
 from fsr_sim.contract import (
     ATTITUDE_CMD,
     CLOCK,
@@ -211,29 +212,13 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
 
 
 def recorded_scenario(recording: Recording, namespace: str, notes: list[str]) -> Scenario | None:
-    """The scenario the recording's metadata holds for the vehicle under ``namespace`` (``/`` or ``/uav1``):
-    a single vehicle's scenario, or the member of a fleet (``fleet: [{namespace, scenario}, ...]``, what
-    ``fsr-fly`` records for several vehicles). None, with a note saying why, when there is none."""
-    text = recording.scenario_yaml
-    if text is None:
-        notes.append("no scenario in the recording's metadata: vehicle limits, true mass and surfaces unknown")
-        return None
-    source = f"{recording.path} (fsr_scenario metadata)"
-    try:
-        data = parse_yaml_mapping(text, source)
-    except ConfigError as error:
-        notes.append(f"scenario in the metadata cannot be read: {error}")
-        return None
-    if isinstance(data.get("fleet"), list):
-        members = {"/" + str(m.get("namespace", "")).strip("/"): m.get("scenario") for m in data["fleet"]
-                   if isinstance(m, dict)}
-        data = members.get(namespace)
-        if not isinstance(data, dict):
-            notes.append(f"the fleet in the metadata has no vehicle under {namespace} (it has "
-                         f"{', '.join(sorted(members)) or 'none'}): vehicle limits, true mass and surfaces unknown")
-            return None
-        source = f"{source}, fleet member {namespace}"
-    return Scenario(data=data, source=source, base_dir=recording.path.parent)
+    """The scenario the recording's metadata holds for the vehicle under ``namespace`` (``/`` or ``/uav1``)
+    (:func:`fsr_bringup.recording.metadata.scenario_from_text`); None, with a note saying why, when there is none."""
+    scenario, note = scenario_from_text(recording.scenario_yaml, namespace, f"{recording.path} (fsr_scenario metadata)",
+                                        recording.path.parent)
+    if note is not None:
+        notes.append(note)
+    return scenario
 
 
 def _scenario(scenario: Scenario | None, fallback: str,

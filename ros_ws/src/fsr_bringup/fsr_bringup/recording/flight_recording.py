@@ -46,12 +46,22 @@ class InProcessRecorder:
                  tilting: bool = False, topics: frozenset[str] | None = None, rotor_state: bool = False) -> None:
         """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all);
         ``rotor_state``: the plant has actuator dynamics (the simulator then publishes ``rotor_state``)."""
+        from fsr_bringup.recording.derived import DerivedTopics
+        from fsr_bringup.recording.metadata import scenario_from_text
         from fsr_control.nodes.packets import ControllerPackets
         from fsr_estimation.nodes.packets import EstimatePackets
         from fsr_sim.nodes.state_packets import StatePackets
+        from fsr_sim.recording.reader import SCENARIO_METADATA
         from fsr_sim.recording.writer import RecordingWriter
 
-        self.writer = RecordingWriter(path, metadata={"fsr_scenario": {"yaml": scenario_yaml}})
+        path = Path(path)
+        self.writer = RecordingWriter(path, metadata={SCENARIO_METADATA: {"yaml": scenario_yaml}})
+        scenario, _ = scenario_from_text(scenario_yaml, "/", f"{path} ({SCENARIO_METADATA} metadata)", path.parent)
+        self.derived = DerivedTopics(scenario, "/", topics)
+        for topic, type_name in self.derived.topics().items():
+            self.writer.add_topic(topic, type_name)
+        for topic, stamps, rows in self.derived.static():
+            self.writer.write_block(stamps, [(topic, None, rows)])
         self.controller_packets = ControllerPackets(rotors, rotor_count, tilting)
         self.rotor_state = rotor_state
         self.rotor_count = rotor_count
@@ -89,8 +99,10 @@ class InProcessRecorder:
                 columns = [(topic, values) for topic, values in columns if topic[1:] in self._topics]
             for topic, _ in columns:
                 self._register(topic)
-            self.writer.write_block(stamps, [(topic, None, self._templates[topic].pack_rows(stamps, values))
-                                             for topic, values in columns])
+            messages = [(topic, None, self._templates[topic].pack_rows(stamps, values)) for topic, values in columns]
+            derived = [(topic, np.searchsorted(stamps, steps), rows) for source, _, payloads in messages
+                       for topic, steps, rows in self.derived.take(source[1:], stamps, payloads)]
+            self.writer.write_block(stamps, messages + derived)
 
     def _register(self, topic: str) -> None:
         if topic not in self._registered:

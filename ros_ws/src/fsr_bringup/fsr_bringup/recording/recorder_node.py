@@ -19,6 +19,12 @@ End: once every recorded ``sim_status`` (one per namespace) reported the end of 
 producers have gone (or nothing arrived for a while), the recorder takes what is still queued, finishes
 the file and exits 0 by itself (:mod:`fsr_sim.ros.flight_end`); ``--keep-running`` records until a signal.
 
+Derived topics (:mod:`fsr_bringup.recording.derived`): ``/tf_static`` and ``/tf`` (from every ``odom``) and
+``markers`` (the vehicle for a viewer, with ``--scenario``) are written as the messages they come from arrive;
+``markers`` is also published over DDS. The recorder draws them, not the simulator, because it holds every
+topic of a step (the simulator has neither the estimate nor the reference of the state it publishes) and
+because the simulator's per-step loop then pays nothing for them.
+
 Files survive crashes: chunks are small and flushed every ``FLUSH_PERIOD`` s, so a SIGKILLed file is
 readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued, write the summary,
 exit 0. A path that cannot be written: one line naming it and the reason, exit 1, before subscribing.
@@ -45,18 +51,25 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
+from fsr_bringup.recording.derived import DERIVED_SOURCES, DerivedTopics
+from fsr_bringup.recording.metadata import scenario_from_text
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.contract import (
     BY_NAME,
     CLOCK,
+    MARKERS,
     SIM_STATUS,
     STAMP_TOLERANCE_NS,
     SimStatus,
     recorded_topics,
     recording_selection,
+    resolve,
     stamped_streams,
     topic_named,
 )
+from fsr_sim.recording.reader import SCENARIO_METADATA
 from fsr_sim.recording.writer import RecordingWriter
 from fsr_sim.ros.runtime import (
     EXIT_CONFIG_ERROR,
@@ -171,8 +184,11 @@ def final_status_ns(data: bytes) -> int | None:
     return None if text is None else final_stamp_ns(text)
 
 
-def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_running: bool = False) -> type:
-    """Build the node class lazily (rclpy is imported only after the environment is configured)."""
+def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_running: bool = False,
+                  scenario_yaml: str | None = None, only: frozenset[str] | None = None) -> type:
+    """Build the node class lazily (rclpy is imported only after the environment is configured).
+    ``scenario_yaml``: the recorded scenario (what the derived topics are drawn from, :mod:`fsr_bringup.recording.
+    derived`); ``only``: the ``--only`` selection."""
     from rclpy.node import Node
     from rclpy.qos import QoSProfile
 
@@ -220,7 +236,38 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
             status_topics = [topic for _sub, topic, _stamped, status in self.entries if status]
             self.flight_end = None if keep_running or not status_topics else FlightEndRule(status_topics)
             self.stop_flag: object = None  # set by run_node
+            self.derived: dict[str, tuple[DerivedTopics, object]] = {}  # namespace -> (its topics, markers publisher)
+            self.derive_failed: set[str] = set()
             self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
+
+        def derived_of(self, namespace: str) -> tuple[DerivedTopics, object]:
+            """The derived topics of a vehicle namespace, set up (``/tf_static`` written) at its first message."""
+            found = self.derived.get(namespace)
+            if found is None:
+                scenario, _ = scenario_from_text(scenario_yaml, namespace or "/", f"{writer.path} (--scenario)",
+                                                 writer.path.parent)
+                derived = DerivedTopics(scenario, namespace or "/", only)
+                for topic, type_name in derived.topics().items():
+                    writer.add_topic(topic, type_name)
+                publisher = None
+                if derived.markers:
+                    publisher = self.create_publisher(message_class(MARKERS.type),
+                                                      resolve(MARKERS.name, namespace or "/"), qos_of(MARKERS))
+                found = self.derived[namespace] = (derived, publisher)
+                self.write_derived(derived.static(), None)
+            return found
+
+        def write_derived(self, messages: list[tuple[str, object, object]], publisher: object) -> None:
+            """Write derived ``(topic, stamps, payload rows)`` (log time = publish time = stamp); publish the
+            markers."""
+            records = []
+            for topic, stamps, rows in messages:
+                for stamp, row in zip(stamps.tolist(), rows, strict=True):
+                    data = row.tobytes()
+                    records.append((topic, data, stamp, stamp))
+                    if publisher is not None and topic.endswith("/" + MARKERS.name):
+                        publisher.publish(data)
+            self.writer.write_records(records)
 
         def done(self) -> bool:
             if self.failed:
@@ -277,9 +324,32 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
                         log_time = self.sim_time_ns
                     records.append((topic, data, log_time, source))
                 self.writer.write_records(records)
+                self.derive(records)
                 self.unflushed = True
             except OSError as error:
                 self.fail(error)
+
+        def derive(self, records: list[tuple[str, bytes, int, int]]) -> None:
+            """Hand the batch's messages to their namespace's derived topics, one call per topic."""
+            grouped: dict[str, tuple[list[int], list[bytes]]] = {}
+            for topic, data, log_time, _source in records:
+                if topic.rsplit("/", 1)[-1] in DERIVED_SOURCES:
+                    stamps, payloads = grouped.setdefault(topic, ([], []))
+                    stamps.append(log_time)
+                    payloads.append(data)
+            for topic, (stamps, payloads) in grouped.items():
+                namespace, _, base = topic.rpartition("/")
+                if namespace in self.derive_failed:
+                    continue
+                try:
+                    derived, publisher = self.derived_of(namespace)
+                    self.write_derived(derived.take(base, np.array(stamps, dtype=np.int64), payloads), publisher)
+                except OSError:
+                    raise
+                except Exception as error:  # noqa: BLE001 - a viewer's topics must never cost the recording
+                    self.derive_failed.add(namespace)
+                    print(f"fsr-record: warning: no more /tf or markers for {namespace or '/'}: {error!r}",
+                          file=sys.stderr, flush=True)
 
         def maybe_flush(self) -> None:
             """Complete the current chunk every FLUSH_PERIOD s (also when the graph has gone quiet)."""
@@ -371,11 +441,12 @@ def scenario_text(scenario: str) -> str:
 
 
 def open_writer(out: Path, scenario: str | None) -> RecordingWriter:
-    """Create the file and push its header to disk now, so that a bad path fails before subscribing."""
-    metadata = None
-    if scenario is not None:
-        metadata = {"fsr_scenario": {"yaml": scenario_text(scenario)}}
+    """Create the file and push its header to disk now, so that a bad path fails before subscribing;
+    ``writer.scenario_yaml`` is the scenario's text kept in the metadata (None without ``scenario``)."""
+    text = None if scenario is None else scenario_text(scenario)
+    metadata = None if text is None else {SCENARIO_METADATA: {"yaml": text}}
     writer = RecordingWriter(out, metadata=metadata, chunk_size=CHUNK_SIZE)
+    writer.scenario_yaml = text
     try:
         writer.flush()
     except OSError:
@@ -419,7 +490,7 @@ def main(argv: list[str] | None = None) -> int:
     nodes: list[object] = []
 
     def make_node(_args: list[str]) -> object:
-        node = make_recorder(writer, topics, args.keep_running)()
+        node = make_recorder(writer, topics, args.keep_running, writer.scenario_yaml, args.only)()
         nodes.append(node)
         return node
 

@@ -84,14 +84,21 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
         sensors=(odometry_noise or OdometryNoise()).pack(float(dt) * int(substeps)),
-        rotor_lag=actuation == "rotors" and vehicle.rotor_time_constant > 0.0,
+        rotor_lag=actuator_lags(vehicle, actuation)[0],
         speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
-        tilt_lag=actuation == "rotors" and vehicle.has_servos and (vehicle.tilt_time_constant > 0.0
-                                                                   or math.isfinite(vehicle.tilt_rate_max)),
+        tilt_lag=actuator_lags(vehicle, actuation)[1],
         tilt_decay=math.exp(-dt / vehicle.tilt_time_constant) if vehicle.tilt_time_constant > 0.0 else 0.0,
         tilt_step_max=float(vehicle.tilt_rate_max * dt),
         turbulence=pack_turbulence(turbulence, vehicle.drag_coefficients, dt),
     )
+
+
+def actuator_lags(vehicle: Vehicle, actuation: str) -> tuple[bool, bool]:
+    """(the rotor speeds lag, the tilts lag) their commands: with rotor actuation, a rotor time constant; rotors
+    on servos with a time constant or a rate limit."""
+    rotors = actuation == "rotors"
+    servo_lag = vehicle.tilt_time_constant > 0.0 or math.isfinite(vehicle.tilt_rate_max)
+    return rotors and vehicle.rotor_time_constant > 0.0, rotors and vehicle.has_servos and servo_lag
 
 
 def has_actuator_dynamics(params: core.PlantParams) -> bool:

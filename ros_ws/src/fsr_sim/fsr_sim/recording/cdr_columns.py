@@ -156,20 +156,27 @@ class Columns:
         return self.numbers[path]
 
 
-def decode_columns(payloads: list[bytes], type_name: str) -> Columns:
+def decode_columns(payloads: list[bytes] | np.ndarray, type_name: str) -> Columns:
     """Decode every message of one topic into columns; raises :class:`LayoutError` if it cannot.
 
-    payloads: CDR bytes of ``n`` messages of ``type_name`` (``nav_msgs/msg/Odometry``). Returns
+    payloads: CDR bytes of ``n`` messages of ``type_name`` (``nav_msgs/msg/Odometry``), or a uint8 array (n, size)
+    of messages of one length (an in-process block). Returns
     ``numbers[path]`` of shape (n,) for scalars and (n, k) for arrays/sequences (float64; integers that
     fit exactly, e.g. stamps, are kept as int64), and ``strings[path]`` of shape (n,).
     """
     cls = message_class(type_name)
     n = len(payloads)
     groups: list[tuple[np.ndarray, Layout, np.ndarray]] = []  # (message indices, layout, byte matrix rows)
-    lengths = np.fromiter((len(p) for p in payloads), dtype=np.int64, count=n)
+    if isinstance(payloads, np.ndarray):  # rows of one length (uint8, (n, size)): already the byte matrix
+        lengths = np.full(n, payloads.shape[1] if n else 0, dtype=np.int64)
+    else:
+        lengths = np.fromiter((len(p) for p in payloads), dtype=np.int64, count=n)
     for length in np.unique(lengths):
         index = np.flatnonzero(lengths == length)
-        matrix = np.frombuffer(b"".join(payloads[i] for i in index), dtype=np.uint8).reshape(len(index), length)
+        if isinstance(payloads, np.ndarray):
+            matrix = np.ascontiguousarray(payloads, dtype=np.uint8)
+        else:
+            matrix = np.frombuffer(b"".join(payloads[i] for i in index), dtype=np.uint8).reshape(len(index), length)
         remaining = np.arange(len(index))
         while remaining.size:
             if len(groups) >= MAX_LAYOUTS:

@@ -20,7 +20,7 @@ from typing import IO, Any
 import numpy as np
 from mcap.writer import CompressionType, Writer
 
-from fsr_sim.ros.message_schema import message_class, message_definition
+from fsr_sim.ros.message_schema import type_definition
 
 DEFAULT_CHUNK_SIZE = 256 * 1024
 _MESSAGE_OPCODE = 0x05
@@ -68,7 +68,7 @@ class RecordingWriter:
             return
         schema_id = self._schemas.get(type_name)
         if schema_id is None:
-            definition = message_definition(message_class(type_name))
+            definition = type_definition(type_name)
             schema_id = self._writer.register_schema(
                 name=type_name, encoding="ros2msg", data=definition.encode("utf-8")
             )
@@ -176,18 +176,62 @@ class RecordingWriter:
         else:
             sizes = np.concatenate([np.full(len(r), r.shape[1], dtype=np.int64) for r in records])
             order = np.lexsort((np.concatenate(place_keys), np.concatenate(step_keys)))  # step, then topic order
+            self._sequence_in_order(records, channels, order)
             ends = np.cumsum(sizes[order])
-            starts = np.empty_like(sizes)
-            starts[order] = ends - sizes[order]  # each record's place in the block
-            block = np.empty(int(ends[-1]), dtype=np.uint8)
-            first = 0
-            for rows in records:
-                count, size = rows.shape
-                block[starts[first:first + count, None] + np.arange(size)] = rows
-                first += count
+            block = self._interleaved(records, step_keys, len(stamps), order, sizes, ends)
             channel_order = np.concatenate(channels)[order]
             times = stamps[np.concatenate(step_keys)][order]
         self._fast.add_block(block, ends, channel_order, times)
+
+    @staticmethod
+    def _interleaved(records: list[np.ndarray], step_keys: list[np.ndarray], steps: int, order: np.ndarray,
+                     sizes: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """The records of a block back to back in ``order`` (step, then entry). When the entries of every step
+        come first (a flight's topics, then sparse ones such as markers), each run of steps between two sparse
+        records is one slice of the every-step rows side by side; otherwise each record is scattered to its
+        place."""
+        dense = [place for place, rows in enumerate(records) if len(rows) == steps]
+        sparse = [place for place, rows in enumerate(records) if len(rows) != steps]
+        if dense and sparse and max(dense) < min(sparse):
+            side_by_side = np.concatenate([records[place] for place in dense], axis=1)
+            keyed = sorted((int(step), place, row) for place in sparse
+                           for row, step in enumerate(step_keys[place].tolist()))
+            pieces, done = [], 0
+            for step, place, row in keyed:
+                if step >= done:
+                    pieces.append(side_by_side[done:step + 1].reshape(-1))
+                    done = step + 1
+                pieces.append(records[place][row])
+            pieces.append(side_by_side[done:].reshape(-1))
+            return np.concatenate(pieces)
+        starts = np.empty_like(sizes)
+        starts[order] = ends - sizes[order]  # each record's place in the block
+        block = np.empty(int(ends[-1]), dtype=np.uint8)
+        first = 0
+        for rows in records:
+            count, size = rows.shape
+            block[starts[first:first + count, None] + np.arange(size)] = rows
+            first += count
+        return block
+
+    @staticmethod
+    def _sequence_in_order(records: list[np.ndarray], channels: list[np.ndarray], order: np.ndarray) -> None:
+        """Renumber the records of a topic given by several entries (messages of two sizes on one topic) in
+        their written ``order``, as :meth:`write` would number them."""
+        entry_channels = [int(c[0]) for c in channels]
+        shared = {c for c in entry_channels if entry_channels.count(c) > 1}
+        if not shared:
+            return
+        entry = np.concatenate([np.full(len(r), place) for place, r in enumerate(records)])
+        row = np.concatenate([np.arange(len(r)) for r in records])
+        for channel in shared:
+            places = [place for place, c in enumerate(entry_channels) if c == channel]
+            first = min(int(records[place][0, 11:15].view("<u4")[0]) for place in places)
+            mine = order[np.isin(entry[order], places)]  # this topic's records, in written order
+            sequence = (first + np.arange(len(mine))).astype("<u4")
+            for place in places:
+                taken = entry[mine] == place
+                records[place][row[mine][taken], 11:15] = sequence[taken].view(np.uint8).reshape(-1, 4)
 
     def write_message(self, topic: str, msg: Any, log_time_ns: int) -> None:
         """Serialise an rclpy message instance and append it (registering the topic if new)."""

@@ -48,6 +48,20 @@ class Template:
         self.align(4)
         self.buffer += _UINT32.pack(value)
 
+    def int32(self, value: int) -> None:
+        self.align(4)
+        self.buffer += struct.pack("<i", value)
+
+    def boolean(self, value: bool) -> None:
+        self.buffer += bytes((1 if value else 0,))
+
+    def floats(self, count: int) -> int:
+        """``count`` float32 (e.g. a ``std_msgs/ColorRGBA``): the offset of the first."""
+        self.align(4)
+        offset = self.offset
+        self.buffer += bytes(4 * count)
+        return offset
+
     def string(self, text: str) -> None:
         data = text.encode("utf-8")
         self.uint32(len(data) + 1)
@@ -142,6 +156,41 @@ class StampedDoubles:
         start = 0
         for offset, count in self.runs:
             rows[:, offset:offset + 8 * count] = np.ascontiguousarray(values[:, start:start + count]).view(np.uint8)
+            start += count
+        return rows
+
+
+class StampedNumbers:
+    """A message of fixed layout with several stamps (one per nested ``Header``, all the same) and runs of float64
+    and float32 at fixed places: ``tf2_msgs/TFMessage``, ``visualization_msgs/MarkerArray``. Only
+    :meth:`pack_rows` (many messages at once, as :meth:`StampedDoubles.pack_rows`).
+
+    ``runs``: (offset, count, dtype ``"<f8"`` or ``"<f4"``) in value order."""
+
+    def __init__(self, template: Template, stamp_offsets: Sequence[int], runs: Sequence[tuple[int, int, str]]) -> None:
+        self.template = bytes(template.buffer)
+        self.size = len(self.template)
+        self.stamp_offsets = tuple(stamp_offsets)
+        self.runs = tuple(runs)
+        self.value_count = sum(count for _, count, _ in runs)
+
+    def pack_rows(self, stamps_ns: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Row ``k`` (uint8, shape (N, size)): the message stamped ``stamps_ns[k]`` [ns] holding ``values[k]``
+        (N, value_count) in run order (float32 runs rounded to float32)."""
+        stamps = np.asarray(stamps_ns, dtype=np.int64)
+        values = np.asarray(values, dtype=np.float64).reshape(len(stamps), self.value_count)
+        rows = np.tile(np.frombuffer(self.template, dtype=np.uint8), (len(stamps), 1))
+        seconds, nanoseconds = np.divmod(stamps, NS_PER_S)
+        stamp = np.empty((len(stamps), 2), dtype="<u4")
+        stamp[:, 0] = seconds.astype("<i4").view("<u4")
+        stamp[:, 1] = nanoseconds
+        stamp_bytes = stamp.view(np.uint8)
+        for offset in self.stamp_offsets:
+            rows[:, offset:offset + 8] = stamp_bytes
+        start = 0
+        for offset, count, dtype in self.runs:
+            size = np.dtype(dtype).itemsize
+            rows[:, offset:offset + size * count] = values[:, start:start + count].astype(dtype).view(np.uint8)
             start += count
         return rows
 

@@ -25,6 +25,14 @@ def type_name(msg_class: type) -> str:
     return f"{package}/msg/{msg_class.__name__}"
 
 
+# Types fsr records although the pip wheels have no Python package for them: their .msg text (nested types
+# are the wheels' own). tf2_msgs/msg/TFMessage is the Jazzy definition.
+DEFINITIONS_WITHOUT_PACKAGE = {
+    "tf2_msgs/msg/TFMessage": ("geometry_msgs/TransformStamped[] transforms\n",
+                               [("geometry_msgs", "TransformStamped")]),
+}
+
+
 def message_class(name: str) -> type:
     """The Python class of ``pkg/msg/Type`` (or ``pkg/Type``)."""
     parts = name.split("/")
@@ -73,21 +81,34 @@ def _nested_types(msg_class: type) -> list[tuple[str, str]]:
     return found
 
 
+def type_definition(type_name: str) -> str:
+    """The full ``ros2msg`` schema text of ``pkg/msg/Type``: :func:`message_definition` of its class, or for a type
+    of :data:`DEFINITIONS_WITHOUT_PACKAGE` its text with its nested types."""
+    if type_name in DEFINITIONS_WITHOUT_PACKAGE:
+        text, nested = DEFINITIONS_WITHOUT_PACKAGE[type_name]
+        return _with_nested(text, nested)
+    return message_definition(message_class(type_name))
+
+
 @cache
 def message_definition(msg_class: type) -> str:
     """The full ``ros2msg`` schema text of a message class, as rosbag2 records it."""
     package = msg_class.__module__.split(".")[0]
-    text = _msg_text(package, msg_class.__name__)
+    return _with_nested(_msg_text(package, msg_class.__name__), _nested_types(msg_class))
+
+
+def _with_nested(text: str, nested_types: list[tuple[str, str]]) -> str:
+    """``text`` followed by every type nested in ``nested_types`` once, depth-first in field order."""
     seen: set[tuple[str, str]] = set()
 
-    def append_nested(cls: type) -> None:
+    def append_nested(types: list[tuple[str, str]]) -> None:
         nonlocal text
-        for nested in _nested_types(cls):
+        for nested in types:
             if nested in seen:
                 continue
             seen.add(nested)
             text += f"\n{SEPARATOR}\nMSG: {nested[0]}/{nested[1]}\n{_msg_text(*nested)}"
-            append_nested(message_class(f"{nested[0]}/msg/{nested[1]}"))
+            append_nested(_nested_types(message_class(f"{nested[0]}/msg/{nested[1]}")))
 
-    append_nested(msg_class)
+    append_nested(nested_types)
     return text
