@@ -13,7 +13,7 @@ setup(
     ],
     install_requires=[
         "setuptools", "numpy", "matplotlib", "PyYAML", "mcap", "mcap-ros2-support", "ros-rosidl-parser",
-        "pandas", "dask[distributed]",
+        "pandas", "dask[distributed]", "pillow", "imageio-ffmpeg",
         "fsr_sim", "fsr_control", "fsr_estimation",
     ],
     extras_require={"test": ["pytest"]},  # fsr_bringup.testing (the graph-test pytest plugin)

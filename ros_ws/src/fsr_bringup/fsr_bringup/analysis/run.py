@@ -5,12 +5,12 @@ by side."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from fsr_bringup.analysis.figures import FigureOptions, Run, start_figures
-from fsr_bringup.analysis.load import load_flight
+from fsr_bringup.analysis.load import RecordedFlight, load_flight
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, flight_metrics
 from fsr_bringup.analysis.summary import comparison_summary, markdown_summary
 from fsr_sim.recording.reader import Recording, RecordingError, open_recording
@@ -23,6 +23,7 @@ class Analysis:
     figures: list[Path]
     metrics_path: Path
     summary_path: Path
+    flights: list[RecordedFlight] = field(default_factory=list)  # the recordings as loaded, in order
 
 
 def _opened(recording: Recording | str | Path) -> Recording:
@@ -82,7 +83,7 @@ def analyze_recordings(
     summary_path = out_dir / "summary.md"
     metrics_path.write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
     summary_path.write_text(summary, encoding="utf-8")
-    return Analysis(metrics, summary, written, metrics_path, summary_path)
+    return Analysis(metrics, summary, written, metrics_path, summary_path, flights)
 
 
 def analyze_recording(

@@ -3,20 +3,26 @@
 One recording: ``DIR/metrics.json``, ``DIR/summary.md`` and the figures (``--format png,pdf,svg``; PNG at
 300 dpi, journal column widths, no titles unless ``--titles``). Several recordings are overlaid in the same
 figures (a colour per run, ``--labels a,b``) with their metrics side by side in one table. A truncated
-recording (writer killed) is analysed up to its last complete chunk and said so. Exit codes:
-``fsr-analyze --help``.
+recording (writer killed) is analysed up to its last complete chunk and said so. ``--animate`` also writes
+``DIR/animation.mp4`` (``--animate gif``: ``animation.gif``): the vehicle in 3D with its trail, rotor thrusts and
+the true and estimated external force, at real time or ``--speed X``, ``--fps`` frames per second
+(:mod:`fsr_bringup.analysis.animation`). Exit codes: ``fsr-analyze --help``.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
 from pathlib import Path
 
-from fsr_sim.cli.arguments import ArgumentParser
-from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_OK
+from fsr_bringup.analysis.figure_options import ANIMATION_FORMATS, AnimationOptions
+from fsr_sim.cli.arguments import ArgumentParser, argument_type
+from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
 SETTLING_CHOICES = ("standard", "report")  # fsr_estimation.core.metrics.SETTLING_DEFINITIONS (imported lazily)
+PROGRESS_EVERY_S = 0.25  # s between updates of the animation's progress line (as fsr-fly's)
 
 
 def add_figure_arguments(parser: argparse.ArgumentParser) -> None:
@@ -45,10 +51,48 @@ def figure_options(args: argparse.Namespace) -> object:
     return FigureOptions(formats=formats, width=args.width, titles=args.titles)
 
 
+def positive_number(text: str) -> float:
+    """A finite number > 0 (``--speed``, ``--fps``)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"expected a number > 0; got '{text}'") from None
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"expected a number > 0; got '{text}'")
+    return value
+
+
+def add_animation_arguments(parser: argparse.ArgumentParser) -> None:
+    defaults = AnimationOptions()
+    parser.add_argument("--animate", nargs="?", const=defaults.format, choices=ANIMATION_FORMATS,
+                        help="also write the flight as an animation in the output folder: animation.mp4 (default) "
+                             "or animation.gif; after the recording: fsr-analyze RUN.mcap --animate [gif]")
+    parser.add_argument("--speed", type=argument_type(positive_number), metavar="X",
+                        help="animation speed: simulated seconds per second of video (default 1: real time; "
+                             "2: twice as fast)")
+    parser.add_argument("--fps", type=argument_type(positive_number), metavar="F",
+                        help=f"animation frames per second (default {defaults.fps:g}; a GIF at most 50)")
+
+
+def animation_options(args: argparse.Namespace) -> AnimationOptions | None:
+    """The animation asked for (None: none), ValueError for --speed/--fps without --animate or several runs."""
+    if args.animate is None:
+        given = [name for name in ("speed", "fps") if getattr(args, name) is not None]
+        if given:
+            raise ValueError(f"--{given[0]}: only with --animate")
+        return None
+    if len(args.recordings) > 1:
+        raise ValueError(f"--animate: draws one recording; got {len(args.recordings)}")
+    defaults = AnimationOptions()
+    return AnimationOptions(format=args.animate, fps=defaults.fps if args.fps is None else args.fps,
+                            speed=defaults.speed if args.speed is None else args.speed)
+
+
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = ArgumentParser(prog="fsr-analyze", doc=__doc__, exit_codes={
         EXIT_OK: "done", EXIT_FAILURE: "the output cannot be written",
-        EXIT_CONFIG_ERROR: "a file is missing, not MCAP or empty, or an argument is invalid (one line on stderr)"})
+        EXIT_CONFIG_ERROR: "a file is missing, not MCAP or empty, or an argument is invalid (one line on stderr)",
+        EXIT_INTERRUPTED: "interrupted (SIGINT/SIGTERM) while writing the animation: no animation file"})
     parser.add_argument("recordings", type=Path, nargs="+", metavar="RECORDING",
                         help="MCAP file(s) written by fsr-record / fsr-fly; several are overlaid")
     parser.add_argument("--out", type=Path, help="output folder (default: next to the first recording, "
@@ -59,6 +103,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--settle", type=float, default=None, help="start of the wrench RMS window [s] (default 5)")
     parser.add_argument("--no-figures", action="store_true", help="metrics and summary only")
     add_figure_arguments(parser)
+    add_animation_arguments(parser)
     return parser.parse_args(argv)
 
 
@@ -74,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     labels = [label.strip() for label in args.labels.split(",")] if args.labels else None
     try:
         options = figure_options(args)
+        animation = animation_options(args)
         recordings = []
         for path in args.recordings:
             recording = open_recording(path)
@@ -93,6 +139,57 @@ def main(argv: list[str] | None = None) -> int:
     print(result.summary)
     print(f"fsr-analyze: wrote {result.metrics_path}, {result.summary_path} and {len(result.figures)} figure files "
           f"in {out}")
+    return EXIT_OK if animation is None else animate(result.flights[0], out, animation)
+
+
+def animate(flight: object, out: Path, options: AnimationOptions) -> int:
+    """Write the animation of ``flight`` (a RecordedFlight) with progress: in place on a terminal, else a line
+    every 10 s (the Console of fsr-fly). SIGTERM stops it as Ctrl-C does, leaving no animation file."""
+    import time
+
+    from fsr_bringup.analysis.animation import write_animation
+    from fsr_bringup.runner.flight import Console
+
+    console = Console(prog="fsr-analyze")
+    start = time.perf_counter()
+    shown = [start]
+
+    def progress(done: int, total: int) -> None:
+        now = time.perf_counter()
+        if now - shown[0] < PROGRESS_EVERY_S and done < total:
+            return
+        shown[0] = now
+        wall = now - start
+        rate = done / wall if wall > 0 else 0.0
+        eta = (total - done) / rate if rate > 0 else float("nan")
+        console.progress(f"animation: frame {done} / {total}   {rate:5.1f} frames/s   ETA {eta:5.1f} s")
+
+    def terminate(signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        written = write_animation(flight, out, options, progress)
+    except KeyboardInterrupt:
+        console.end_progress()
+        print(f"fsr-analyze: interrupted: no animation written (the analysis is in {out})", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except ValueError as error:
+        console.end_progress()
+        print(f"fsr-analyze: error: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    except OSError as error:
+        console.end_progress()
+        print(f"fsr-analyze: error: cannot write the animation in {out}: {error.strerror or error}", file=sys.stderr)
+        return EXIT_FAILURE
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    console.end_progress()
+    for note in written.notes:
+        print(f"fsr-analyze: animation: {note}")
+    pace = "real time" if options.speed == 1 else f"{options.speed:g}x real time"
+    print(f"fsr-analyze: wrote {written.path} ({written.frames} frames at {options.fps:g} fps, {pace}) in "
+          f"{time.perf_counter() - start:.1f} s")
     return EXIT_OK
 
 
