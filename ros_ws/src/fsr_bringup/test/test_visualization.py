@@ -14,7 +14,7 @@ from mcap_ros2.decoder import DecoderFactory
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_bringup.visualization.config import visualization_config
 from fsr_bringup.visualization.foxglove import layout, layout_text
-from fsr_bringup.visualization.frames import WORLD_IN_MAP, axis_quaternions, rotor_axes
+from fsr_bringup.visualization.frames import WORLD_IN_MAP, axis_quaternions
 from fsr_bringup.visualization.markers import FORCE_PER_ARM, speed_colours
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
@@ -30,6 +30,7 @@ from fsr_sim.contract import (
     recording_selection,
     rotor_frame,
 )
+from fsr_sim.model.allocation import rotor_axes
 from fsr_sim.model.so3 import rotation_from_quaternion
 from fsr_sim.ros.message_schema import message_class
 

@@ -31,10 +31,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsr_bringup.analysis.load import RecordedFlight, RotorCommand, Wrench, zero_order_hold
-from fsr_sim.model.allocation import tilt_basis
+from fsr_bringup.visualization.frames import NED_TO_ENU
+from fsr_sim.model.allocation import rotor_axes
 from fsr_sim.model.vehicle import Vehicle
 
-NED_TO_VIEW = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])  # (north, east, down) -> (east, north, up)
+NED_TO_VIEW = NED_TO_ENU  # (north, east, down) -> (east, north, up): the view is map's frame (REP 103)
 TRAIL_POINTS = 3000  # the trail and the planned path are drawn through at most this many samples
 DISC_POINTS = 24  # vertices of a rotor disc's outline
 HEAD_FRACTION = 0.22  # arrow head length / arrow length
@@ -101,13 +102,10 @@ def world_vectors(rotation: np.ndarray, body: np.ndarray) -> np.ndarray:
 
 
 def rotor_axes_body(vehicle: Vehicle, tilts: np.ndarray | None, frames: int) -> np.ndarray:
-    """Thrust axes ``z_i = cos(alpha_i) z_0,i + sin(alpha_i) a_i x z_0,i`` (body FRD, unit), (F, n, 3), for tilt
-    angles ``alpha`` (F, n) [rad] (NaN, or None: the fixed axes ``z_0,i``)."""
-    if tilts is None or vehicle.tilt_axes is None:
-        return np.broadcast_to(vehicle.thrust_axes, (frames, vehicle.rotor_count, 3)).copy()
-    alpha = np.nan_to_num(tilts, nan=0.0)[..., None]
-    z_v, z_l = tilt_basis(vehicle)
-    return np.cos(alpha) * z_v + np.sin(alpha) * z_l
+    """Thrust axes ``z_i`` (body FRD, unit), (F, n, 3), at tilt angles ``alpha`` (F, n) [rad] (NaN, or None: the
+    fixed axes ``z_0,i``): :func:`fsr_sim.model.allocation.rotor_axes`."""
+    axes = rotor_axes(vehicle, None if tilts is None else np.nan_to_num(tilts, nan=0.0))
+    return np.broadcast_to(axes, (frames, vehicle.rotor_count, 3)).copy()
 
 
 def disc_outlines(centres: np.ndarray, axes: np.ndarray, radius: float, points: int = DISC_POINTS) -> np.ndarray:

@@ -16,19 +16,19 @@ its thrust axis reversed.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from fsr_sim.contract import BODY_FLU_FRAME, BODY_FRAME, MAP_FRAME, WORLD_FRAME, frame_prefix, rotor_frame
-from fsr_sim.model.allocation import tilt_basis
+from fsr_sim.model.allocation import rotor_axes
+from fsr_sim.model.so3 import quaternion_from_rotation
 from fsr_sim.model.vehicle import Vehicle
 from fsr_sim.ros.cdr_pack import StampedNumbers, Template
 
-HALF_SQRT2 = math.sqrt(0.5)
-WORLD_IN_MAP = np.array((HALF_SQRT2, HALF_SQRT2, 0.0, 0.0))  # x y z w: pi about (1, 1, 0)/sqrt(2)
-FLU_IN_FRD = np.array((1.0, 0.0, 0.0, 0.0))  # pi about x
+NED_TO_ENU = np.array(((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, -1.0)))  # (n, e, d) -> (e, n, -d)
+WORLD_IN_MAP = quaternion_from_rotation(NED_TO_ENU)  # x y z w: pi about (1, 1, 0)/sqrt(2)
+FLU_IN_FRD = np.array((1.0, 0.0, 0.0, 0.0))  # pi about x: (x, y, z) -> (x, -y, -z)
 TRANSFORM_VALUES = 7  # translation (3), rotation x y z w (4)
 
 
@@ -55,16 +55,6 @@ def axis_quaternions(axes: np.ndarray) -> np.ndarray:
     q[opposite] = (1.0, 0.0, 0.0, 0.0)
     norm[opposite] = 1.0
     return q / norm
-
-
-def rotor_axes(vehicle: Vehicle, tilts: np.ndarray | None) -> np.ndarray:
-    """Thrust axes ``z_i`` (body FRD, unit) (..., n, 3) at tilts (..., n) [rad] (None or fixed rotors: their fixed
-    axes, (n, 3))."""
-    if tilts is None or vehicle.tilt_axes is None:
-        return np.array(vehicle.thrust_axes)
-    z_v, z_l = tilt_basis(vehicle)
-    alpha = np.asarray(tilts, dtype=float)[..., None]
-    return np.cos(alpha) * z_v + np.sin(alpha) * z_l
 
 
 def rotor_frames(vehicle: Vehicle, prefix: str) -> list[tuple[str, str]]:

@@ -25,8 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_bringup.visualization.frames import axis_quaternions, rotor_axes
+from fsr_bringup.visualization.frames import axis_quaternions
 from fsr_sim.contract import WORLD_FRAME
+from fsr_sim.model.allocation import rotor_axes
 from fsr_sim.model.environment import Environment
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.model.vehicle import Vehicle

@@ -28,11 +28,12 @@ from fsr_sim.model.vehicle import Vehicle
 
 
 def rotor_axes(vehicle: Vehicle, tilt_angles: np.ndarray | None = None) -> np.ndarray:
-    """Thrust directions ``z_i`` (body FRD, unit), shape (n, 3), for tilt angles ``alpha_i`` [rad]."""
-    n = vehicle.rotor_count
+    """Thrust directions ``z_i = cos(alpha_i) z_0,i + sin(alpha_i) a_i x z_0,i`` (body FRD, unit), shape (..., n, 3),
+    for tilt angles ``alpha_i`` [rad] of shape (..., n) (many samples at once); the fixed axes ``z_0,i`` (n, 3)
+    without servos or tilts."""
     if vehicle.tilt_axes is None or tilt_angles is None:
         return np.array(vehicle.thrust_axes)
-    alpha = np.asarray(tilt_angles, dtype=float).reshape(n, 1)
+    alpha = np.asarray(tilt_angles, dtype=float).reshape(*np.shape(tilt_angles)[:-1], vehicle.rotor_count, 1)
     z_v, z_l = tilt_basis(vehicle)
     return np.cos(alpha) * z_v + np.sin(alpha) * z_l
 
