@@ -21,6 +21,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -82,9 +83,13 @@ def _scene(scenario: Scenario | None) -> _Scene | None:
         times = np.linspace(0.0, trajectory.end_time, PATH_POINTS)
         path = np.array([trajectory.evaluate(t).position for t in times])
     except (ConfigError, ValueError) as error:
-        print(f"fsr-record: warning: no markers: {error}", file=sys.stderr, flush=True)
+        _warn(f"no markers in the recording: {error}")
         return None
     return _Scene(simulation, visualization, estimate, path)
+
+
+def _warn(text: str) -> None:
+    print(f"{Path(sys.argv[0]).name or 'fsr'}: warning: {text}", file=sys.stderr, flush=True)
 
 
 def _xyz(columns: Columns, prefix: str, names: Sequence[str] = POSITION) -> np.ndarray:
@@ -184,7 +189,7 @@ class DerivedTopics:
             return decode_columns(payloads if isinstance(payloads, np.ndarray) else [bytes(p) for p in payloads],
                                   type_name)
         except (LayoutError, KeyError) as error:
-            print(f"fsr-record: warning: cannot draw from {type_name}: {error}", file=sys.stderr, flush=True)
+            _warn(f"cannot draw from {type_name}: {error}")
             return None
 
     def _markers(self, complete: list[int]) -> list[tuple[str, np.ndarray, np.ndarray]]:
