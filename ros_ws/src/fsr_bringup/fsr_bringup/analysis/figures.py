@@ -1,4 +1,4 @@
-"""Figures of one or several flights for a paper (matplotlib, Agg, no pyplot state).
+r"""Figures of one or several flights for a paper (matplotlib, Agg, no pyplot state).
 
 Each ``*_figure`` function draws one figure from a list of :class:`Run` (one run, or several overlaid: two
 estimator settings, two controllers) and returns it, or a reason why it has nothing to show (topics
@@ -8,15 +8,21 @@ and turns the reasons into notes. Conventions, the same in every figure:
 * size: one journal column (3.5 in) or two (7.16 in) wide, 8 pt text (:data:`RC`), no title inside the
   figure unless asked for; the scenario and the runs go into the file's metadata (PNG text chunks, PDF info,
   SVG ``<metadata>``) and into ``summary.md``;
-* every axis label names its quantity, frame (world NED, body FRD, ZYX Euler) and unit; time is the
-  simulated time [s];
+* every axis label names its quantity in math notation (mathtext: ``$p_x$``, ``$\tau_x$``,
+  ``$\|e_\Omega\|$``, ``$f_{e,x}$``), its frame (world NED, body FRD, ZYX Euler) and unit; time is the
+  simulated time ``$t$`` [s];
 * colours from the Okabe-Ito palette (colour-blind safe), one meaning per colour in a figure: a run per
-  colour (:data:`RUN_COLOURS`), black dashed the reference / the truth the estimate must reach, grey what
-  is only shown for comparison (the external wrench alone, model values, limits); in rotor figures a rotor
-  per colour;
+  colour (:data:`RUN_COLOURS`), black dashed the reference / the truth the estimate must reach, a run's
+  colour dashed its commanded attitude ``R_c``, grey what is only shown for comparison (the external wrench
+  alone, model values, limits); in rotor figures a rotor per colour; light grey bands the time a windowed
+  disturbance acts;
 * a panel whose data spans less than its :data:`FLOORS` value is drawn on a fixed axis of that height with
   a note (no autoscaled rounding noise), tick labels without offset notation;
-* legends are placed above the panels, never over the data;
+* the rules of :mod:`fsr_bringup.analysis.figure_rules`: a zoom on the first seconds beside the panels of a
+  figure with a start transient shorter than 2 % of its time axis, limits drawn only near the data, no
+  panel that is zero by construction, disturbance windows shaded;
+* one legend above the panels, never over the data; panels placed by
+  :mod:`fsr_bringup.analysis.figure_layout` (one measurement, no layout engine);
 * long series are decimated for drawing only (:func:`envelope`: per-bucket min and max, so peaks survive);
   metrics always use every sample.
 """
@@ -32,12 +38,13 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.legend import Legend
 
 from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, thrust_ratio_series
+from fsr_bringup.analysis.figure_layout import PNG_DPI, Panel, Panels, add_zoom, arrange, envelope, panel_grid
 from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
+from fsr_bringup.analysis.figure_rules import disturbance_windows, limits_near, start_transient, zoom_span
 from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_sim.contract import REFERENCE, WRENCH_CMD
@@ -45,10 +52,11 @@ from fsr_sim.model.so3 import euler_zyx_from_rotation
 
 ONE_COLUMN_IN = 3.5  # in, one journal column
 TWO_COLUMN_IN = 7.16  # in, full page width (two columns)
-PNG_DPI = 300
 FONT_PT = 8.0
-PLOT_BUCKETS = 1500  # longer series are drawn as per-bucket min and max (same picture, far fewer points)
 AXES = ("x", "y", "z")
+EULER = (r"roll $\phi$", r"pitch $\theta$", r"yaw $\psi$")
+TIME_LABEL = r"time $t$ [s]"
+ZOOM_TIME_LABEL = r"$t$ [s]"
 
 # Okabe & Ito (2008), colour-universal design.
 OKABE_ITO = {
@@ -60,8 +68,11 @@ RUN_COLOURS = tuple(OKABE_ITO[k] for k in ("blue", "vermillion", "bluish_green",
 ROTOR_COLOURS = tuple(OKABE_ITO[k] for k in ("blue", "vermillion", "bluish_green", "reddish_purple", "orange",
                                              "sky_blue", "yellow", "black"))
 TRUTH = {"color": OKABE_ITO["black"], "ls": "--", "lw": 1.0}
+COMMANDED = {"ls": (0, (5.0, 1.5)), "lw": 0.9}  # in the run's colour: what its controller commanded (R_c)
 ASIDE = {"color": "0.55", "ls": ":", "lw": 1.0}  # grey: shown for comparison only (not a target)
 LIMIT = {"color": "0.55", "ls": "-.", "lw": 0.8}
+DISTURBANCE = {"facecolor": "0.9", "edgecolor": "none", "zorder": 0.0}  # behind the grid and the data
+DISTURBANCE_LABEL = "disturbance acting"
 
 # Smallest axis height per unit: a channel spanning less is drawn flat on this fixed axis, with a note.
 FLOORS = {"m": 1e-3, "m/s": 1e-3, "deg": 1e-3, "rad/s": 1e-3, "N": 1e-3, "N m": 1e-4, "kg": 1e-4, "-": 1e-4,
@@ -73,6 +84,7 @@ RC = {
     "axes.formatter.useoffset": False, "axes.formatter.limits": (-4, 5), "lines.linewidth": 1.0,
     "axes.linewidth": 0.6, "grid.linewidth": 0.4, "grid.alpha": 0.4, "legend.frameon": False,
     "svg.fonttype": "none", "pdf.fonttype": 42, "savefig.dpi": PNG_DPI, "font.family": "DejaVu Sans",
+    "mathtext.fontset": "dejavusans",
 }
 
 
@@ -98,89 +110,93 @@ class Drawn:
     notes: list[str] = field(default_factory=list)
 
 
-def envelope(t: np.ndarray, y: np.ndarray, buckets: int = PLOT_BUCKETS) -> tuple[np.ndarray, np.ndarray]:
-    """Min-max decimation of a 1-D series for drawing: each of ``buckets`` equal slices keeps its minimum and
-    maximum in time order, so peaks (saturation spikes) survive. Short series are returned as they are."""
-    n = len(t)
-    size = n // buckets
-    if size < 4:
-        return t, y
-    head = buckets * size
-    block = y[:head].reshape(buckets, size)
-    i_min = np.argmin(np.where(np.isnan(block), np.inf, block), axis=1)
-    i_max = np.argmax(np.where(np.isnan(block), -np.inf, block), axis=1)
-    index = np.sort(np.stack((i_min, i_max), axis=1), axis=1) + (np.arange(buckets) * size)[:, None]
-    index = np.concatenate((index.ravel(), np.arange(head, n)))
-    return t[index], y[index]
-
-
-def _plot(ax: Axes, t: np.ndarray, y: np.ndarray, **kwargs: object) -> None:
-    ax.plot(*envelope(t, y), **kwargs)
-
-
-def _figure(rows: int, cols: int, width: float, row_height: float = 1.15) -> tuple[Figure, np.ndarray]:
-    fig = Figure(figsize=(width, row_height * rows + 0.55), layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = np.atleast_1d(fig.subplots(rows, cols, sharex=True, squeeze=False))
-    return fig, axes
-
-
-def _label(ax: Axes, text: str, unit: str, frame: str = "") -> None:
-    """Axis label ``text [unit]`` with the frame on a second line; the unit also selects the panel's floor
-    (:data:`FLOORS`)."""
-    shown = unit.removeprefix("rotor ")
-    ax.set_ylabel(f"{text} [{shown}]" + (f"\n{frame}" if frame else ""))
-    ax._fsr_unit = unit  # type: ignore[attr-defined]
-
-
-def _apply_floor(ax: Axes) -> str | None:
+def _apply_floor(panel: Panel) -> str | None:
     """Fixed axis for a panel whose data spans less than its floor; returns the note drawn on it."""
-    unit = getattr(ax, "_fsr_unit", None)
-    floor = FLOORS.get(unit) if unit else None
-    if floor is None:
+    floor = FLOORS.get(panel.unit) if panel.unit else None
+    extent = panel.data_range() if floor is not None else None
+    if extent is None:
         return None
-    values = [np.asarray(line.get_ydata(), dtype=float) for line in ax.get_lines()
-              if line.get_transform() == ax.transData]
-    values = [v[np.isfinite(v)] for v in values if v.size]
-    values = [v for v in values if v.size]
-    if not values:
-        return None
-    low = min(float(v.min()) for v in values)
-    high = max(float(v.max()) for v in values)
+    low, high = extent
     if high - low >= floor:
         return None
     centre = round(0.5 * (low + high) / floor) * floor
     bottom = 0.0 if low >= 0.0 and centre - floor < 0.0 else centre - floor  # a norm stays on [0, 2 floor]
-    ax.set_ylim(bottom, bottom + 2.0 * floor)
-    note = f"range < {floor:g} {unit}"
-    ax.text(0.99, 0.04, note, transform=ax.transAxes, ha="right", va="bottom", color="0.35")
+    panel.ax.set_ylim(bottom, bottom + 2.0 * floor)
+    note = f"range < {floor:g} {panel.unit.removeprefix('rotor ')}"
+    panel.ax.text(0.99, 0.04, note, transform=panel.ax.transAxes, ha="right", va="bottom", color="0.35")
     return note
 
 
-def _finish(fig: Figure, axes: np.ndarray, title: str, options: FigureOptions, legend_cols: int = 4) -> None:
-    """Grid, floors, time label, one legend above the panels (no duplicates), optional title."""
+def _time_range(panels: Panels) -> tuple[float, float] | None:
+    times = [t for panel in panels.flat for t, _, _ in panel.series if len(t)]
+    if not times:
+        return None
+    return min(float(t[0]) for t in times), max(float(t[-1]) for t in times)
+
+
+def _windows(runs: Iterable[Run], t_range: tuple[float, float]) -> list[tuple[float, float]]:
+    """The disturbance windows of the runs' scenarios (:func:`.figure_rules.disturbance_windows`)."""
+    profiles = [p for run in runs if run.flight.config is not None for p in run.flight.config.disturbances]
+    return disturbance_windows(profiles, *t_range)
+
+
+def _shade(panels: Panels, windows: list[tuple[float, float]]) -> None:
+    for panel in panels.flat:
+        for start, end in windows:
+            panel.ax.axvspan(start, end, label=DISTURBANCE_LABEL, **DISTURBANCE)
+            if panel.zoom is not None:
+                low, high = panel.zoom.get_xlim()
+                if start < high and end > low:
+                    panel.zoom.axvspan(max(start, low), min(end, high), **DISTURBANCE)
+
+
+def finish_panels(panels: Panels, runs: list[Run], title: str, options: FigureOptions, legend_cols: int = 4,
+                  zoom: bool = True) -> None:
+    """What every figure does once its data are drawn (:func:`~fsr_bringup.analysis.figure_layout.panel_grid`,
+    :meth:`~fsr_bringup.analysis.figure_layout.Panel.plot`): floors, the zoom on a short start transient
+    (``zoom``), the runs' disturbance windows, grid, time labels, one legend above the panels (no duplicates;
+    at most ``legend_cols`` columns), the ``title`` if the options ask for titles, then the layout."""
+    for panel in panels.flat:
+        _apply_floor(panel)
+    t_range = _time_range(panels)
+    if t_range is not None:
+        if zoom:
+            transients = [start_transient([(t, y) for t, y, _ in panel.series], FLOORS.get(panel.unit, 0.0))
+                          for panel in panels.flat]
+            span = zoom_span(transients, t_range[1] - t_range[0])
+            if span is not None:
+                add_zoom(panels, t_range[0], span, f"first {span:g} s")
+        _shade(panels, _windows(runs, t_range))
     handles: dict[str, object] = {}
-    for ax in axes.flat:
-        ax.grid(True)
-        _apply_floor(ax)
-        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+    entries = [panel.ax.get_legend_handles_labels() for panel in panels.flat]
+    for found, labels in sorted(entries, key=lambda entry: -len(entry[1])):  # the fullest panel sets the order
+        for handle, label in zip(found, labels, strict=True):
             handles.setdefault(label, handle)
-    for ax in axes[-1]:
-        ax.set_xlabel("time [s]")
-    if handles:
-        fig.legend(list(handles.values()), list(handles), loc="outside upper center",
-                   ncols=_legend_columns(list(handles), fig.get_figwidth(), legend_cols), handlelength=2.0,
-                   columnspacing=1.2)
-    if options.titles:
-        fig.suptitle(title)
+    for panel in panels.flat:
+        for ax in (panel.ax, panel.zoom):
+            if ax is not None:
+                ax.grid(True)
+    for panel in panels.cells[-1]:
+        panel.ax.set_xlabel(TIME_LABEL)
+        if panel.zoom is not None:
+            panel.zoom.set_xlabel(ZOOM_TIME_LABEL)
+    legend = _legend(panels.fig, handles, legend_cols) if handles else None
+    arrange(panels, legend, title if options.titles else None)
 
 
-def _legend_columns(labels: list[str], width_in: float, most: int) -> int:
-    """Most legend columns (at most ``most``) whose entries fit in the figure width: an entry is about its
-    text (0.6 em per character) plus the handle and spacing (~3.2 em)."""
-    em = FONT_PT / 72.0  # in
-    entry = max(len(label) for label in labels) * 0.6 * em + 3.2 * em
-    return max(1, min(most, len(labels), int(width_in // entry)))
+def _legend(fig: Figure, handles: dict[str, object], most: int) -> Legend:
+    """The figure's legend in the most columns (at most ``most``) that fit in its width, measured."""
+    def legend(ncols: int) -> Legend:
+        return fig.legend(list(handles.values()), list(handles), loc="upper center", ncols=ncols,
+                          handlelength=2.0, columnspacing=1.2)
+
+    renderer = fig.canvas.get_renderer()
+    for ncols in range(min(most, len(handles)), 1, -1):
+        wide = legend(ncols)
+        if wide.get_window_extent(renderer).width <= fig.bbox.width:
+            return wide
+        wide.remove()
+    return legend(1)
 
 
 def _width(natural: str, options: FigureOptions) -> float:
@@ -188,10 +204,13 @@ def _width(natural: str, options: FigureOptions) -> float:
     return TWO_COLUMN_IN if choice == "two" else ONE_COLUMN_IN
 
 
-def _degrees_unwrapped(rpy: np.ndarray) -> np.ndarray:
-    """Euler angles in degrees with yaw unwrapped (no +-180 deg jumps in a turning flight)."""
+def _degrees_unwrapped(rpy: np.ndarray, yaw_near: float | None = None) -> np.ndarray:
+    """Euler angles in degrees with yaw unwrapped (no +-180 deg jumps in a turning flight), its first value
+    shifted by whole turns to within 180 deg of ``yaw_near`` [deg] (the same branch as the flown yaw)."""
     out = np.degrees(rpy)
     out[:, 2] = np.degrees(np.unwrap(rpy[:, 2]))
+    if yaw_near is not None and len(out) and math.isfinite(out[0, 2]):
+        out[:, 2] += 360.0 * round((yaw_near - out[0, 2]) / 360.0)
     return out
 
 
@@ -200,27 +219,42 @@ def _colour(index: int) -> str:
 
 
 def pose_figure(runs: list[Run], options: FigureOptions) -> Drawn:
-    """Position (world NED) [m] and ZYX Euler attitude [deg] of each run vs the planner's reference."""
+    """Position (world NED) [m] and ZYX Euler attitude [deg] of each run (solid), its commanded attitude
+    ``R_c`` (``attitude_cmd``: what the attitude error of the summary is measured against; dashed, the run's
+    colour) and the planner's reference ``p_d``, ``R_d`` (black dashed)."""
     runs_with = [r for r in runs if r.flight.odom is not None]
     if not runs_with:
         return Drawn(None, "no odom")
-    fig, axes = _figure(3, 2, _width("two", options))
-    ref = next((r.flight.reference for r in runs_with if r.flight.reference is not None), None)
-    ref_rpy = _degrees_unwrapped(euler_zyx_from_rotation(ref.rotation)) if ref is not None else None
+    panels = panel_grid(3, 2, _width("two", options))
+    notes = []
+    yaw_start = None
     for index, run in enumerate(runs_with):
         odom = run.flight.odom
-        rpy = _degrees_unwrapped(euler_zyx_from_rotation(odom.rotation))
+        rpy = _degrees_unwrapped(euler_zyx_from_rotation(odom.rotation), yaw_start)
+        yaw_start = rpy[0, 2] if yaw_start is None else yaw_start
+        style = {"color": _colour(index), "label": f"{run.label}: $p$, $R$"}
         for i in range(3):
-            _plot(axes[i, 0], odom.t, odom.position[:, i], color=_colour(index), label=run.label)
-            _plot(axes[i, 1], odom.t, rpy[:, i], color=_colour(index), label=run.label)
-    for i, (name, angle) in enumerate(zip(AXES, ("roll", "pitch", "yaw"), strict=True)):
-        if ref is not None:
-            _plot(axes[i, 0], ref.t, ref.position[:, i], label=REFERENCE.name, **TRUTH)
-            _plot(axes[i, 1], ref.t, ref_rpy[:, i], label=REFERENCE.name, **TRUTH)
-        _label(axes[i, 0], f"p_{name}", "m", "world NED")
-        _label(axes[i, 1], angle, "deg", "ZYX Euler")
-    _finish(fig, axes, "pose vs reference", options)
-    return Drawn(fig)
+            panels[i, 0].plot(odom.t, odom.position[:, i], **style)
+            panels[i, 1].plot(odom.t, rpy[:, i], **style)
+        commanded = run.flight.attitude_cmd
+        if commanded is None:
+            notes.append(f"pose: {run.label} has no attitude_cmd; its commanded attitude R_c is not drawn")
+            continue
+        rpy_c = _degrees_unwrapped(euler_zyx_from_rotation(commanded.rotation), rpy[0, 2])
+        for i in range(3):
+            panels[i, 1].plot(commanded.t, rpy_c[:, i], color=_colour(index),
+                              label=f"{run.label}: commanded $R_c$", **COMMANDED)
+    ref = next((r.flight.reference for r in runs_with if r.flight.reference is not None), None)
+    if ref is not None:
+        ref_rpy = _degrees_unwrapped(euler_zyx_from_rotation(ref.rotation), yaw_start)
+        for i in range(3):
+            panels[i, 0].plot(ref.t, ref.position[:, i], label=f"{REFERENCE.name} $p_d$, $R_d$", **TRUTH)
+            panels[i, 1].plot(ref.t, ref_rpy[:, i], label=f"{REFERENCE.name} $p_d$, $R_d$", **TRUTH)
+    for i, (name, angle) in enumerate(zip(AXES, EULER, strict=True)):
+        panels[i, 0].label(f"$p_{name}$", "m", "world NED")
+        panels[i, 1].label(angle, "deg", "ZYX Euler")
+    finish_panels(panels, runs_with, "pose vs reference", options, legend_cols=3)
+    return Drawn(panels.fig, notes=notes)
 
 
 def errors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
@@ -230,53 +264,77 @@ def errors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     series = [s for s in series if s[2] is not None]
     if not series:
         return Drawn(None, "odom or reference missing")
-    fig, axes = _figure(4, 1, _width("one", options), row_height=0.95)
+    panels = panel_grid(4, 1, _width("one", options), row_height=0.95)
     notes = []
     for index, run, errors in series:
         style = {"color": _colour(index), "label": run.label}
-        _plot(axes[0, 0], errors.t, np.linalg.norm(errors.position, axis=1), **style)
-        _plot(axes[1, 0], errors.t, np.linalg.norm(errors.velocity, axis=1), **style)
-        _plot(axes[2, 0], errors.t, errors.attitude_deg, **style)
-        _plot(axes[3, 0], errors.t, np.linalg.norm(errors.angular_velocity, axis=1), **style)
+        panels[0, 0].plot(errors.t, np.linalg.norm(errors.position, axis=1), **style)
+        panels[1, 0].plot(errors.t, np.linalg.norm(errors.velocity, axis=1), **style)
+        panels[2, 0].plot(errors.t, errors.attitude_deg, **style)
+        panels[3, 0].plot(errors.t, np.linalg.norm(errors.angular_velocity, axis=1), **style)
         if not errors.attitude_commanded:
             notes.append(f"errors: {run.label} has no attitude_cmd; its attitude error is against R_d")
-    _label(axes[0, 0], "|e_p|", "m", "world NED")
-    _label(axes[1, 0], "|e_v|", "m/s", "world NED")
-    _label(axes[2, 0], "att. error", "deg", "angle of R_c^T R")
-    _label(axes[3, 0], "|e_omega|", "rad/s", "body FRD")
-    _finish(fig, axes, "tracking errors", options, legend_cols=3)
-    return Drawn(fig, notes=notes)
+    panels[0, 0].label(r"$\|e_p\|$", "m", "world NED")
+    panels[1, 0].label(r"$\|e_v\|$", "m/s", "world NED")
+    panels[2, 0].label(r"$\angle(R_c^\top R)$", "deg", "rotation angle")
+    panels[3, 0].label(r"$\|e_\Omega\|$", "rad/s", "body FRD")
+    finish_panels(panels, [run for _, run, _ in series], "tracking errors", options, legend_cols=3)
+    return Drawn(panels.fig, notes=notes)
 
 
 def wrench_command_figure(runs: list[Run], options: FigureOptions) -> Drawn:
-    """Commanded body force [N] and torque [N m] (``wrench_cmd``, body FRD) of each run, with ``-m g``."""
+    """Commanded body force [N] and torque [N m] (``wrench_cmd``, body FRD) of each run, with ``-m g``. A
+    vehicle that is not fully actuated commands thrust along ``-z_b`` only: its ``f_x``, ``f_y`` (zero by
+    construction) have no panel and the figure is one column of ``f_z``, ``tau_x``, ``tau_y``, ``tau_z``."""
     runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.wrench_cmd is not None]
     if not runs_with:
         return Drawn(None, "no wrench_cmd")
-    fig, axes = _figure(3, 2, _width("two", options))
+    configs = [r.flight.config for _, r in runs_with]
+    thrust_only = all(c is not None and not c.vehicle.fully_actuated for c in configs)
+    if thrust_only:
+        panels = panel_grid(4, 1, _width("one", options), row_height=0.95)
+        force_panels = {2: panels[0, 0]}
+        torque_panels = {i: panels[i + 1, 0] for i in range(3)}
+    else:
+        panels = panel_grid(3, 2, _width("two", options))
+        force_panels = {i: panels[i, 0] for i in range(3)}
+        torque_panels = {i: panels[i, 1] for i in range(3)}
     for index, run in runs_with:
         cmd = run.flight.wrench_cmd
-        for i in range(3):
-            _plot(axes[i, 0], cmd.t, cmd.force[:, i], color=_colour(index), label=run.label)
-            _plot(axes[i, 1], cmd.t, cmd.torque[:, i], color=_colour(index), label=run.label)
-    config = runs_with[0][1].flight.config
-    if config is not None:
-        weight = config.vehicle.weight
-        axes[2, 0].axhline(-weight, label=f"-m g (controller model, {weight:.2f} N)", **ASIDE)
-    for i, name in enumerate(AXES):
-        _label(axes[i, 0], f"f_{name}", "N", "body FRD")
-        _label(axes[i, 1], f"tau_{name}", "N m", "body FRD")
-    _finish(fig, axes, "commanded wrench", options)
-    return Drawn(fig)
+        for i, panel in force_panels.items():
+            panel.plot(cmd.t, cmd.force[:, i], color=_colour(index), label=run.label)
+        for i, panel in torque_panels.items():
+            panel.plot(cmd.t, cmd.torque[:, i], color=_colour(index), label=run.label)
+    if configs[0] is not None:
+        weight = configs[0].vehicle.weight
+        force_panels[2].hline(-weight, label=f"$-m g$ (controller model, {weight:.2f} N)", **ASIDE)
+    for i, panel in force_panels.items():
+        panel.label(f"$f_{AXES[i]}$", "N", "body FRD")
+    for i, panel in torque_panels.items():
+        panel.label(rf"$\tau_{AXES[i]}$", "N m", "body FRD")
+    finish_panels(panels, [run for _, run in runs_with], "commanded wrench", options,
+                  legend_cols=2 if thrust_only else 4)
+    notes = ([f"{WRENCH_CMD.name}: no f_x, f_y panels (thrust along -z_b only: zero by construction)"]
+             if thrust_only else [])
+    return Drawn(panels.fig, notes=notes)
+
+
+def _limit_lines(panel: Panel, limits: Iterable[float], label: str) -> None:
+    """The ``limits`` near the panel's data as grey lines (:func:`~fsr_bringup.analysis.figure_rules.limits_near`)."""
+    extent = panel.data_range()
+    if extent is not None:
+        for limit in limits_near(*extent, limits):
+            panel.hline(limit, label=label, **LIMIT)
 
 
 def rotors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
-    """Rotor speeds [rad/s] (and tilt angles [deg]) per run (one row each), a colour per rotor, limits grey."""
+    """Commanded rotor speeds [rad/s] (and tilt angles [deg]) per run (one row each), a colour per rotor, on
+    axes scaled to the data; a limit is drawn (grey) where the data come near it."""
     runs_with = [r for r in runs if r.flight.rotor_cmd is not None]
     if not runs_with:
         return Drawn(None, "no rotor_cmd (wrench actuation has no rotors, or not recorded)")
     tilting = any(r.flight.rotor_cmd.tilts is not None for r in runs_with)
-    fig, axes = _figure(len(runs_with), 2 if tilting else 1, _width("two" if tilting else "one", options),
+    panels = panel_grid(len(runs_with), 2 if tilting else 1, _width("two" if tilting else "one", options),
                         row_height=1.5)
     for row, run in enumerate(runs_with):
         cmd = run.flight.rotor_cmd
@@ -284,34 +342,35 @@ def rotors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
         prefix = f"{run.label}: " if len(runs_with) > 1 else ""
         for i in range(cmd.speeds.shape[1]):
             colour = ROTOR_COLOURS[i % len(ROTOR_COLOURS)]
-            _plot(axes[row, 0], cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
+            panels[row, 0].plot(cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
             if tilting and cmd.tilts is not None:
-                _plot(axes[row, 1], cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
-        _label(axes[row, 0], f"{prefix}speed", "rotor rad/s", "rotor axis")
+                panels[row, 1].plot(cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
+        panels[row, 0].label(prefix + r"$\omega_{c,i}$", "rotor rad/s", "rotor axis")
         if vehicle is not None:
-            for limit in (vehicle.rotor_speed_min, vehicle.rotor_speed_max):
-                axes[row, 0].axhline(limit, label="limits", **LIMIT)
+            _limit_lines(panels[row, 0], (vehicle.rotor_speed_min, vehicle.rotor_speed_max),
+                         r"speed limits $\omega_{\min}$, $\omega_{\max}$")
         if tilting:
-            _label(axes[row, 1], f"{prefix}tilt", "deg", "about the arm")
+            panels[row, 1].label(prefix + r"$\alpha_{c,i}$", "deg", "about the arm")
             if vehicle is not None and vehicle.tilt_angle_max < math.pi:
-                for sign in (-1, 1):
-                    axes[row, 1].axhline(sign * math.degrees(vehicle.tilt_angle_max), label="limits", **LIMIT)
-    _finish(fig, axes, "rotor commands", options, legend_cols=5)
-    return Drawn(fig)
+                limit = math.degrees(vehicle.tilt_angle_max)
+                _limit_lines(panels[row, 1], (-limit, limit), r"tilt limits $\pm\alpha_{\max}$")
+    finish_panels(panels, runs_with, "rotor commands", options, legend_cols=5)
+    return Drawn(panels.fig)
 
 
 def external_wrench_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     """Online wrench estimate of each run vs the effective truth (black dashed) in body FRD; the external
-    wrench alone (``wrench_truth``) in grey for comparison."""
+    wrench alone (``wrench_truth``) in grey for comparison. The estimator starts from zero: its settling
+    (a few tenths of a second) gets a zoom on a long flight (:mod:`~fsr_bringup.analysis.figure_rules`)."""
     runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.wrench_estimate is not None]
     if not runs_with:
         return Drawn(None, "no wrench_estimate (estimator off, or not recorded)")
-    fig, axes = _figure(3, 2, _width("two", options))
+    panels = panel_grid(3, 2, _width("two", options))
     for index, run in runs_with:
         est = run.flight.wrench_estimate
         for i in range(3):
-            _plot(axes[i, 0], est.t, est.force[:, i], color=_colour(index), label=f"estimate, {run.label}")
-            _plot(axes[i, 1], est.t, est.torque[:, i], color=_colour(index), label=f"estimate, {run.label}")
+            panels[i, 0].plot(est.t, est.force[:, i], color=_colour(index), label=f"estimate, {run.label}")
+            panels[i, 1].plot(est.t, est.torque[:, i], color=_colour(index), label=f"estimate, {run.label}")
     notes = []
     for _, run in runs_with:
         eff = run.effective
@@ -319,18 +378,18 @@ def external_wrench_figure(runs: list[Run], options: FigureOptions) -> Drawn:
             notes.append(f"external_wrench: no effective truth for {run.label} (scenario or wrench_cmd missing)")
             continue
         for i in range(3):
-            _plot(axes[i, 0], eff.t, eff.force_body[:, i], label="effective truth", **TRUTH)
-            _plot(axes[i, 1], eff.t, eff.torque_body[:, i], label="effective truth", **TRUTH)
+            panels[i, 0].plot(eff.t, eff.force_body[:, i], label="effective truth", **TRUTH)
+            panels[i, 1].plot(eff.t, eff.torque_body[:, i], label="effective truth", **TRUTH)
     truth = runs_with[0][1].flight.wrench_truth
     if truth is not None:
         for i in range(3):
-            _plot(axes[i, 0], truth.t, truth.force[:, i], label="external wrench only", **ASIDE)
-            _plot(axes[i, 1], truth.t, truth.torque[:, i], label="external wrench only", **ASIDE)
+            panels[i, 0].plot(truth.t, truth.force[:, i], label="external wrench only", **ASIDE)
+            panels[i, 1].plot(truth.t, truth.torque[:, i], label="external wrench only", **ASIDE)
     for i, name in enumerate(AXES):
-        _label(axes[i, 0], f"f_{name}", "N", "body FRD")
-        _label(axes[i, 1], f"tau_{name}", "N m", "body FRD")
-    _finish(fig, axes, "wrench estimate vs effective truth", options, legend_cols=3)
-    return Drawn(fig, notes=notes)
+        panels[i, 0].label(f"$f_{{e,{name}}}$", "N", "body FRD")
+        panels[i, 1].label(rf"$\tau_{{e,{name}}}$", "N m", "body FRD")
+    finish_panels(panels, [run for _, run in runs_with], "wrench estimate vs effective truth", options, legend_cols=3)
+    return Drawn(panels.fig, notes=notes)
 
 
 def mass_figure(runs: list[Run], options: FigureOptions) -> Drawn:
@@ -338,24 +397,25 @@ def mass_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     runs_with = [(i, r) for i, r in enumerate(runs) if r.flight.mass_estimate is not None]
     if not runs_with:
         return Drawn(None, "no mass_estimate (estimator off, or not recorded)")
-    fig, axes = _figure(1, 1, _width("one", options), row_height=1.8)
-    ax = axes[0, 0]
+    panels = panel_grid(1, 1, _width("one", options), row_height=1.8)
+    panel = panels[0, 0]
     for index, run in runs_with:
         mass = run.flight.mass_estimate
-        _plot(ax, mass.t, mass.value, color=_colour(index), label=f"estimate, {run.label}")
+        panel.plot(mass.t, mass.value, color=_colour(index), label=f"estimate, {run.label}")
     flight = runs_with[0][1].flight
     if flight.config is not None:
-        ax.axhline(flight.config.plant_vehicle.mass, label="true plant mass", **TRUTH)
+        panel.hline(flight.config.plant_vehicle.mass, label="true plant mass $m$", **TRUTH)
     if flight.estimator is not None:
-        ax.axhline(flight.estimator.mass, label="estimator model mass", **ASIDE)
-    _label(ax, "mass", "kg", "m_e + f_e,z / g")
-    _finish(fig, axes, "mass estimate", options, legend_cols=2)
-    return Drawn(fig)
+        panel.hline(flight.estimator.mass, label="estimator model mass $m_e$", **ASIDE)
+    panel.label(r"$\hat{m}$", "kg", r"$m_e + f_{e,z}/g$")
+    finish_panels(panels, [run for _, run in runs_with], "mass estimate", options, legend_cols=2)
+    return Drawn(panels.fig)
 
 
 def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     """Thrust ratio ``T / T_OGE`` per rotor near the ground and the ceiling (first run with rotors and an
-    active surface effect), with the height above the ground in grey."""
+    active surface effect), with the height above the ground in grey (its own axis on the right: this figure
+    has no zoom, which would not repeat it)."""
     for run in runs:
         flight = run.flight
         if flight.config is None or flight.config.actuation != "rotors" or flight.rotor_cmd is None:
@@ -364,28 +424,28 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
         if series is None:
             continue
         t, ground, ceiling = series
-        panels = [(ratio, name) for ratio, name in ((ground, "ground"), (ceiling, "ceiling"))
-                  if np.any(ratio != 1.0)]
-        if not panels:
+        shown = [(ratio, name) for ratio, name in ((ground, "ground"), (ceiling, "ceiling"))
+                 if np.any(ratio != 1.0)]  # 1 everywhere: no surface in reach (zero effect by construction)
+        if not shown:
             continue
-        fig, axes = _figure(len(panels), 1, _width("one", options), row_height=1.8)
-        for row, (ratio, surface) in enumerate(panels):
+        panels = panel_grid(len(shown), 1, _width("one", options), row_height=1.8)
+        for row, (ratio, surface) in enumerate(shown):
             if np.allclose(ratio, ratio[:, :1], rtol=0.0, atol=1e-9):  # level flight: every rotor alike
-                _plot(axes[row, 0], t, ratio[:, 0], color=ROTOR_COLOURS[0], label="every rotor")
+                panels[row, 0].plot(t, ratio[:, 0], color=ROTOR_COLOURS[0], label="every rotor")
             else:
                 for i in range(ratio.shape[1]):
-                    _plot(axes[row, 0], t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
-                          label=f"rotor {i + 1}")
-            _label(axes[row, 0], f"{surface} T/T_OGE", "-", "per rotor")
+                    panels[row, 0].plot(t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
+                                        label=f"rotor {i + 1}")
+            panels[row, 0].label(rf"{surface} $T/T_{{\mathrm{{OGE}}}}$", "-", "per rotor")
         if flight.odom is not None:
-            twin = axes[0, 0].twinx()
+            twin = panels.twin(panels[0, 0])
             height = flight.config.environment.ground.height - flight.odom.position[:, 2]
-            _plot(twin, flight.odom.t, height, **ASIDE)
-            twin.set_ylabel("height [m]\nabove ground", color="0.35")
-            axes[0, 0].plot([], [], label="height above ground", **ASIDE)  # its legend entry
-        _finish(fig, axes, "thrust ratio near surfaces", options, legend_cols=5)
+            twin.plot(*envelope(flight.odom.t, height), **ASIDE)
+            twin.set_ylabel("height $h$ [m]\nabove ground", color="0.35")
+            panels[0, 0].ax.plot([], [], label="height above ground $h$", **ASIDE)  # its legend entry
+        finish_panels(panels, [run], "thrust ratio near surfaces", options, legend_cols=5, zoom=False)
         notes = [f"thrust_ratio: drawn for {run.label}"] if len(runs) > 1 else []
-        return Drawn(fig, notes=notes)
+        return Drawn(panels.fig, notes=notes)
     return Drawn(None, "no surface effect acts on rotors in this flight (effect off, no surface in reach, or "
                        "wrench actuation)")
 

@@ -54,6 +54,22 @@ class DisturbanceProfile:
         force, torque = core.profile_wrench(table[0], knots, float(t))
         return np.array(force), np.array(torque)
 
+    def acting_interval(self) -> tuple[float, float] | None:
+        """``(start, end)`` [s] outside which the profile is zero (``-inf``/``inf`` where it never stops), or
+        None when it is zero all the time. Constant: ``[0, inf)``; step and sinusoid: ``[start, end)`` (a
+        sinusoid's sine is zero at instants only, so it counts as acting throughout); table: from the knot
+        before the first non-zero knot to the knot after the last one (values are held beyond the ends)."""
+        if self.kind != "table":
+            values = np.concatenate((self.force, self.torque, self.offset_force, self.offset_torque))
+            return (self.start, self.end) if np.any(values != 0.0) else None
+        nonzero = np.flatnonzero(np.any(np.hstack((self.force, self.torque)) != 0.0, axis=1))
+        if nonzero.size == 0:
+            return None
+        first, last = int(nonzero[0]), int(nonzero[-1])
+        start = -np.inf if first == 0 else float(self.times[first - 1])
+        end = np.inf if last == len(self.times) - 1 else float(self.times[last + 1])
+        return start, end
+
 
 def constant(force: ArrayLike = ZERO3, torque: ArrayLike = ZERO3, frame: str = "world") -> DisturbanceProfile:
     """A wrench that acts all the time: ``force`` [N] and ``torque`` [N m] in ``frame`` (``world`` or ``body``)."""
