@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
 from pathlib import Path
 
@@ -148,7 +147,7 @@ def animate(flight: object, out: Path, options: AnimationOptions) -> int:
     import time
 
     from fsr_bringup.analysis.animation import write_animation
-    from fsr_bringup.runner.flight import Console
+    from fsr_bringup.runner.flight import Console, sigterm_interrupts
 
     console = Console(prog="fsr-analyze")
     start = time.perf_counter()
@@ -159,17 +158,11 @@ def animate(flight: object, out: Path, options: AnimationOptions) -> int:
         if now - shown[0] < PROGRESS_EVERY_S and done < total:
             return
         shown[0] = now
-        wall = now - start
-        rate = done / wall if wall > 0 else 0.0
-        eta = (total - done) / rate if rate > 0 else float("nan")
-        console.progress(f"animation: frame {done} / {total}   {rate:5.1f} frames/s   ETA {eta:5.1f} s")
+        console.count_progress("frames", done, total, now - start)
 
-    def terminate(signum: int, _frame: object) -> None:
-        raise KeyboardInterrupt(signal.Signals(signum).name)
-
-    previous = signal.signal(signal.SIGTERM, terminate)
     try:
-        written = write_animation(flight, out, options, progress)
+        with sigterm_interrupts():
+            written = write_animation(flight, out, options, progress)
     except KeyboardInterrupt:
         console.end_progress()
         print(f"fsr-analyze: interrupted: no animation written (the analysis is in {out})", file=sys.stderr)
@@ -182,8 +175,6 @@ def animate(flight: object, out: Path, options: AnimationOptions) -> int:
         console.end_progress()
         print(f"fsr-analyze: error: cannot write the animation in {out}: {error.strerror or error}", file=sys.stderr)
         return EXIT_FAILURE
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     console.end_progress()
     for note in written.notes:
         print(f"fsr-analyze: animation: {note}")

@@ -19,12 +19,11 @@ from __future__ import annotations
 
 import argparse
 import shlex
-import signal
 import sys
 import time
 from pathlib import Path
 
-from fsr_bringup.runner.flight import Console
+from fsr_bringup.runner.flight import Console, sigterm_interrupts
 from fsr_bringup.sweeps.axes import SweepError, parse_grid, parse_sample
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
@@ -114,20 +113,15 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
 
     def progress(done: int, total: int, wall: float) -> None:
-        rate = done / wall if wall > 0 else 0.0
-        eta = (total - done) / rate if rate > 0 else float("nan")
-        console.progress(f"{done} / {total} flights   {rate:6.1f} flights/s   ETA {eta:5.1f} s")
+        console.count_progress("flights", done, total, wall)
 
-    def terminate(signum: int, _frame: object) -> None:
-        raise KeyboardInterrupt(signal.Signals(signum).name)
-
-    previous = signal.signal(signal.SIGTERM, terminate)
     try:
         fixed = _overrides(args.overrides)
-        table = sweep(args.scenario, grid={a.key: list(a.values) for a in args.grid},
-                      sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, n=args.n,
-                      seed=args.seed, duration=args.duration, workers=args.workers, cluster=args.cluster,
-                      set=fixed, band=args.band, progress=progress)
+        with sigterm_interrupts():
+            table = sweep(args.scenario, grid={a.key: list(a.values) for a in args.grid},
+                          sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, n=args.n,
+                          seed=args.seed, duration=args.duration, workers=args.workers, cluster=args.cluster,
+                          set=fixed, band=args.band, progress=progress)
     except (SweepError, ConfigError) as error:
         console.end_progress()
         print(f"fsr-sweep: {error}", file=sys.stderr)
@@ -140,8 +134,6 @@ def main(argv: list[str] | None = None) -> int:
         console.end_progress()
         print(f"fsr-sweep: the sweep failed: {error}", file=sys.stderr)
         return EXIT_FAILURE
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     console.end_progress()
     out = args.out or Path("runs") / f"sweep_{table.attrs['scenario']}_{time.strftime('%Y%m%d-%H%M%S')}"
     out.mkdir(parents=True, exist_ok=True)

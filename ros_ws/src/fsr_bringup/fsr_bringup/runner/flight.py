@@ -18,11 +18,13 @@ come from its watcher process (``runner/watcher_node.py``, which says why), stop
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -116,12 +118,31 @@ class Console:
         rtf = sim_time / wall if wall > 0 else 0.0
         self.progress(f"t = {sim_time:7.3f} / {duration:.3f} s   real-time factor {rtf:5.2f}")
 
+    def count_progress(self, what: str, done: int, total: int, wall: float) -> None:
+        """``done`` of ``total`` ``what`` (flights, frames) after ``wall`` seconds: the rate and the time left."""
+        rate = done / wall if wall > 0 else 0.0
+        eta = (total - done) / rate if rate > 0 else float("nan")
+        self.progress(f"{done} / {total} {what}   {rate:6.1f} {what}/s   ETA {eta:5.1f} s")
+
     def end_progress(self) -> None:
         if self.tty and self.progress_line:
             with self.lock:
                 sys.stdout.write("\r\033[K")
                 sys.stdout.flush()
                 self.progress_line = ""
+
+
+@contextlib.contextmanager
+def sigterm_interrupts() -> Iterator[None]:
+    """SIGTERM raises KeyboardInterrupt inside the block, as Ctrl-C does (a command then stops the same way)."""
+    def terminate(signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 @dataclass(frozen=True)
