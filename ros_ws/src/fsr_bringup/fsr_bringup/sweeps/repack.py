@@ -1,0 +1,99 @@
+"""A sweep's flights set up from its scenario packed once: per flight only the swept values are packed anew.
+
+Setting a flight up from its scenario (validating every section into configs, then packing the plant, the
+controller and the observer: :func:`fsr_bringup.runner.in_process_flight.prepare_flight`) costs about as much as
+flying it for a few seconds. Most of it is the same for every flight of a sweep, so :class:`PackedSweep` sets
+the sweep's scenario up once and keeps the packed objects and a copy of their initial states; a flight whose
+swept keys are all in :data:`REPACKED_KEYS` then only has those values checked and packed (exactly as the
+full set-up packs them) and every state put back to its initial values. Any other key, or a value the quick
+check does not take, gives None: the flight is set up in full (which also names a refused value).
+
+:data:`REPACKED_KEYS`: ``plant.mass`` and ``plant.inertia`` - the true plant's mass properties, read by nothing
+but the plant's packed ``mass``, ``inertia`` and ``inertia_inv`` (the controller and the observer know the
+nominal vehicle) and by the effective truth the estimate is measured against.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from fsr_bringup.sweeps.measured import LoopFlight, loop_flight
+from fsr_sim.model.checks import InvalidValueError, symmetric_positive_definite
+from fsr_sim.model.plant import new_plant_state
+
+REPACKED_KEYS = ("plant.mass", "plant.inertia")
+
+
+def _snapshot(value: Any) -> Any:
+    """A copy of a packed state (NamedTuples of arrays, nested): its arrays copied."""
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, tuple) and hasattr(value, "_fields"):
+        return type(value)(*(_snapshot(item) for item in value))
+    return value
+
+
+def _restore(target: Any, snapshot: Any) -> None:
+    """Put the arrays of ``target`` back to those of ``snapshot`` (same structure), in place."""
+    if isinstance(target, np.ndarray):
+        np.copyto(target, snapshot)
+    elif isinstance(target, tuple) and hasattr(target, "_fields"):
+        for item, saved in zip(target, snapshot, strict=True):
+            _restore(item, saved)
+
+
+def _mass(value: Any) -> float | None:
+    """``plant.mass`` as the scenario's validation takes it (a finite number > 0), or None."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) and value > 0.0 else None
+
+
+def _inertia(value: Any) -> np.ndarray | None:
+    """``plant.inertia`` as the scenario's validation takes it (3 numbers or a 3x3, SPD), or None."""
+    try:
+        return np.array(symmetric_positive_definite(value, "plant.inertia"), dtype=float)
+    except (InvalidValueError, TypeError, ValueError):
+        return None
+
+
+class PackedSweep:
+    """The flights of one sweep's scenario, set up from one packed flight (module docstring)."""
+
+    def __init__(self, setup, band: float) -> None:  # noqa: ANN001 - a FlightSetup, not flown yet
+        self.flight = loop_flight(setup, band)  # None: the loop cannot measure this scenario's flights
+        if self.flight is None:
+            return
+        self.plant_vehicle = setup.simulation.plant_vehicle
+        self.initial_x = setup.plant.core_state.x.copy()
+        self.controller_state = _snapshot(setup.controller.state)
+        self.observer_state = _snapshot(setup.observer.state)
+        self.model_inertia = np.asarray(setup.estimation.inertia, dtype=float)
+
+    def flight_for(self, values: dict[str, Any]) -> LoopFlight | None:
+        """The flight with ``values`` set, ready to fly (its states at their initial values), or None when
+        it must be set up in full (module docstring)."""
+        if self.flight is None or not set(values) <= set(REPACKED_KEYS):
+            return None
+        mass, inertia = self.plant_vehicle.mass, self.plant_vehicle.inertia
+        if "plant.mass" in values:
+            mass = _mass(values["plant.mass"])
+            if mass is None:
+                return None
+        if "plant.inertia" in values:
+            inertia = _inertia(values["plant.inertia"])
+            if inertia is None:
+                return None
+        flight = self.flight
+        inertia = np.ascontiguousarray(inertia, dtype=float)  # as fsr_sim.model.plant.pack_plant packs them
+        params = flight.plant_params._replace(mass=float(mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia))
+        _restore(flight.controller_state, self.controller_state)
+        _restore(flight.observer_state, self.observer_state)
+        measures = flight.measures._replace(mass=float(mass), inertia=inertia,
+                                            inertia_delta=np.ascontiguousarray(self.model_inertia - inertia))
+        return flight.replace(plant_params=params, plant_state=new_plant_state(params, self.initial_x),
+                              measures=measures)
