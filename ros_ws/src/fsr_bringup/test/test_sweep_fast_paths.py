@@ -8,9 +8,7 @@ import math
 
 import pytest
 
-from fsr_bringup.runner.in_process_flight import prepare_flight
 from fsr_bringup.sweeps.batch import fly_one, packed_sweep
-from fsr_bringup.sweeps.measured import loop_flight
 from fsr_bringup.sweeps.metrics import METRIC_COLUMNS
 from fsr_sim.config.scenario import load_scenario
 
@@ -35,6 +33,12 @@ def assert_rows_agree(got: dict, want: dict, rel: float = 1e-9) -> None:
     ("ex4_geometric", {"duration": 1.0, "actuation": "rotors", "estimator.enabled": False},
      {"plant.mass": 2.5}),  # rotors at their limits (saturation, the wrench gives way)
     ("ex5_voliro", {"duration": 1.0, "estimator.enabled": False}, {"plant.mass": 2.0}),  # tilts
+    ("ex5_voliro", {"duration": 1.0}, {"plant.mass": 2.0}),  # rotors and tilts with the estimator
+    ("octo_ground_effect", {"duration": 1.5}, {"plant.mass": 2.5}),  # ground effect: the thrust ratios
+    ("ceiling_approach", {"duration": 1.0}, {}),  # the ceiling's
+    ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}, {"plant.mass": 1.3}),  # rotor lag
+    ("ex5_voliro", {"duration": 1.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120},
+     {}),  # tilt lag
 ])
 def test_a_flight_measured_in_the_loop_has_the_row_of_its_arrays(scenario, fixed, values):
     base = load_scenario(scenario, values=fixed)
@@ -44,9 +48,7 @@ def test_a_flight_measured_in_the_loop_has_the_row_of_its_arrays(scenario, fixed
     assert_rows_agree(measured, from_arrays)
 
 
-def test_the_loop_leaves_rotors_with_the_estimator_and_early_ends_to_the_arrays():
-    rotors = load_scenario("ex4_geometric", values={"duration": 0.5, "actuation": "rotors"})
-    assert loop_flight(prepare_flight(rotors), 0.01) is None  # its effective truth needs the rotors' wrench
+def test_the_loop_leaves_a_flight_that_ends_early_to_its_arrays():
     diverging = load_scenario("ex4_geometric", values={"duration": 2.0, "actuation": "rotors",
                                                        "estimator.enabled": False})
     row, steps = fly_one(diverging, {"plant.mass": 30.0})
@@ -54,11 +56,15 @@ def test_the_loop_leaves_rotors_with_the_estimator_and_early_ends_to_the_arrays(
     assert_rows_agree(row, fly_one(diverging, {"plant.mass": 30.0}, measured=False)[0])
 
 
-def test_flights_set_up_from_the_packed_sweep_have_the_rows_of_a_full_set_up():
-    base = load_scenario("ex4_geometric", values={"duration": 1.0})
+@pytest.mark.parametrize(("scenario", "fixed", "mass"), [
+    ("ex4_geometric", {"duration": 1.0}, 1.1),  # wrench actuation
+    ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}, 1.3),  # rotors that lag
+])
+def test_flights_set_up_from_the_packed_sweep_have_the_rows_of_a_full_set_up(scenario, fixed, mass):
+    base = load_scenario(scenario, values=fixed)
     packed = packed_sweep(base, 0.01)
-    flights = [{"plant.mass": 1.1}, {"plant.mass": 1.45, "plant.inertia": [0.03, 0.03, 0.06]},
-               {"plant.inertia": [[0.03, 0.001, 0.0], [0.001, 0.03, 0.0], [0.0, 0.0, 0.06]]}, {"plant.mass": 1.1}]
+    flights = [{"plant.mass": mass}, {"plant.mass": mass + 0.3, "plant.inertia": [0.03, 0.03, 0.06]},
+               {"plant.inertia": [[0.03, 0.001, 0.0], [0.001, 0.03, 0.0], [0.0, 0.0, 0.06]]}, {"plant.mass": mass}]
     rows = []
     for values in flights:  # one after the other: each starts from the initial states again
         assert packed.flight_for(values) is not None

@@ -12,9 +12,12 @@ and the controller's answer to it), into the accumulator vector ``acc`` (:data:`
 * with rotors: the largest commanded speed (NaN if any is NaN), the steps with a commanded speed at a limit
   (NaN counts as the middle of the range) or a tilt at its limit, and per body axis whether the wrench gave way
   (``|shortfall| > tolerance`` at some step);
-* with the estimator in wrench actuation: the effective truth of sample ``k < K`` (what the observer must
-  converge to, :mod:`fsr_bringup.analysis.effective`, from the states ``k`` and ``k + 1``: the external wrench,
-  the turn of ``R`` within the step, the ground's contact force, the model mismatch), and per channel the sum of
+* with the estimator: the effective truth of sample ``k < K`` (what the observer must converge to,
+  :mod:`fsr_bringup.analysis.effective`, from the states ``k`` and ``k + 1``: the external wrench, the actuator's
+  wrench against the commanded one - in wrench actuation the turn of ``R`` within the step; with rotors their
+  wrench at the thrust ratios of both poses, from the commanded speeds and tilts or, where the rotors lag, the
+  actual ones, computed by the plant's own functions on the plant without actuator dynamics -, the ground's
+  contact force, the model mismatch), and per channel the sum of
   the squared estimate errors of the samples at ``t_k >= late_from``, the last sample outside the 3 % band, the
   sum of the truths at ``t_k >= last_from`` (their count too), the band of the last sample, and the samples whose
   truth is not finite.
@@ -50,8 +53,9 @@ from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import advance, publish
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE, read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
+from fsr_sim.core.rotors import scaled_rotor_wrench
 from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
-from fsr_sim.core.surfaces import in_contact
+from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, in_contact, thrust_ratios
 
 FINISHED, DIVERGED, CONTROLLER_FAILED = 1, 2, 3  # outcomes, as fly_steps'
 
@@ -69,6 +73,10 @@ FINAL_BAND = 36  # 6: the band of the last sample with a truth
 TRUTH_SAMPLES = 42  # samples with a finite truth
 TRUTH_UNDEFINED = 43  # samples (before the last) whose truth is not finite
 SIZE = 44
+# The rows of rotor_rows (n each): rotor_state of t_k, the thrust ratios of t_k and t_k+1, the speeds and tilts
+# acting over the step, work rows.
+ACTUAL_SPEEDS, ACTUAL_TILTS, RATIOS, RATIOS_NEXT, SPEEDS, TILTS, GROUND, CEILING = range(8)
+ROTOR_ROWS = 8
 LARGEST = float(np.finfo(np.float64).max)
 
 
@@ -92,6 +100,11 @@ class MeasureParams(NamedTuple):
     tolerance: float  # the estimate's settling band, relative to |truth|
     late_from: float  # s: the RMS error from here
     last_from: float  # s: the final truth is the mean from here
+    lagging: bool  # rotors: the actual speeds (tilts) act, not the commanded ones (actuator dynamics)
+    commanded_tilts: bool  # rotors: the commands carry tilts (a tilting vehicle)
+    with_tilts: bool  # rotors: the tilts are applied (commanded tilts on a plant with servos)
+    ground: Surfaces  # the surfaces with the ceiling's effect off (the ground's thrust ratios)
+    ceiling: Surfaces  # ... with the ground's effect off
 
 
 @jit
@@ -207,10 +220,11 @@ def _times(inertia, v: Vec3) -> Vec3:  # noqa: ANN001
 
 @jit_inline
 def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float, t_next: float, x, x_next,
-                     published, force_cmd: Vec3, torque_cmd: Vec3, estimate) -> None:  # noqa: ANN001
-    """Sample ``k < K`` of the estimate against the effective truth in wrench actuation (the command is what
-    acts), from the state ``x`` (13) of ``t`` and ``x_next`` of ``t_next``, the published row of ``t`` (its
-    ``wrench_truth``) and the estimate of ``t``."""
+                     published, force_cmd: Vec3, torque_cmd: Vec3, force_start: Vec3, torque_start: Vec3,
+                     force_end: Vec3, torque_end: Vec3, estimate) -> None:  # noqa: ANN001
+    """Sample ``k < K`` of the estimate against the effective truth, from the state ``x`` (13) of ``t`` and
+    ``x_next`` of ``t_next``, the published row of ``t`` (its ``wrench_truth``), the commanded body wrench, the
+    actuator's body wrench at the start and at the end of the step, and the estimate of ``t``."""
     rotation, rotation_next = _state_rotation(x), _state_rotation(x_next)
     dt = t_next - t
     f_ext_body = (published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2])
@@ -219,11 +233,12 @@ def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float
     tau_ext = (_finite(tau_ext[0]), _finite(tau_ext[1]), _finite(tau_ext[2]))
     f_ext = mat_vec3(rotation, f_ext_body)
     commanded_world = mat_vec3(rotation, force_cmd)
-    commanded_next = mat_vec3(rotation_next, force_cmd)
-    mean_actuator = (0.5 * (commanded_world[0] + commanded_next[0]), 0.5 * (commanded_world[1] + commanded_next[1]),
-                     0.5 * (commanded_world[2] + commanded_next[2]))
-    mean_torque = (0.5 * (torque_cmd[0] + torque_cmd[0]), 0.5 * (torque_cmd[1] + torque_cmd[1]),
-                   0.5 * (torque_cmd[2] + torque_cmd[2]))
+    start_world = mat_vec3(rotation, force_start)
+    end_world = mat_vec3(rotation_next, force_end)
+    mean_actuator = (0.5 * (start_world[0] + end_world[0]), 0.5 * (start_world[1] + end_world[1]),
+                     0.5 * (start_world[2] + end_world[2]))
+    mean_torque = (0.5 * (torque_start[0] + torque_end[0]), 0.5 * (torque_start[1] + torque_end[1]),
+                   0.5 * (torque_start[2] + torque_end[2]))
     accel = ((x_next[3] - x[3]) / dt, (x_next[4] - x[4]) / dt, (x_next[5] - x[5]) / dt)
     omega = (x[10], x[11], x[12])
     omega_dot = ((x_next[10] - x[10]) / dt, (x_next[11] - x[11]) / dt, (x_next[12] - x[12]) / dt)
@@ -280,24 +295,65 @@ def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float
             acc[TRUTH_LAST_SUM + c] += truth[c]
 
 
+@jit_inline
+def thrust_ratio_row(m: MeasureParams, x, ground, ceiling, out) -> None:  # noqa: ANN001
+    """The rotors' thrust ratios ``T / T_OGE`` at the pose of ``x`` into ``out`` (n,): the ground's times the
+    ceiling's, each with the other surface's effect off (1 where a surface has none), as the analysis takes
+    them; ``ground`` and ``ceiling`` (n,) scratch."""
+    rotation = _state_rotation(x)
+    if has_thrust_effects(m.ground):
+        thrust_ratios(m.ground, x[2], rotation[2], ground)
+    else:
+        ground[:] = 1.0
+    if has_thrust_effects(m.ceiling):
+        thrust_ratios(m.ceiling, x[2], rotation[2], ceiling)
+    else:
+        ceiling[:] = 1.0
+    for i in range(out.shape[0]):
+        out[i] = ground[i] * ceiling[i]
+
+
+@jit_inline
+def rotor_command_row(m: MeasureParams, k: int, row, actual_speeds, actual_tilts, speeds, tilts) -> None:  # noqa: ANN001
+    """What acts over step ``k`` as the analysis takes it, into ``speeds`` and ``tilts`` (n,): where the rotors
+    lag, the actual speeds and tilts of the state (``rotor_state``) but the command at ``k = 0``; else the
+    command (``row``); NaN as 0."""
+    n = speeds.shape[0]
+    lagging = m.lagging and k > 0
+    for i in range(n):
+        speeds[i] = _finite(actual_speeds[i] if lagging else row[ROTOR_SPEEDS + i])
+        tilts[i] = _finite(actual_tilts[i] if lagging else row[ROTOR_SPEEDS + n + i]) if m.commanded_tilts else 0.0
+
+
 @jit
 def fly_measured(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
                  controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
                  observer_state: ObserverState, step_count: int, period_ns: int, measures: MeasureParams,
-                 states, published, row, estimate, acc) -> tuple:  # noqa: ANN001
+                 actuator_plant: PlantParams, actuator_state: PlantState, states, published, row, estimate,
+                 rotor_rows, acc) -> tuple:  # noqa: ANN001
     """Steps ``0..step_count`` measured into ``acc`` (module docstring); ``states`` (13,) the state of ``t_k``,
-    ``published`` (2, 19) the rows of ``t_k`` and ``t_k+1``, ``row`` the controller's output and ``estimate`` (7)
-    the estimator's, all scratch. Returns ``(outcome, k, detail)`` as
+    ``published`` (2, 19) the rows of ``t_k`` and ``t_k+1``, ``row`` the controller's output, ``estimate`` (7)
+    the estimator's and ``rotor_rows`` (8, n) the rotors' (:data:`ACTUAL_SPEEDS` ...), all scratch.
+    ``actuator_plant`` is the plant without actuator dynamics (its ``actuator_state`` scratch): the rotors'
+    wrench of a command, as the analysis computes it. Returns ``(outcome, k, detail)`` as
     :func:`fsr_bringup.core.flight_loop.fly_steps` (never ``GOING_ON``)."""
     reset(acc)
     n = (row.shape[0] - ROTOR_SPEEDS) // 2
     mode = controller.allocation.mode
+    rotor_truth = with_estimator and measures.truth and mode != WRENCH
     publish(plant, plant_state, published[0])
+    if rotor_truth:
+        thrust_ratio_row(measures, plant_state.x, rotor_rows[GROUND], rotor_rows[CEILING], rotor_rows[RATIOS_NEXT])
     for k in range(step_count + 1):
         t = (k * period_ns) * 1e-9
         now = published[k % 2]
         for i in range(plant_state.x.shape[0]):
             states[i] = plant_state.x[i]
+        if rotor_truth:
+            for i in range(n):  # rotor_state of t_k; the ratios of t_k (computed at the end of the last step)
+                rotor_rows[ACTUAL_SPEEDS, i] = plant_state.speeds[i]
+                rotor_rows[ACTUAL_TILTS, i] = plant_state.tilts[i]
+                rotor_rows[RATIOS, i] = rotor_rows[RATIOS_NEXT, i]
         position, rotation, velocity_world, angular_velocity = read_odometry(now)
         status = controller_tick(controller, controller_state, t, position, rotation, velocity_world,
                                  angular_velocity, row)
@@ -322,7 +378,19 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         code = advance(plant, plant_state, published[(k + 1) % 2])
         if code != RUNNING:
             return DIVERGED, k, code
-        if with_estimator and measures.truth:
+        if rotor_truth:
+            rotor_command_row(measures, k, row, rotor_rows[ACTUAL_SPEEDS], rotor_rows[ACTUAL_TILTS],
+                              rotor_rows[SPEEDS], rotor_rows[TILTS])
+            thrust_ratio_row(measures, plant_state.x, rotor_rows[GROUND], rotor_rows[CEILING], rotor_rows[RATIOS_NEXT])
+            set_rotor_command(actuator_plant, actuator_state, rotor_rows[SPEEDS], rotor_rows[TILTS],
+                              measures.with_tilts)
+            force_start, torque_start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
+                                                            rotor_rows[RATIOS])
+            force_end, torque_end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
+                                                        rotor_rows[RATIOS_NEXT])
             measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x, now,
-                             force, torque, estimate)
+                             force, torque, force_start, torque_start, force_end, torque_end, estimate)
+        elif with_estimator and measures.truth:  # wrench actuation: the command is what acts
+            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x, now,
+                             force, torque, force, torque, force, torque, estimate)
     return FINISHED, step_count, 0

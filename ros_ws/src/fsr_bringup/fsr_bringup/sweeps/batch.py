@@ -1,9 +1,12 @@
 """A batch of a sweep's flights, flown in one process: what a local worker process and a Dask worker run.
 
-Each flight is set up from the sweep's scenario and its own ``set`` values (validated like any flight: a value
-refused is an ``invalid`` row naming the key), flown whole by the compiled loop in one call (nothing passes
-through Python per step) into arrays this process reuses from flight to flight, and measured
-(:func:`fsr_bringup.sweeps.metrics.flight_row`). A flight that diverges is a row with its reason; the batch goes on.
+Each flight is set up from the sweep's scenario and its own ``set`` values: from the scenario packed once, only
+the swept values packed anew, where that is exact (:mod:`fsr_bringup.sweeps.repack`), else validated in full
+like any flight (a value refused is an ``invalid`` row naming the key). It is flown whole by the compiled loop in
+one call (nothing passes through Python per step) and measured as it flies (:mod:`fsr_bringup.sweeps.measured`);
+a flight the loop cannot measure (it ended early) is flown again into arrays this process reuses from flight to
+flight and measured from them (:func:`fsr_bringup.sweeps.metrics.flight_row`). A flight that diverges is a row
+with its reason; the batch goes on.
 """
 
 from __future__ import annotations

@@ -2,9 +2,8 @@
 
 The compiled loop accumulates what :func:`fsr_bringup.sweeps.metrics.flight_row` takes from the flight's arrays;
 :func:`measured_row` turns the accumulators into the same row (the same numbers to rounding: running sums where
-numpy sums pairwise). What the loop cannot measure gives None and the flight is measured from its arrays: rotor
-actuation with the estimator on (its effective truth needs the rotors' wrench at the thrust ratios), a flight
-that ends early (its windows depend on where it ended), a truth that is not finite.
+numpy sums pairwise). What the loop cannot measure gives None and the flight is measured from its arrays: a
+flight that ends early (its windows depend on where it ended) or one with a truth that is not finite.
 """
 
 from __future__ import annotations
@@ -20,6 +19,7 @@ from fsr_bringup.core import flight_measures as core
 from fsr_bringup.sweeps.metrics import SIGNIFICANT_WRENCH
 from fsr_control.core import controller as control_layout
 from fsr_estimation.core.metrics import TOLERANCE
+from fsr_sim.config.scenario import plant_from_config
 from fsr_sim.contract import FINISHED
 from fsr_sim.core.odometry import PUBLISHED_SIZE
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE
@@ -34,6 +34,7 @@ class _Scratch:
         self.published = np.zeros((2, PUBLISHED_SIZE))
         self.row = np.zeros(control_layout.output_size(rotors))
         self.estimate = np.zeros(7)
+        self.rotor_rows = np.zeros((core.ROTOR_ROWS, rotors))
         self.acc = np.zeros(core.SIZE)
 
 
@@ -56,6 +57,8 @@ class LoopFlight:
     period_ns: int
     rotor_count: int
     measures: core.MeasureParams
+    actuator_params: Any  # the plant without actuator dynamics (the rotors' wrench of a command)
+    actuator_state: Any  # its scratch state
 
     def replace(self, **changes: Any) -> LoopFlight:
         return replace(self, **changes)
@@ -67,9 +70,12 @@ def loop_flight(setup, band: float) -> LoopFlight | None:  # noqa: ANN001 - a Fl
     (module docstring)."""
     sim, estimation = setup.simulation, setup.estimation
     rotors = setup.rotors
-    if rotors and estimation.enabled:
-        return None
     vehicle, plant = sim.vehicle, sim.plant_vehicle
+    surfaces = setup.plant.params.surfaces  # pack_surfaces(environment, plant vehicle), as the analysis packs it
+    actuator = setup.plant  # unused without the rotors' effective truth
+    if rotors and estimation.enabled:  # the rotors' wrench of a command: the plant without actuator dynamics
+        actuator = plant_from_config(replace(sim, plant_vehicle=replace(
+            plant, rotor_time_constant=0.0, tilt_time_constant=0.0, tilt_rate_max=np.inf)))
     tol = LIMIT_TOLERANCE * vehicle.rotor_speed_max
     span = (setup.steps * setup.period_ns) * 1e-9
     inertia = np.ascontiguousarray(plant.inertia, dtype=float)
@@ -81,10 +87,13 @@ def loop_flight(setup, band: float) -> LoopFlight | None:  # noqa: ANN001 - a Fl
         tilt_limit=vehicle.tilt_angle_max * (1 - LIMIT_TOLERANCE), shortfall_tolerance=SHORTFALL_TOLERANCE,
         truth=bool(estimation.enabled), mass=float(plant.mass), mass_model=float(estimation.mass), inertia=inertia,
         inertia_delta=np.ascontiguousarray(np.asarray(estimation.inertia, float) - inertia), gravity=GRAVITY,
-        tolerance=TOLERANCE, late_from=0.0 + min(DEFAULT_SETTLE_S, 0.5 * span), last_from=span - MEAN_WINDOW_S)
+        tolerance=TOLERANCE, late_from=0.0 + min(DEFAULT_SETTLE_S, 0.5 * span), last_from=span - MEAN_WINDOW_S,
+        lagging=setup.actuator_dynamics, commanded_tilts=rotors and vehicle.has_servos,
+        with_tilts=rotors and vehicle.has_servos and plant.has_servos,
+        ground=surfaces._replace(ceiling_effect=False), ceiling=surfaces._replace(ground_effect=False))
     return LoopFlight(setup.plant.params, setup.plant.core_state, setup.controller.params, setup.controller.state,
                       bool(estimation.enabled), setup.observer.params, setup.observer.state, setup.steps,
-                      setup.period_ns, sim.vehicle.rotor_count, measures)
+                      setup.period_ns, sim.vehicle.rotor_count, measures, actuator.params, actuator.core_state)
 
 
 def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
@@ -95,7 +104,8 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
     outcome, _, _ = core.fly_measured(
         flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
         flight.with_estimator, flight.observer_params, flight.observer_state, flight.steps, flight.period_ns,
-        flight.measures, scratch.states, scratch.published, scratch.row, scratch.estimate, scratch.acc)
+        flight.measures, flight.actuator_params, flight.actuator_state, scratch.states, scratch.published,
+        scratch.row, scratch.estimate, scratch.rotor_rows, scratch.acc)
     if outcome != core.FINISHED or scratch.acc[core.TRUTH_UNDEFINED] > 0:
         return None
     return measured_row(flight, scratch.acc)

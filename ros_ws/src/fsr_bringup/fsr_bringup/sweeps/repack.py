@@ -95,5 +95,9 @@ class PackedSweep:
         _restore(flight.observer_state, self.observer_state)
         measures = flight.measures._replace(mass=float(mass), inertia=inertia,
                                             inertia_delta=np.ascontiguousarray(self.model_inertia - inertia))
-        return flight.replace(plant_params=params, plant_state=new_plant_state(params, self.initial_x),
-                              measures=measures)
+        state = new_plant_state(params, self.initial_x)
+        rotor_truth = flight.actuator_params is not flight.plant_params  # else the plant's own (unused)
+        actuator = flight.actuator_params._replace(mass=params.mass, inertia=inertia, inertia_inv=params.inertia_inv)
+        return flight.replace(plant_params=params, plant_state=state, measures=measures,
+                              actuator_params=actuator if rotor_truth else params,
+                              actuator_state=flight.actuator_state if rotor_truth else state)
