@@ -77,10 +77,11 @@ def test_flights_set_up_from_the_packed_sweep_have_the_rows_of_a_full_set_up(sce
 
 
 @pytest.mark.parametrize("values", [
-    {"estimator.c0": 5.0}, {"plant.mass": 1.2, "controller.gains.k_p": [7, 7, 40]},  # keys it does not re-pack
+    {"controller.gains.k_p": [7, 7, 40]}, {"plant.mass": 1.2, "estimator.mass": 1.3},  # keys it does not re-pack
     {"plant.mass": -1.0}, {"plant.mass": True}, {"plant.mass": math.nan},  # values the full set-up refuses
     {"plant.inertia": [0.03, -0.03, 0.06]}, {"plant.inertia": [[0.03, 0.01, 0.0], [0.0, 0.03, 0.0], [0, 0, 0.06]]},
     {"plant.inertia.0": 0.03},
+    {"estimator.c0": -1.0}, {"estimator.c0": 3000.0}, {"estimator.r": 0}, {"estimator.r": 2.0}, {"estimator.r": True},
 ])
 def test_what_the_packed_sweep_cannot_set_up_is_set_up_in_full(values):
     base = load_scenario("ex4_geometric", values={"duration": 0.3})
@@ -99,3 +100,28 @@ def test_a_refused_or_diverging_value_of_a_packed_sweep_is_the_full_path_row():
     diverged, steps = fly_one(base, {"plant.mass": 30.0}, packed=packed)
     assert diverged["end_reason"] == "diverged" and "crashed into the ground" in diverged["end_detail"]
     assert (diverged, steps) == fly_one(base, {"plant.mass": 30.0}, measured=False)
+
+
+def test_a_filter_of_the_observer_is_packed_anew_and_each_flight_has_the_row_of_a_full_set_up():
+    base = load_scenario("ex3_estimation", values={"duration": 6.0})
+    packed = packed_sweep(base, 0.01)
+    flights = [{"estimator.c0": 5.0, "estimator.r": 3}, {"estimator.r": 1}, {"estimator.c0": 20.0},
+               {"plant.mass": 1.2, "estimator.c0": 5.0, "estimator.r": 3}, {"estimator.c0": 5.0, "estimator.r": 3}]
+    rows = []
+    for values in flights:
+        assert packed.flight_for(values) is not None
+        row, _ = fly_one(base, values, packed=packed)
+        assert row == fly_one(base, values)[0]
+        rows.append(row)
+    assert rows[0] == rows[4] and rows[0] != rows[1] != rows[2] and rows[0] != rows[3]
+
+
+@pytest.mark.parametrize(("fixed", "values"), [
+    ({"controller.compensation": "estimate"}, {"estimator.c0": 5.0}),  # the controller's observer has c0 too
+    ({"estimator.enabled": False}, {"estimator.r": 2}),
+])
+def test_the_observer_filter_is_set_up_in_full_where_more_than_the_observer_reads_it(fixed, values):
+    base = load_scenario("wind_rejection", values={"duration": 0.3, **fixed})
+    packed = packed_sweep(base, 0.01)
+    assert packed.flight_for(values) is None and packed.flight_for({"plant.mass": 1.3}) is not None
+    assert fly_one(base, values, packed=packed) == fly_one(base, values)

@@ -7,8 +7,8 @@ and the controller's answer to it), into the accumulator vector ``acc`` (:data:`
 
 * position error ``e_k = |p_k - p_d,k|`` [m]: the last finite value, the peak, ``sum e_k^2`` and the samples
   counted (finite ones), and the last sample outside the band (NaN counts as outside);
-* attitude error, the angle of ``R_c,k^T R_k`` [deg] (``atan2(|vee(E - E^T)| / 2, (tr E - 1) / 2)``):
-  the last finite value and the peak;
+* attitude error, the angle of ``R_c,k^T R_k`` (``atan2(|vee(E - E^T)| / 2, (tr E - 1) / 2)``): the
+  ``(sin, cos)`` parts of the last finite value and of the peak (the angles are taken once, at the end);
 * with rotors: the largest commanded speed (NaN if any is NaN), the steps with a commanded speed at a limit
   (NaN counts as the middle of the range) or a tilt at its limit, and per body axis whether the wrench gave way
   (``|shortfall| > tolerance`` at some step);
@@ -61,18 +61,19 @@ FINISHED, DIVERGED, CONTROLLER_FAILED = 1, 2, 3  # outcomes, as fly_steps'
 
 # The accumulators (acc).
 POSITION_FINAL, POSITION_PEAK, POSITION_SQUARES, POSITION_SAMPLES, POSITION_LAST_OUTSIDE = 0, 1, 2, 3, 4
-ATTITUDE_FINAL, ATTITUDE_PEAK = 5, 6
-ROTOR_SPEED_PEAK, SATURATED_STEPS, TILT_STEPS = 7, 8, 9
-GAVE_WAY = 10  # 6: 1 where that body axis fell short at some step
-ESTIMATE_SQUARES = 16  # 6: sum of the squared errors at t >= late_from
-ESTIMATE_LATE = 22  # samples summed in ESTIMATE_SQUARES
-ESTIMATE_LAST_OUTSIDE = 23  # 6: the last sample outside the band (-1: none)
-TRUTH_LAST_SUM = 29  # 6: sum of the truths at t >= last_from
-TRUTH_LAST_SAMPLES = 35
-FINAL_BAND = 36  # 6: the band of the last sample with a truth
-TRUTH_SAMPLES = 42  # samples with a finite truth
-TRUTH_UNDEFINED = 43  # samples (before the last) whose truth is not finite
-SIZE = 44
+ATTITUDE_FINAL, ATTITUDE_PEAK = 5, 7  # 2 each: (sin, cos) of the angle (module docstring)
+ATTITUDE_SAMPLES = 9
+ROTOR_SPEED_PEAK, SATURATED_STEPS, TILT_STEPS = 10, 11, 12
+GAVE_WAY = 13  # 6: 1 where that body axis fell short at some step
+ESTIMATE_SQUARES = 19  # 6: sum of the squared errors at t >= late_from
+ESTIMATE_LATE = 25  # samples summed in ESTIMATE_SQUARES
+ESTIMATE_LAST_OUTSIDE = 26  # 6: the last sample outside the band (-1: none)
+TRUTH_LAST_SUM = 32  # 6: sum of the truths at t >= last_from
+TRUTH_LAST_SAMPLES = 38
+FINAL_BAND = 39  # 6: the band of the last sample with a truth
+TRUTH_SAMPLES = 45  # samples with a finite truth
+TRUTH_UNDEFINED = 46  # samples (before the last) whose truth is not finite
+SIZE = 47
 # The rows of rotor_rows (n each): rotor_state of t_k, the thrust ratios of t_k and t_k+1, the speeds and tilts
 # acting over the step, work rows.
 ACTUAL_SPEEDS, ACTUAL_TILTS, RATIOS, RATIOS_NEXT, SPEEDS, TILTS, GROUND, CEILING = range(8)
@@ -113,23 +114,22 @@ def reset(acc) -> None:  # noqa: ANN001
     acc[POSITION_FINAL] = math.nan
     acc[POSITION_PEAK] = -math.inf
     acc[POSITION_LAST_OUTSIDE] = -1.0
-    acc[ATTITUDE_FINAL] = math.nan
-    acc[ATTITUDE_PEAK] = -math.inf
+    acc[ATTITUDE_FINAL] = acc[ATTITUDE_FINAL + 1] = math.nan
+    acc[ATTITUDE_PEAK] = acc[ATTITUDE_PEAK + 1] = math.nan
     acc[ROTOR_SPEED_PEAK] = -math.inf
     for c in range(6):
         acc[ESTIMATE_LAST_OUTSIDE + c] = -1.0
 
 
 @jit
-def relative_angle_deg(desired: Mat3, rotation: Mat3) -> float:
-    """Angle of ``R_d^T R`` [deg] (module docstring)."""
+def relative_angle_parts(desired: Mat3, rotation: Mat3) -> tuple[float, float]:
+    """``(sin, cos)`` of the angle of ``R_d^T R``: ``|vee(E - E^T)| / 2`` and ``(tr E - 1) / 2`` (its angle is
+    their ``atan2``, accurate to rounding near 0 and pi)."""
     e = mat_t_mat3(desired, rotation)
     a = e[2][1] - e[1][2]
     b = e[0][2] - e[2][0]
     c = e[1][0] - e[0][1]
-    sin_part = 0.5 * math.sqrt(a * a + b * b + c * c)
-    cos_part = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0)
-    return math.degrees(math.atan2(sin_part, cos_part))
+    return 0.5 * math.sqrt(a * a + b * b + c * c), 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0)
 
 
 @jit
@@ -144,8 +144,8 @@ def _state_rotation(x) -> Mat3:  # noqa: ANN001
 
 
 @jit_inline
-def measure_sample(m: MeasureParams, acc, k: int, x, row) -> None:  # noqa: ANN001
-    """Sample ``k``: the true state ``x`` (13) and the controller's output ``row``."""
+def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> None:  # noqa: ANN001
+    """Sample ``k``: the true state ``x`` (13), its rotation and the controller's output ``row``."""
     ex, ey, ez = x[0] - row[REFERENCE_POSITION], x[1] - row[REFERENCE_POSITION + 1], x[2] - row[REFERENCE_POSITION + 2]
     error = math.sqrt(ex * ex + ey * ey + ez * ez)
     if math.isfinite(error):
@@ -155,10 +155,15 @@ def measure_sample(m: MeasureParams, acc, k: int, x, row) -> None:  # noqa: ANN0
         acc[POSITION_SAMPLES] += 1.0
     if not error <= m.band:
         acc[POSITION_LAST_OUTSIDE] = k
-    angle = relative_angle_deg(_rows(row, COMMANDED_ROTATION), _state_rotation(x))
-    if math.isfinite(angle):
-        acc[ATTITUDE_FINAL] = angle
-        acc[ATTITUDE_PEAK] = max(acc[ATTITUDE_PEAK], angle)
+    sin_part, cos_part = relative_angle_parts(_rows(row, COMMANDED_ROTATION), rotation)
+    if math.isfinite(sin_part) and math.isfinite(cos_part):
+        # the peak's (sin, cos) without an atan2 per step: in the upper half plane the larger angle is the one
+        # counter-clockwise of the other (a cross product); ties within rounding pick either, the same angle
+        peak_sin, peak_cos = acc[ATTITUDE_PEAK], acc[ATTITUDE_PEAK + 1]
+        if acc[ATTITUDE_SAMPLES] == 0.0 or peak_cos * sin_part - peak_sin * cos_part > 0.0:
+            acc[ATTITUDE_PEAK], acc[ATTITUDE_PEAK + 1] = sin_part, cos_part
+        acc[ATTITUDE_FINAL], acc[ATTITUDE_FINAL + 1] = sin_part, cos_part
+        acc[ATTITUDE_SAMPLES] += 1.0
     if not m.rotors:
         return
     n = (row.shape[0] - ROTOR_SPEEDS) // 2
@@ -220,12 +225,13 @@ def _times(inertia, v: Vec3) -> Vec3:  # noqa: ANN001
 
 @jit_inline
 def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float, t_next: float, x, x_next,
-                     published, force_cmd: Vec3, torque_cmd: Vec3, force_start: Vec3, torque_start: Vec3,
-                     force_end: Vec3, torque_end: Vec3, estimate) -> None:  # noqa: ANN001
+                     rotation: Mat3, rotation_next: Mat3, published, force_cmd: Vec3, torque_cmd: Vec3,
+                     force_start: Vec3, torque_start: Vec3, force_end: Vec3, torque_end: Vec3,
+                     estimate) -> None:  # noqa: ANN001
     """Sample ``k < K`` of the estimate against the effective truth, from the state ``x`` (13) of ``t`` and
-    ``x_next`` of ``t_next``, the published row of ``t`` (its ``wrench_truth``), the commanded body wrench, the
-    actuator's body wrench at the start and at the end of the step, and the estimate of ``t``."""
-    rotation, rotation_next = _state_rotation(x), _state_rotation(x_next)
+    ``x_next`` of ``t_next`` (and their rotations), the published row of ``t`` (its ``wrench_truth``), the
+    commanded body wrench, the actuator's body wrench at the start and at the end of the step, and the estimate
+    of ``t``."""
     dt = t_next - t
     f_ext_body = (published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2])
     tau_ext = (published[TRUTH_TORQUE], published[TRUTH_TORQUE + 1], published[TRUTH_TORQUE + 2])
@@ -296,11 +302,10 @@ def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float
 
 
 @jit_inline
-def thrust_ratio_row(m: MeasureParams, x, ground, ceiling, out) -> None:  # noqa: ANN001
+def thrust_ratio_row(m: MeasureParams, x, rotation: Mat3, ground, ceiling, out) -> None:  # noqa: ANN001
     """The rotors' thrust ratios ``T / T_OGE`` at the pose of ``x`` into ``out`` (n,): the ground's times the
     ceiling's, each with the other surface's effect off (1 where a surface has none), as the analysis takes
     them; ``ground`` and ``ceiling`` (n,) scratch."""
-    rotation = _state_rotation(x)
     if has_thrust_effects(m.ground):
         thrust_ratios(m.ground, x[2], rotation[2], ground)
     else:
@@ -342,8 +347,10 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
     mode = controller.allocation.mode
     rotor_truth = with_estimator and measures.truth and mode != WRENCH
     publish(plant, plant_state, published[0])
+    rotation_k = _state_rotation(plant_state.x)  # R of the true state t_k (then of t_k+1, for the next step)
     if rotor_truth:
-        thrust_ratio_row(measures, plant_state.x, rotor_rows[GROUND], rotor_rows[CEILING], rotor_rows[RATIOS_NEXT])
+        thrust_ratio_row(measures, plant_state.x, rotation_k, rotor_rows[GROUND], rotor_rows[CEILING],
+                         rotor_rows[RATIOS_NEXT])
     for k in range(step_count + 1):
         t = (k * period_ns) * 1e-9
         now = published[k % 2]
@@ -364,7 +371,7 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         if with_estimator:
             estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force, torque,
                                 estimate)
-        measure_sample(measures, acc, k, states, row)
+        measure_sample(measures, acc, k, states, rotation_k, row)
         if k == step_count:
             return FINISHED, k, 0
         if mode == WRENCH:  # as fly_steps
@@ -378,19 +385,23 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         code = advance(plant, plant_state, published[(k + 1) % 2])
         if code != RUNNING:
             return DIVERGED, k, code
+        rotation_next = _state_rotation(plant_state.x)
         if rotor_truth:
             rotor_command_row(measures, k, row, rotor_rows[ACTUAL_SPEEDS], rotor_rows[ACTUAL_TILTS],
                               rotor_rows[SPEEDS], rotor_rows[TILTS])
-            thrust_ratio_row(measures, plant_state.x, rotor_rows[GROUND], rotor_rows[CEILING], rotor_rows[RATIOS_NEXT])
+            thrust_ratio_row(measures, plant_state.x, rotation_next, rotor_rows[GROUND], rotor_rows[CEILING],
+                             rotor_rows[RATIOS_NEXT])
             set_rotor_command(actuator_plant, actuator_state, rotor_rows[SPEEDS], rotor_rows[TILTS],
                               measures.with_tilts)
             force_start, torque_start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
                                                             rotor_rows[RATIOS])
             force_end, torque_end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
                                                         rotor_rows[RATIOS_NEXT])
-            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x, now,
-                             force, torque, force_start, torque_start, force_end, torque_end, estimate)
+            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,
+                             rotation_k, rotation_next, now, force, torque, force_start, torque_start, force_end,
+                             torque_end, estimate)
         elif with_estimator and measures.truth:  # wrench actuation: the command is what acts
-            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x, now,
-                             force, torque, force, torque, force, torque, estimate)
+            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,
+                             rotation_k, rotation_next, now, force, torque, force, torque, force, torque, estimate)
+        rotation_k = rotation_next
     return FINISHED, step_count, 0

@@ -111,6 +111,13 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
     return measured_row(flight, scratch.acc)
 
 
+def _degrees(acc: np.ndarray, at: int) -> float:
+    """The angle [deg] of the ``(sin, cos)`` parts at ``acc[at]`` (NaN: no finite sample)."""
+    if not acc[core.ATTITUDE_SAMPLES]:
+        return math.nan
+    return float(np.degrees(np.arctan2(acc[at], acc[at + 1])))
+
+
 def measured_row(flight: LoopFlight, acc: np.ndarray) -> dict[str, Any]:
     """The row (:data:`fsr_bringup.sweeps.metrics.METRIC_COLUMNS`) of a finished flight from its accumulators."""
     count = flight.steps + 1
@@ -128,9 +135,8 @@ def measured_row(flight: LoopFlight, acc: np.ndarray) -> dict[str, Any]:
         "position_error_peak_m": float(acc[core.POSITION_PEAK]) if valid else math.nan,
         "position_error_rms_m": math.sqrt(acc[core.POSITION_SQUARES] / acc[core.POSITION_SAMPLES]) if valid
         else math.nan,
-        "attitude_error_final_deg": float(acc[core.ATTITUDE_FINAL]),
-        "attitude_error_peak_deg": float(acc[core.ATTITUDE_PEAK]) if math.isfinite(acc[core.ATTITUDE_FINAL])
-        else math.nan,
+        "attitude_error_final_deg": _degrees(acc, core.ATTITUDE_FINAL),
+        "attitude_error_peak_deg": _degrees(acc, core.ATTITUDE_PEAK),
         "settling_time_s": math.nan if last >= count - 1 else time(last + 1) - time(0),
     }
     if not measures.rotors:

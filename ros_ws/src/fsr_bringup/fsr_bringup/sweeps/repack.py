@@ -8,9 +8,14 @@ swept keys are all in :data:`REPACKED_KEYS` then only has those values checked a
 full set-up packs them) and every state put back to its initial values. Any other key, or a value the quick
 check does not take, gives None: the flight is set up in full (which also names a refused value).
 
-:data:`REPACKED_KEYS`: ``plant.mass`` and ``plant.inertia`` - the true plant's mass properties, read by nothing
-but the plant's packed ``mass``, ``inertia`` and ``inertia_inv`` (the controller and the observer know the
-nominal vehicle) and by the effective truth the estimate is measured against.
+:data:`REPACKED_KEYS`:
+
+* ``plant.mass`` and ``plant.inertia``: the true plant's mass properties, read by nothing but the plant's packed
+  ``mass``, ``inertia`` and ``inertia_inv`` (the controller and the observer know the nominal vehicle) and by
+  the effective truth the estimate is measured against;
+* ``estimator.c0`` and ``estimator.r``: the observer's filter, read by nothing but the observer (a new one is
+  made, as the full set-up makes it) - unless the controller compensates with the estimate (its own observer
+  then has them too: set up in full), or the estimator is off.
 """
 
 from __future__ import annotations
@@ -21,10 +26,12 @@ from typing import Any
 import numpy as np
 
 from fsr_bringup.sweeps.measured import LoopFlight, loop_flight
+from fsr_estimation.core.observer import MomentumObserver
 from fsr_sim.model.checks import InvalidValueError, symmetric_positive_definite
 from fsr_sim.model.plant import new_plant_state
 
-REPACKED_KEYS = ("plant.mass", "plant.inertia")
+REPACKED_KEYS = ("plant.mass", "plant.inertia", "estimator.c0", "estimator.r")
+PLANT_KEYS = ("plant.mass", "plant.inertia")
 
 
 def _snapshot(value: Any) -> Any:
@@ -45,12 +52,19 @@ def _restore(target: Any, snapshot: Any) -> None:
             _restore(item, saved)
 
 
-def _mass(value: Any) -> float | None:
-    """``plant.mass`` as the scenario's validation takes it (a finite number > 0), or None."""
+def _positive(value: Any) -> float | None:
+    """``plant.mass`` or ``estimator.c0`` as the scenario's validation takes it (a finite number > 0), or None."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
     value = float(value)
     return value if math.isfinite(value) and value > 0.0 else None
+
+
+def _r(value: Any) -> int | None:
+    """``estimator.r`` as the scenario's validation takes it (an integer >= 1), or None."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        return None
+    return int(value)
 
 
 def _inertia(value: Any) -> np.ndarray | None:
@@ -73,26 +87,45 @@ class PackedSweep:
         self.controller_state = _snapshot(setup.controller.state)
         self.observer_state = _snapshot(setup.observer.state)
         self.model_inertia = np.asarray(setup.estimation.inertia, dtype=float)
+        self.estimation = setup.estimation
+        self.control_period = setup.simulation.control_period
+        self.filter_keys = setup.estimation.enabled and not setup.controller.params.compensation.enabled
 
     def flight_for(self, values: dict[str, Any]) -> LoopFlight | None:
         """The flight with ``values`` set, ready to fly (its states at their initial values), or None when
         it must be set up in full (module docstring)."""
-        if self.flight is None or not set(values) <= set(REPACKED_KEYS):
+        keys = set(values)
+        if self.flight is None or not keys <= set(REPACKED_KEYS):
+            return None
+        if keys - set(PLANT_KEYS) and not self.filter_keys:
             return None
         mass, inertia = self.plant_vehicle.mass, self.plant_vehicle.inertia
         if "plant.mass" in values:
-            mass = _mass(values["plant.mass"])
+            mass = _positive(values["plant.mass"])
             if mass is None:
                 return None
         if "plant.inertia" in values:
             inertia = _inertia(values["plant.inertia"])
             if inertia is None:
                 return None
+        observer = None
+        if keys & {"estimator.c0", "estimator.r"}:
+            c0 = _positive(values.get("estimator.c0", self.estimation.c0))
+            r = _r(values.get("estimator.r", self.estimation.r))
+            if c0 is None or r is None:
+                return None
+            try:  # as prepare_flight makes it
+                observer = MomentumObserver(self.estimation.mass, self.estimation.inertia, c0, r, self.control_period)
+            except ValueError:  # the full set-up names the refused value
+                return None
         flight = self.flight
         inertia = np.ascontiguousarray(inertia, dtype=float)  # as fsr_sim.model.plant.pack_plant packs them
         params = flight.plant_params._replace(mass=float(mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia))
         _restore(flight.controller_state, self.controller_state)
-        _restore(flight.observer_state, self.observer_state)
+        if observer is None:
+            _restore(flight.observer_state, self.observer_state)
+        else:
+            flight = flight.replace(observer_params=observer.params, observer_state=observer.state)
         measures = flight.measures._replace(mass=float(mass), inertia=inertia,
                                             inertia_delta=np.ascontiguousarray(self.model_inertia - inertia))
         state = new_plant_state(params, self.initial_x)
