@@ -59,6 +59,7 @@ def test_the_loop_leaves_a_flight_that_ends_early_to_its_arrays():
 @pytest.mark.parametrize(("scenario", "fixed", "mass"), [
     ("ex4_geometric", {"duration": 1.0}, 1.1),  # wrench actuation
     ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}, 1.3),  # rotors that lag
+    ("wind_rejection_turbulent", {"duration": 1.0, "sensors.odometry.position_std": 0.001}, 1.3),  # gusts, noise
 ])
 def test_flights_set_up_from_the_packed_sweep_have_the_rows_of_a_full_set_up(scenario, fixed, mass):
     base = load_scenario(scenario, values=fixed)

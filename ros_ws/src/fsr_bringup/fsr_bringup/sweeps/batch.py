@@ -88,12 +88,10 @@ def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M
         return invalid_row(str(error)), 0
     _ARRAYS[:] = [setup.arrays]
     if measured:
-        flight = loop_flight(setup, band)
-        row = fly_measured(flight) if flight is not None else None
+        row = fly_measured(loop_flight(setup, band))
         if row is not None:
             return row, setup.steps
-        if flight is not None:  # flown again from the start, into its arrays
-            setup = prepare_flight(scenario, arrays=setup.arrays)
+        setup = prepare_flight(scenario, arrays=setup.arrays)  # flown again from the start, into its arrays
     start = time.perf_counter()
     outcome, k, detail = setup.fly(0, setup.steps)
     count = setup.flown(outcome, k)

@@ -64,10 +64,9 @@ class LoopFlight:
         return replace(self, **changes)
 
 
-def loop_flight(setup, band: float) -> LoopFlight | None:  # noqa: ANN001 - a FlightSetup
+def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSetup
     """The loop's flight of ``setup`` with its measurement parameters (thresholds as
-    :mod:`fsr_bringup.analysis.metrics` computes them), or None when the loop cannot measure this flight
-    (module docstring)."""
+    :mod:`fsr_bringup.analysis.metrics` computes them)."""
     sim, estimation = setup.simulation, setup.estimation
     rotors = setup.rotors
     vehicle, plant = sim.vehicle, sim.plant_vehicle
@@ -100,7 +99,9 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
     """Fly ``flight`` whole, measured in the loop: its row, or None when the loop could not measure it (module
     docstring: the flight is then to be flown again from its arrays)."""
     n = flight.rotor_count
-    scratch = _SCRATCH.get(n) or _SCRATCH.setdefault(n, _Scratch(n))
+    scratch = _SCRATCH.get(n)
+    if scratch is None:
+        scratch = _SCRATCH[n] = _Scratch(n)
     outcome, _, _ = core.fly_measured(
         flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
         flight.with_estimator, flight.observer_params, flight.observer_state, flight.steps, flight.period_ns,
