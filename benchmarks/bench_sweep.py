@@ -67,8 +67,8 @@ def main() -> None:
             start = time.perf_counter()
             subprocess.run([*command, "--out", str(Path(folder) / f"run{i}")], check=True, capture_output=True)
             walls.append(time.perf_counter() - start)
-    print(f"{' '.join(command[1:])}: {min(walls):.2f} / {statistics.median(walls):.2f} s wall "
-          f"(target <= {TARGET_COMMAND_S:g} s)")
+    target = f" (target <= {TARGET_COMMAND_S:g} s)" if args.command_n == 1000 else ""
+    print(f"{' '.join(command[1:])}: {min(walls):.2f} / {statistics.median(walls):.2f} s wall{target}")
     print(f"load average after: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
 
 
