@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED
 from fsr_control.core.allocation import TILTING, WRENCH
 from fsr_control.core.controller import (
     COMMANDED_ROTATION,
@@ -56,8 +57,6 @@ from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_comma
 from fsr_sim.core.rotors import scaled_rotor_wrench
 from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
 from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, in_contact, thrust_ratios
-
-FINISHED, DIVERGED, CONTROLLER_FAILED = 1, 2, 3  # outcomes, as fly_steps'
 
 # The accumulators (acc).
 POSITION_FINAL, POSITION_PEAK, POSITION_SQUARES, POSITION_SAMPLES, POSITION_LAST_OUTSIDE = 0, 1, 2, 3, 4
@@ -110,6 +109,7 @@ class MeasureParams(NamedTuple):
 
 @jit
 def reset(acc) -> None:  # noqa: ANN001
+    """The accumulators before the first sample (NaN: no value yet; -1: no sample outside a band)."""
     acc[:] = 0.0
     acc[POSITION_FINAL] = math.nan
     acc[POSITION_PEAK] = -math.inf
