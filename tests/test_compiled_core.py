@@ -45,6 +45,51 @@ def test_compiled_and_cpython_flights_are_bit_identical():
     assert np.array_equal(compiled, python), np.abs(compiled - python).max()
 
 
+SWEEP_ROWS = """
+import json, sys
+from fsr_bringup.sweeps.batch import fly_one
+from fsr_sim.config.scenario import load_scenario
+flights = json.loads(sys.argv[1])
+rows = [fly_one(load_scenario(name, values=fixed), values)[0] for name, fixed, values in flights]
+print(json.dumps(rows))
+"""
+SWEEP_FLIGHTS = (("ex4_geometric", {"duration": 0.3}, {"plant.mass": 1.3}),  # wrench actuation
+                 ("octo_ground_effect", {"duration": 0.3}, {"plant.mass": 2.5}),  # rotors, ground effect
+                 ("ex5_voliro", {"duration": 0.3, "plant.tilt_time_constant": 0.03}, {}))  # tilts that lag
+
+
+@pytest.mark.slow
+def test_a_sweep_flight_measured_in_the_loop_is_the_same_compiled_and_under_cpython():
+    """The loop that measures a sweep's flight as it flies (fsr_bringup.core.flight_measures): the same row
+    compiled and under CPython."""
+    rows = []
+    for disable in ("0", "1"):
+        out = subprocess.run([sys.executable, "-c", SWEEP_ROWS, json.dumps(SWEEP_FLIGHTS)], capture_output=True,
+                             env={**os.environ, "NUMBA_DISABLE_JIT": disable}, text=True, check=True, timeout=280)
+        rows.append(json.loads(out.stdout))
+    for compiled, python in zip(*rows, strict=True):
+        assert compiled.keys() == python.keys()
+        for key, value in compiled.items():
+            assert value == pytest.approx(python[key], rel=1e-12, nan_ok=True) if isinstance(value, float) \
+                else value == python[key], key
+
+
+@pytest.mark.slow
+def test_a_sweep_compiles_nothing_with_the_cache_filled(tmp_path):
+    """After fsr-compile, fsr-sweep's flights (measured in the loop, wrench actuation and rotors with the
+    estimator) only load compiled code."""
+    env = {**os.environ, "NUMBA_DEBUG_CACHE": "1", "MPLBACKEND": "Agg"}
+    subprocess.run([str(Path(sys.executable).parent / "fsr-compile")], env=env, check=True, capture_output=True,
+                   timeout=280)
+    for scenario in ("ex4_geometric", "wind_rejection"):
+        sweep = subprocess.run([str(Path(sys.executable).parent / "fsr-sweep"), scenario, "--sample",
+                                "plant.mass=uniform:1.2:1.4", "--n", "3", "--duration", "0.1", "--out", scenario],
+                               cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+        assert sweep.returncode == 0, sweep.stderr
+        assert "[cache] data loaded" in sweep.stdout
+        assert "[cache] data saved" not in sweep.stdout
+
+
 @pytest.mark.graph
 def test_no_flight_and_no_node_compiles_with_the_cache_filled(tmp_path):
     """After fsr-compile (scripts/setup.sh runs it) an in-process flight and every node of a graph flight only

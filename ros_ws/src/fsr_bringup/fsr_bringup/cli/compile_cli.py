@@ -35,8 +35,21 @@ def tour(folder: Path) -> None:
         simulate(name, duration=0.02, record=path)
         flight_metrics(load_flight(path))
     simulate("ex4_geometric", set={"actuation": "rotors"}, duration=0.02)
+    _sweep_flights()
     _node_calls()
     _python_api()
+
+
+def _sweep_flights() -> None:
+    """A sweep's flights measured in the loop (:mod:`fsr_bringup.sweeps.measured`), of every built-in scenario,
+    with and without the estimator."""
+    from fsr_bringup.sweeps.batch import fly_one
+    from fsr_sim.config.scenario import load_scenario
+
+    flights = [(name, {}) for name in BUILT_IN] + [("ex4_geometric", {"actuation": "rotors"})]
+    for name, fixed in flights:
+        for enabled in (True, False):
+            fly_one(load_scenario(name, values={**fixed, "duration": 0.02, "estimator.enabled": enabled}), {})
 
 
 def _node_calls() -> None:

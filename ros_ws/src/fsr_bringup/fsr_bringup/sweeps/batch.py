@@ -1,9 +1,12 @@
 """A batch of a sweep's flights, flown in one process: what a local worker process and a Dask worker run.
 
-Each flight is set up from the sweep's scenario and its own ``set`` values (validated like any flight: a value
-refused is an ``invalid`` row naming the key), flown whole by the compiled loop in one call (nothing passes
-through Python per step) into arrays this process reuses from flight to flight, and measured
-(:func:`fsr_bringup.sweeps.metrics.flight_row`). A flight that diverges is a row with its reason; the batch goes on.
+Each flight is set up from the sweep's scenario and its own ``set`` values: from the scenario packed once, only
+the swept values packed anew, where that is exact (:mod:`fsr_bringup.sweeps.repack`), else validated in full
+like any flight (a value refused is an ``invalid`` row naming the key). It is flown whole by the compiled loop in
+one call (nothing passes through Python per step) and measured as it flies (:mod:`fsr_bringup.sweeps.measured`);
+a flight the loop cannot measure (it ended early) is flown again into arrays this process reuses from flight to
+flight and measured from them (:func:`fsr_bringup.sweeps.metrics.flight_row`). A flight that diverges is a row
+with its reason; the batch goes on.
 """
 
 from __future__ import annotations
@@ -15,7 +18,9 @@ from typing import Any
 
 from fsr_bringup.runner.in_process_flight import FlightArrays, prepare_flight
 from fsr_bringup.sweeps.axes import flight_scenario
+from fsr_bringup.sweeps.measured import fly_measured, loop_flight
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, flight_row, invalid_row
+from fsr_bringup.sweeps.repack import PackedSweep
 from fsr_sim.config.scenario import Scenario
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.contract import FINISHED
@@ -43,8 +48,34 @@ class BatchResult:
 _ARRAYS: list[FlightArrays] = []  # this process' arrays, reused by its next flights
 
 
-def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M) -> tuple[dict[str, Any], int]:
-    """The metrics row of one flight and the steps it flew."""
+def packed_sweep(base: Scenario, band: float) -> PackedSweep | None:
+    """This process' :class:`PackedSweep` of ``base`` (made once per sweep scenario and band), or None when the
+    scenario alone cannot be set up."""
+    key = (repr(base.data), base.source, str(base.base_dir), band)
+    if _PACKED and _PACKED[0][0] == key:
+        return _PACKED[0][1]
+    try:
+        packed = PackedSweep(prepare_flight(base), band)
+    except ValueError:  # ConfigError too: a scenario that needs its swept values to be valid
+        packed = None
+    _PACKED[:] = [(key, packed)]
+    return packed
+
+
+_PACKED: list[tuple[tuple, PackedSweep | None]] = []
+
+
+def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M, measured: bool = True,
+            packed: PackedSweep | None = None) -> tuple[dict[str, Any], int]:
+    """The metrics row of one flight and the steps it flew: measured in the loop where it can be
+    (:mod:`fsr_bringup.sweeps.measured`; ``measured=False``: always from the flight's arrays), set up from
+    ``packed`` where it can be (:mod:`fsr_bringup.sweeps.repack`)."""
+    repacked = packed.flight_for(values) if packed is not None and measured else None
+    if repacked is not None:
+        row = fly_measured(repacked)
+        if row is not None:
+            return row, repacked.steps
+        measured = False  # it ended early: flown again in full, into arrays
     try:
         scenario = flight_scenario(base, values)
     except ConfigError as error:
@@ -56,6 +87,11 @@ def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M
     except ValueError as error:  # a model refusing its values (e.g. an observer filter) names them
         return invalid_row(str(error)), 0
     _ARRAYS[:] = [setup.arrays]
+    if measured:
+        row = fly_measured(loop_flight(setup, band))
+        if row is not None:
+            return row, setup.steps
+        setup = prepare_flight(scenario, arrays=setup.arrays)  # flown again from the start, into its arrays
     start = time.perf_counter()
     outcome, k, detail = setup.fly(0, setup.steps)
     count = setup.flown(outcome, k)
@@ -75,9 +111,10 @@ def fly_batch(batch: Batch) -> BatchResult:
 
     start = time.perf_counter()
     base = Scenario(data=batch.data, source=batch.source, base_dir=Path(batch.base_dir))
+    packed = packed_sweep(base, batch.band)
     rows, steps = [], 0
     for number, values in batch.flights:
-        row, flown = fly_one(base, values, batch.band)
+        row, flown = fly_one(base, values, batch.band, packed=packed)
         rows.append((number, row))
         steps += flown
     return BatchResult(rows, steps, time.perf_counter() - start, f"{socket.gethostname()}:{os.getpid()}")

@@ -124,9 +124,9 @@ class DrydenTurbulence:
 def pack_turbulence(entries: Sequence[DrydenTurbulence], drag: ArrayLike, dt: float) -> TurbulenceParams:
     """The core's :class:`~fsr_sim.core.turbulence.TurbulenceParams` of ``entries`` at the RK4 step ``dt`` [s]
     with the vehicle's drag coefficients ``drag`` (3,), the filters' stationary start included."""
-    from scipy.linalg import solve_discrete_lyapunov
-    from scipy.signal import cont2discrete, tf2ss
-
+    if any(entry.wind_speed > 0.0 for entry in entries):  # only gusts need scipy (importing it takes ~1 s)
+        from scipy.linalg import solve_discrete_lyapunov
+        from scipy.signal import cont2discrete, tf2ss
     m = len(entries)
     a, b, c = np.zeros((m, 3, ORDER, ORDER)), np.zeros((m, 3, ORDER)), np.zeros((m, 3, ORDER))
     d, axes, mean = np.zeros((m, 3)), np.zeros((m, 3, 3)), np.zeros((m, 3))

@@ -1,0 +1,128 @@
+"""The sweep's fast paths give the rows of the full path: a flight measured in the compiled loop (no per-step
+arrays) has the row its arrays give, a flight set up from the sweep's packed scenario (only the swept values
+packed anew) the row of a flight set up in full; what they cannot do falls back to the full path."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from fsr_bringup.sweeps.batch import fly_one, packed_sweep
+from fsr_bringup.sweeps.metrics import METRIC_COLUMNS
+from fsr_sim.config.scenario import load_scenario
+
+TEXT_COLUMNS = ("end_reason", "end_detail", "gave_way")
+
+
+def assert_rows_agree(got: dict, want: dict, rel: float = 1e-9) -> None:
+    for column in METRIC_COLUMNS:
+        if column in TEXT_COLUMNS:
+            assert got[column] == want[column], column
+        elif math.isnan(want[column]):
+            assert math.isnan(got[column]), (column, got[column])
+        else:
+            assert got[column] == pytest.approx(want[column], rel=rel, abs=1e-12), column
+
+
+@pytest.mark.parametrize(("scenario", "fixed", "values"), [
+    ("ex4_geometric", {"duration": 1.5}, {"plant.mass": 1.3}),  # wrench actuation, estimator on
+    ("ex3_estimation", {"duration": 6.0}, {"estimator.c0": 7.0}),  # the RMS from the 5 s settle window on
+    ("ex4_geometric", {"duration": 1.5, "estimator.mass": 1.0, "estimator.inertia": [0.02, 0.02, 0.05]},
+     {"plant.mass": 1.4}),  # a model mismatch in mass and inertia
+    ("ex4_geometric", {"duration": 1.0, "actuation": "rotors", "estimator.enabled": False},
+     {"plant.mass": 2.5}),  # rotors at their limits (saturation, the wrench gives way)
+    ("ex5_voliro", {"duration": 1.0, "estimator.enabled": False}, {"plant.mass": 2.0}),  # tilts
+    ("ex5_voliro", {"duration": 1.0}, {"plant.mass": 2.0}),  # rotors and tilts with the estimator
+    ("octo_ground_effect", {"duration": 1.5}, {"plant.mass": 2.5}),  # ground effect: the thrust ratios
+    ("ceiling_approach", {"duration": 1.0}, {}),  # the ceiling's
+    ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}, {"plant.mass": 1.3}),  # rotor lag
+    ("ex5_voliro", {"duration": 1.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120},
+     {}),  # tilt lag
+])
+def test_a_flight_measured_in_the_loop_has_the_row_of_its_arrays(scenario, fixed, values):
+    base = load_scenario(scenario, values=fixed)
+    measured, steps = fly_one(base, values)
+    from_arrays, steps_from_arrays = fly_one(base, values, measured=False)
+    assert measured["end_reason"] == "finished" and steps == steps_from_arrays
+    assert_rows_agree(measured, from_arrays)
+
+
+def test_the_loop_leaves_a_flight_that_ends_early_to_its_arrays():
+    diverging = load_scenario("ex4_geometric", values={"duration": 2.0, "actuation": "rotors",
+                                                       "estimator.enabled": False})
+    row, steps = fly_one(diverging, {"plant.mass": 30.0})
+    assert row["end_reason"] == "diverged" and steps < 2000
+    assert_rows_agree(row, fly_one(diverging, {"plant.mass": 30.0}, measured=False)[0])
+
+
+@pytest.mark.parametrize(("scenario", "fixed", "mass"), [
+    ("ex4_geometric", {"duration": 1.0}, 1.1),  # wrench actuation
+    ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}, 1.3),  # rotors that lag
+    ("wind_rejection_turbulent", {"duration": 1.0, "sensors.odometry.position_std": 0.001}, 1.3),  # gusts, noise
+])
+def test_flights_set_up_from_the_packed_sweep_have_the_rows_of_a_full_set_up(scenario, fixed, mass):
+    base = load_scenario(scenario, values=fixed)
+    packed = packed_sweep(base, 0.01)
+    flights = [{"plant.mass": mass}, {"plant.mass": mass + 0.3, "plant.inertia": [0.03, 0.03, 0.06]},
+               {"plant.inertia": [[0.03, 0.001, 0.0], [0.001, 0.03, 0.0], [0.0, 0.0, 0.06]]}, {"plant.mass": mass}]
+    rows = []
+    for values in flights:  # one after the other: each starts from the initial states again
+        assert packed.flight_for(values) is not None
+        row, steps = fly_one(base, values, packed=packed)
+        full, full_steps = fly_one(base, values)
+        assert row == full and steps == full_steps == 1000  # the same arithmetic: the same numbers
+        assert_rows_agree(row, fly_one(base, values, measured=False)[0])
+        rows.append(row)
+    assert rows[0] == rows[3] and rows[0] != rows[1]
+
+
+@pytest.mark.parametrize("values", [
+    {"controller.gains.k_p": [7, 7, 40]}, {"plant.mass": 1.2, "estimator.mass": 1.3},  # keys it does not re-pack
+    {"plant.mass": -1.0}, {"plant.mass": True}, {"plant.mass": math.nan},  # values the full set-up refuses
+    {"plant.inertia": [0.03, -0.03, 0.06]}, {"plant.inertia": [[0.03, 0.01, 0.0], [0.0, 0.03, 0.0], [0, 0, 0.06]]},
+    {"plant.inertia.0": 0.03},
+    {"estimator.c0": -1.0}, {"estimator.c0": 3000.0}, {"estimator.r": 0}, {"estimator.r": 2.0}, {"estimator.r": True},
+])
+def test_what_the_packed_sweep_cannot_set_up_is_set_up_in_full(values):
+    base = load_scenario("ex4_geometric", values={"duration": 0.3})
+    packed = packed_sweep(base, 0.01)
+    assert packed.flight_for(values) is None
+    assert fly_one(base, values, packed=packed) == fly_one(base, values)
+
+
+def test_a_refused_or_diverging_value_of_a_packed_sweep_is_the_full_path_row():
+    base = load_scenario("ex4_geometric", values={"duration": 2.0, "actuation": "rotors",
+                                                  "estimator.enabled": False})
+    packed = packed_sweep(base, 0.01)
+    refused, _ = fly_one(base, {"plant.mass": -1.0}, packed=packed)
+    assert refused["end_reason"] == "invalid" and "plant.mass" in refused["end_detail"]
+    assert packed.flight_for({"plant.mass": 30.0}) is not None
+    diverged, steps = fly_one(base, {"plant.mass": 30.0}, packed=packed)
+    assert diverged["end_reason"] == "diverged" and "crashed into the ground" in diverged["end_detail"]
+    assert (diverged, steps) == fly_one(base, {"plant.mass": 30.0}, measured=False)
+
+
+def test_a_filter_of_the_observer_is_packed_anew_and_each_flight_has_the_row_of_a_full_set_up():
+    base = load_scenario("ex3_estimation", values={"duration": 6.0})
+    packed = packed_sweep(base, 0.01)
+    flights = [{"estimator.c0": 5.0, "estimator.r": 3}, {"estimator.r": 1}, {"estimator.c0": 20.0},
+               {"plant.mass": 1.2, "estimator.c0": 5.0, "estimator.r": 3}, {"estimator.c0": 5.0, "estimator.r": 3}]
+    rows = []
+    for values in flights:
+        assert packed.flight_for(values) is not None
+        row, _ = fly_one(base, values, packed=packed)
+        assert row == fly_one(base, values)[0]
+        rows.append(row)
+    assert rows[0] == rows[4] and rows[0] != rows[1] != rows[2] and rows[0] != rows[3]
+
+
+@pytest.mark.parametrize(("fixed", "values"), [
+    ({"controller.compensation": "estimate"}, {"estimator.c0": 5.0}),  # the controller's observer has c0 too
+    ({"estimator.enabled": False}, {"estimator.r": 2}),
+])
+def test_the_observer_filter_is_set_up_in_full_where_more_than_the_observer_reads_it(fixed, values):
+    base = load_scenario("wind_rejection", values={"duration": 0.3, **fixed})
+    packed = packed_sweep(base, 0.01)
+    assert packed.flight_for(values) is None and packed.flight_for({"plant.mass": 1.3}) is not None
+    assert fly_one(base, values, packed=packed) == fly_one(base, values)
