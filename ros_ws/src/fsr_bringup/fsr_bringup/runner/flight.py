@@ -31,6 +31,7 @@ from pathlib import Path
 from fsr_bringup.runner.domains import DomainLease
 from fsr_bringup.runner.processes import NodeProcess, ProcessGroup, describe_exit, executable
 from fsr_sim.contract import (
+    CLOCK,
     DIVERGED,
     EXIT_DIVERGED,
     EXIT_FAILURE,
@@ -39,7 +40,9 @@ from fsr_sim.contract import (
     FINISHED,
     STOPPED,
     SimStatus,
+    recorded_topics,
 )
+from fsr_sim.ros.recorder_match import RECORDED_TOPICS
 from fsr_sim.ros.runtime import TEARDOWN_HUNG_SIGNAL, configure_environment
 
 EXIT_NODE_FAILED = EXIT_FAILURE
@@ -171,8 +174,11 @@ def node_commands(
         if member.namespace:
             recorder += ["--namespace", member.namespace]
     commands = [("recorder", recorder)]
+    # every node waits for the recorder's reader on each recorded topic it publishes (fsr_sim.ros.recorder_match)
+    recorded = record_topics if record_topics is not None else frozenset({*recorded_topics(), CLOCK.name})
     for index, member in enumerate(members):
-        ros_args = ["--ros-args", "-p", f"scenario:={member.scenario_path}"]
+        ros_args = ["--ros-args", "-p", f"scenario:={member.scenario_path}",
+                    "-p", f"{RECORDED_TOPICS.name}:={','.join(sorted(recorded))}"]
         if member.namespace:
             ros_args += ["-r", f"__ns:={member.namespace}"]
         if member.with_estimator:

@@ -50,6 +50,7 @@ from fsr_sim.ros.conversions import odometry_state_from_bytes
 from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.node_usage import NodeUsage, Parameter
+from fsr_sim.ros.recorder_match import RECORDED_TOPICS, recorded_topics_parameter, wait_until_recorded
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GAIN_PARAMETERS = ("k_p", "k_v", "k_d", "k_r", "k_w")
@@ -62,6 +63,7 @@ USAGE = NodeUsage(
         Parameter("controller_type", "", f"{' | '.join(LAWS)}: overrides the scenario's controller.type"),
         *(Parameter(gain, "", "3 numbers, the gain's diagonal: overrides the scenario's") for gain in GAIN_PARAMETERS),
         Parameter("exit_on_finish", "true", "end by itself once sim_status reports the end of the flight"),
+        RECORDED_TOPICS,
     ),
     (ODOM, GOAL, SIM_STATUS),
     (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR),
@@ -86,6 +88,7 @@ class ControllerNode(Node):
         name = self.declare_parameter("scenario", "").value
         controller_type = self.declare_parameter("controller_type", "").value
         exit_on_finish = exit_on_finish_parameter(self, "controller")
+        recorded = recorded_topics_parameter(self)
         if not name:
             raise ConfigError("scenario", "parameter is required (-p scenario:=<name or path>)", "controller")
         gains = {}
@@ -116,6 +119,7 @@ class ControllerNode(Node):
         self.rotors = sim.actuation == "rotors"
         self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.has_servos)
         self.publishers_by_topic = {name: publisher(self, BY_NAME[name]) for name in self.packets.templates}
+        wait_until_recorded(self, self.publishers_by_topic, recorded)  # before odom: no state comes before
         odom = subscription(self, ODOM, self.on_odom, raw=True)
         self.hot_subscriptions = [(odom, self.on_odom)]
         subscription(self, GOAL, self.on_goal)

@@ -37,6 +37,7 @@ from fsr_sim.ros.conversions import state_from_odometry_bytes
 from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.flight_end import FlightEnd
 from fsr_sim.ros.qos import STREAM_DEPTH
+from fsr_sim.ros.recorder_match import recorded_topics_parameter, wait_until_recorded
 from fsr_sim.ros.runtime import RateLimitedWarning, exit_on_finish_parameter, run_node
 
 GATHER_S = 0.005  # s between batches of inputs (the streams are 5000 deep)
@@ -51,6 +52,7 @@ class EstimatorNode(Node):
         values = {name: self.declare_parameter(name, None, dynamic).value for name in PARAMETER_NAMES}
         settings = node_settings(values)
         exit_on_finish = exit_on_finish_parameter(self, "estimator")
+        recorded = recorded_topics_parameter(self)
         self.config = settings.config
         self.enabled = self.config.enabled
         self.warn_input = RateLimitedWarning(self.get_logger())
@@ -65,6 +67,8 @@ class EstimatorNode(Node):
         self.packets = EstimatePackets()  # the bytes an in-process recording writes
         self.wrench_pub = publisher(self, WRENCH_ESTIMATE)
         self.mass_pub = publisher(self, MASS_ESTIMATE)
+        recorded_publishers = {WRENCH_ESTIMATE.name: self.wrench_pub, MASS_ESTIMATE.name: self.mass_pub}
+        wait_until_recorded(self, recorded_publishers, recorded)  # before odom: no state comes before
         odom = subscription(self, ODOM, self._on_odom, raw=True)
         wrench = subscription(self, WRENCH_CMD, self._on_wrench, raw=True)
         self.hot_subscriptions = [(odom, self._on_odom), (wrench, self._on_wrench)]

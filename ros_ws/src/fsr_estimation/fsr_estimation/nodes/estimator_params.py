@@ -34,6 +34,7 @@ from fsr_sim.contract import (
     WRENCH_CMD,
 )
 from fsr_sim.ros.node_usage import NodeUsage, Parameter
+from fsr_sim.ros.recorder_match import RECORDED_TOPICS
 
 PARAMETER_SOURCE = "ROS parameter"
 USAGE = NodeUsage(
@@ -47,11 +48,13 @@ USAGE = NodeUsage(
         Parameter("inertia", "", "3 numbers (the diagonal) or 9 (row-major), kg m^2 (required without a scenario)"),
         Parameter("control_period", "", "s > 0 (default: the scenario's, else from the first two samples)"),
         Parameter("exit_on_finish", "true", "end by itself once sim_status reports the end of the flight"),
+        RECORDED_TOPICS,
     ),
     (ODOM, WRENCH_CMD, SIM_STATUS),
     (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR),
 )
-PARAMETER_NAMES = tuple(p.name for p in USAGE.parameters if p.name != "exit_on_finish")  # that one: runtime
+PARAMETER_NAMES = tuple(p.name for p in USAGE.parameters  # those two: fsr_sim.ros
+                        if p.name not in ("exit_on_finish", RECORDED_TOPICS.name))
 
 
 @dataclass(frozen=True)

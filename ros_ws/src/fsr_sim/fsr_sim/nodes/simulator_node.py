@@ -9,11 +9,12 @@ Parameters: :mod:`fsr_sim.nodes.simulator_params`.
 
 Lockstep (default):
 
-1. Handshake (both modes): wait until ``odom`` has ``wait_for_subscribers`` subscribers and the command topic has a
-   publisher, then publish the state ``t_0`` once and wait for the command stamped ``t_0``. The state is never
-   sent twice, so every subscriber (the recorder too) sees exactly one message per step: the streams are
-   transient-local (:mod:`fsr_sim.ros.qos`), so a reader whose side of the match completes after ``t_0`` went
-   out (discovery is asynchronous) still receives it from the writer's history.
+1. Handshake (both modes): wait until ``odom`` has ``wait_for_subscribers`` subscribers, the command topic has a
+   publisher and each ``recorded_topics`` one we publish a reader (:mod:`fsr_sim.ros.recorder_match`), then
+   publish the state ``t_0`` once and wait for the command stamped ``t_0``. The state is never sent twice, so
+   every subscriber (the recorder too) sees exactly one message per step: the streams are transient-local
+   (:mod:`fsr_sim.ros.qos`), so a reader whose side of the match completes after ``t_0`` went out (discovery
+   is asynchronous) still receives it from the writer's history.
 2. Step k: wait for the command stamped ``t_k`` (stale stamps ignored, NaN/inf dropped with a warning),
    apply it, run ``physics_substeps`` RK4 steps, publish the state ``t_{k+1}``. A missing command ->
    failsafe (``hold`` the last command or ``cut`` thrust); see :mod:`fsr_sim.nodes.lockstep`.
@@ -78,6 +79,7 @@ from fsr_sim.nodes.simulator_params import PARAMETER_NAMES, USAGE, load_simulati
 from fsr_sim.nodes.state_packets import StatePackets
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.endpoints import publisher, subscription
+from fsr_sim.ros.recorder_match import unmatched
 from fsr_sim.ros.runtime import EXIT_DIVERGED, EXIT_FAILURE, EXIT_OK, RateLimitedWarning, run_node, signal_deadline
 from fsr_sim.ros.wait_set import SubscriptionWaitSet
 
@@ -116,6 +118,9 @@ class SimulatorNode(Node):
         self.clock_pub = publisher(self, CLOCK) if self.params.publish_clock else None
         self.progress_pub = publisher(self, SIM_PROGRESS)
         self.status_pub = publisher(self, SIM_STATUS)
+        self.recorded_publishers = {topic.name: pub for topic, pub in (
+            (ODOM, self.odom_pub), (WRENCH_TRUTH, self.wrench_pub), (ROTOR_STATE, self.rotor_state_pub),
+            (CLOCK, self.clock_pub), (SIM_PROGRESS, self.progress_pub), (SIM_STATUS, self.status_pub))}
         self.command_sub = subscription(self, command, _unused, raw=True)  # commands are read from their CDR bytes
         self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
@@ -181,7 +186,8 @@ class SimulatorNode(Node):
     def _handshake(self) -> None:
         subscribers = self.odom_pub.get_subscription_count()
         publishers = self.command_sub.get_publisher_count()
-        if subscribers >= self.params.wait_for_subscribers and publishers >= 1:
+        unrecorded = unmatched(self.recorded_publishers, self.params.recorded_topics)
+        if subscribers >= self.params.wait_for_subscribers and publishers >= 1 and not unrecorded:
             self.get_logger().info(
                 f"graph ready: {subscribers} odom subscriber(s) and {publishers} {self.command_topic} publisher(s);"
                 " sending the initial state"
@@ -194,6 +200,7 @@ class SimulatorNode(Node):
             self._fail_startup(
                 f"only {subscribers} of {self.params.wait_for_subscribers} odom subscriber(s) and "
                 f"{publishers} {self.command_topic} publisher(s) after {self.params.startup_timeout:g} s"
+                + (f"; no recorder reader on {', '.join(unrecorded)}" if unrecorded else "")
             )
             return
         time.sleep(0.01)  # polling the graph (discovery is asynchronous), not waiting blindly

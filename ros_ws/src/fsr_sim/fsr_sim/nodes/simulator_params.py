@@ -6,6 +6,8 @@ ROS parameters (``--ros-args -p name:=value``):
 * ``wait_for_subscribers`` (int >= 0, default 1): ``odom`` subscribers to wait for before step 0.
 * ``publish_clock`` (bool, default true): publish ``/clock`` (one simulator per graph should).
 * ``startup_timeout`` (s > 0, default 20): how long the start-up handshake may take.
+* ``recorded_topics`` (comma-separated, default none): the handshake also waits for a reader on each of
+  these the simulator publishes (:mod:`fsr_sim.ros.recorder_match`).
 * Overrides of the scenario: ``lockstep`` (bool) -> ``lockstep.enabled``, ``timeout`` (s > 0) ->
   ``lockstep.timeout``, ``failsafe`` (hold | cut) -> ``lockstep.failsafe``, ``real_time_factor`` (> 0) ->
   ``lockstep.real_time_factor``, ``duration`` (s > 0, a whole number of control periods) -> ``duration``.
@@ -30,6 +32,7 @@ from fsr_sim.contract import (
     WRENCH_CMD,
 )
 from fsr_sim.ros.node_usage import NodeUsage, Parameter
+from fsr_sim.ros.recorder_match import RECORDED_TOPICS, parse_recorded_topics
 
 PARAMETER_SOURCE = "ROS parameter"
 
@@ -46,6 +49,7 @@ USAGE = NodeUsage(
         Parameter("failsafe", "", "hold | cut (lockstep.failsafe)"),
         Parameter("real_time_factor", "", "free-running pace (lockstep.real_time_factor)"),
         Parameter("duration", "", "s, a whole number of control periods (the scenario's duration)"),
+        RECORDED_TOPICS,
     ),
     (ROTOR_CMD, WRENCH_CMD),  # the one the scenario's actuation names
     (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR, EXIT_DIVERGED),
@@ -66,6 +70,7 @@ class SimulatorParameters:
     failsafe: str | None = None
     real_time_factor: float | None = None
     duration: float | None = None
+    recorded_topics: frozenset[str] = frozenset()  # its publishers on these wait for a reader (handshake)
 
 
 def parse_parameters(values: dict[str, Any]) -> SimulatorParameters:
@@ -91,6 +96,7 @@ def parse_parameters(values: dict[str, Any]) -> SimulatorParameters:
             section.number("real_time_factor", strictly_positive=True) if section.has("real_time_factor") else None
         ),
         duration=section.number("duration", strictly_positive=True) if section.has("duration") else None,
+        recorded_topics=parse_recorded_topics(section.string(RECORDED_TOPICS.name, "")),
     )
     section.reject_unknown()
     return parsed
