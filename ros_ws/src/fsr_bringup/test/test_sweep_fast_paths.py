@@ -39,6 +39,7 @@ def assert_rows_agree(got: dict, want: dict, rel: float = 1e-9) -> None:
     ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}, {"plant.mass": 1.3}),  # rotor lag
     ("ex5_voliro", {"duration": 1.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120},
      {}),  # tilt lag
+    ("ex3_estimation", {"duration": 1.0, "plant.rotor_time_constant": 0.03}, {"plant.mass": 1.3}),  # wrench lag
 ])
 def test_a_flight_measured_in_the_loop_has_the_row_of_its_arrays(scenario, fixed, values):
     base = load_scenario(scenario, values=fixed)

@@ -106,3 +106,37 @@ def test_bad_values_are_refused_with_the_key():
             simulation_config(load_scenario("ex5_voliro", [f"{key}={value}"]))
     with pytest.raises(ValueError, match="tilt_rate_max"):
         replace(TILTING, tilt_rate_max=0.0)
+
+
+def test_a_lagging_wrench_gives_the_first_order_response_and_is_what_the_plant_flies():
+    # wrench actuation with a rotor time constant: each component of the applied wrench lags its command
+    tau = 0.025
+    lagging = Plant(replace(QUAD, rotor_time_constant=tau), DT, actuation="wrench", position=(0.0, 0.0, -50.0))
+    plain = Plant(QUAD, DT, actuation="wrench", position=(0.0, 0.0, -50.0))  # flown with the applied wrench
+    start = np.array((0.0, 0.0, -QUAD.weight, 0.01, -0.02, 0.005))
+    target = np.array((0.0, 0.0, -1.3 * QUAD.weight, -0.03, 0.02, -0.01))
+    lagging.set_wrench(start[:3], start[3:])  # the first command is also the applied wrench
+    np.testing.assert_array_equal(lagging.applied_wrench, start)
+    lagging.set_wrench(target[:3], target[3:])
+    np.testing.assert_array_equal(lagging.applied_wrench, start)  # a command does not act at once
+    for k in range(1, 201):
+        applied = lagging.applied_wrench
+        plain.set_wrench(applied[:3], applied[3:])
+        lagging.step()
+        plain.step()
+        expected = target + (start - target) * math.exp(-k * DT / tau)
+        np.testing.assert_allclose(lagging.applied_wrench, expected, rtol=0.0, atol=1e-9)
+        np.testing.assert_array_equal(lagging.state_vector, plain.state_vector)
+    np.testing.assert_array_equal(lagging.force_command, target[:3])
+    lagging.cut_thrust()  # the failsafe: the wrench decays to zero
+    lagging.step()
+    np.testing.assert_allclose(lagging.applied_wrench, expected * math.exp(-DT / tau), rtol=0.0, atol=1e-9)
+
+
+def test_a_zero_time_constant_leaves_wrench_actuation_exactly_as_it_was():
+    plain = simulate("ex3_estimation", duration=2.0)
+    zero = simulate("ex3_estimation", duration=2.0, set={"plant.rotor_time_constant": 0.0})
+    np.testing.assert_array_equal(zero.state, plain.state)
+    np.testing.assert_array_equal(zero.estimate_force_body, plain.estimate_force_body)
+    lagging = simulate("ex3_estimation", duration=2.0, set={"plant.rotor_time_constant": 0.03})
+    assert lagging.end_reason == "finished" and np.abs(lagging.state - plain.state).max() > 1e-6

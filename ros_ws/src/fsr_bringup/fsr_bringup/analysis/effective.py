@@ -13,7 +13,8 @@ while the true plant (mass ``m``, inertia ``I``) obeys, averaged over the same s
 
 with ``f_a`` the body force the rotors really produce (from their speeds and tilts - ``rotor_cmd``'s, or
 ``rotor_state``'s where actuator dynamics make them lag the command - scaled per rotor by the ground/ceiling
-thrust ratio; ``f_c`` itself in wrench actuation) and
+thrust ratio; in wrench actuation ``f_c`` itself, or with a rotor time constant the applied wrench lagging it,
+replayed from the commands by the plant's own lag and averaged over the RK4 steps it is held over) and
 ``<.>`` the mean over the step (trapezoid of its ends). Eliminating ``a_k`` gives the effective force::
 
     f_eff = f_ext + (<R f_a> - R_k f_c) + f_contact + (m_e - m) (a_k - g e3)      [N, world NED]
@@ -45,7 +46,7 @@ import numpy as np
 
 from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
 from fsr_sim.config.scenario import SimulationConfig, plant_from_config
-from fsr_sim.core.plant import actuator_wrench_log
+from fsr_sim.core.plant import actuator_wrench_log, applied_wrench_log
 from fsr_sim.model.environment import contact_mask, pack_surfaces, thrust_ratio_log
 from fsr_sim.model.frames import E3, GRAVITY
 
@@ -95,6 +96,20 @@ def actuator_wrench(config: SimulationConfig, speeds: np.ndarray, tilts: np.ndar
     return force, torque
 
 
+def applied_wrench(config: SimulationConfig, force: np.ndarray, torque: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Body wrench a wrench-actuated plant applies along a log of commands ``force``, ``torque`` (n, 3) [N, N m],
+    body FRD, one per control period, computed by the plant itself (:func:`fsr_sim.core.plant.applied_wrench_log`:
+    with a rotor time constant each component lags its command, the first command applied at once), as its mean
+    over each period's RK4 steps. Returns force and torque, (n, 3) each; rows whose command is not finite are
+    NaN (the lag is carried through them with a zero command)."""
+    plant = plant_from_config(config)
+    commands = np.ascontiguousarray(np.nan_to_num(np.hstack((force, torque)).astype(float)))
+    mean = np.zeros_like(commands)
+    applied_wrench_log(plant.params, plant.core_state, commands, mean)
+    mean[~np.isfinite(np.hstack((force, torque))).all(axis=1)] = np.nan
+    return mean[:, :3], mean[:, 3:]
+
+
 def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
     """The effective truth of the module docstring; None without odom, wrench_cmd, scenario or estimator model."""
     odom, cmd, config, model = flight.odom, flight.wrench_cmd, flight.config, flight.estimator
@@ -131,6 +146,8 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
         f_start, tau_start = actuator_wrench(config, speeds, tilts, ratios)
         next_ratios = np.vstack((ratios[1:], ratios[-1:]))
         f_end, tau_end = actuator_wrench(config, speeds, tilts, next_ratios)
+    elif config.actuation == "wrench" and plant.rotor_time_constant > 0.0:
+        f_start, tau_start = f_end, tau_end = applied_wrench(config, f_cmd, tau_cmd)
     else:
         f_start = f_end = f_cmd
         tau_start = tau_end = tau_cmd

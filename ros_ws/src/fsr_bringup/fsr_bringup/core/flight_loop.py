@@ -24,12 +24,27 @@ from fsr_control.core.allocation import TILTING, WRENCH
 from fsr_control.core.controller import FORCE, ROTOR_SPEEDS, TORQUE, ControllerParams, ControllerState, controller_tick
 from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import actuator_row, advance, publish
 from fsr_sim.core.odometry import read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
 
 GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED = 0, 1, 2, 3  # outcomes of fly_steps
+
+
+@jit_inline
+def hold_command(plant: PlantParams, plant_state: PlantState, mode: int, row, force, torque) -> None:  # noqa: ANN001
+    """Hand the controller's output ``row`` to the plant for the next period: in wrench actuation ``u_T = -f_z``
+    along ``-z_b`` and ``tau_b`` (``force``, ``torque`` of the row), else the rotor speeds (and tilts)."""
+    if mode == WRENCH:  # the RK4 stage row as scratch: copied before use
+        wrench = plant_state.work[4, :6]
+        wrench[0], wrench[1], wrench[2] = 0.0, 0.0, force[2]
+        wrench[3], wrench[4], wrench[5] = torque
+        set_wrench_command(plant, plant_state, wrench)
+    else:
+        n = (row.shape[0] - ROTOR_SPEEDS) // 2
+        set_rotor_command(plant, plant_state, row[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
+                          row[ROTOR_SPEEDS + n:ROTOR_SPEEDS + 2 * n], mode == TILTING)
 
 
 @jit
@@ -43,7 +58,6 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
     ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""
-    n = (control.shape[1] - ROTOR_SPEEDS) // 2
     mode = controller.allocation.mode
     if first == 0:
         publish(plant, plant_state, published[0])
@@ -65,14 +79,7 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
                                 estimates[k])
         if k == step_count:
             return FINISHED, k, 0
-        if mode == WRENCH:  # u_T = -f_z along -z_b and tau_b (the RK4 stage row as scratch: copied before use)
-            wrench = plant_state.work[4, :6]
-            wrench[0], wrench[1], wrench[2] = 0.0, 0.0, force[2]
-            wrench[3], wrench[4], wrench[5] = torque
-            set_wrench_command(plant, plant_state, wrench)
-        else:
-            set_rotor_command(plant, plant_state, row[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
-                              row[ROTOR_SPEEDS + n:ROTOR_SPEEDS + 2 * n], mode == TILTING)
+        hold_command(plant, plant_state, mode, row, force, torque)
         code = advance(plant, plant_state, published[k + 1])
         actuator_row(plant_state, actuators[k + 1])
         if code != RUNNING:

@@ -35,8 +35,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED
-from fsr_control.core.allocation import TILTING, WRENCH
+from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED, hold_command
+from fsr_control.core.allocation import WRENCH
 from fsr_control.core.controller import (
     COMMANDED_ROTATION,
     FORCE,
@@ -53,7 +53,7 @@ from fsr_estimation.core.observer_step import ObserverParams, ObserverState, est
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import advance, publish
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE, read_odometry
-from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
+from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, period_mean_lagged, set_rotor_command
 from fsr_sim.core.rotors import scaled_rotor_wrench
 from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
 from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, in_contact, thrust_ratios
@@ -374,14 +374,17 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         measure_sample(measures, acc, k, states, rotation_k, row)
         if k == step_count:
             return FINISHED, k, 0
-        if mode == WRENCH:  # as fly_steps
-            wrench = plant_state.work[4, :6]
-            wrench[0], wrench[1], wrench[2] = 0.0, 0.0, force[2]
-            wrench[3], wrench[4], wrench[5] = torque
-            set_wrench_command(plant, plant_state, wrench)
+        hold_command(plant, plant_state, mode, row, force, torque)
+        if plant.wrench_lag:  # the applied wrench over the step (held over each RK4 step, lagging the command)
+            w = plant_state.body_wrench
+            c = plant_state.wrench_command
+            d, s = plant.speed_decay, plant.substeps
+            force_held = (period_mean_lagged(w[0], c[0], d, s), period_mean_lagged(w[1], c[1], d, s),
+                          period_mean_lagged(w[2], c[2], d, s))
+            torque_held = (period_mean_lagged(w[3], c[3], d, s), period_mean_lagged(w[4], c[4], d, s),
+                           period_mean_lagged(w[5], c[5], d, s))
         else:
-            set_rotor_command(plant, plant_state, row[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
-                              row[ROTOR_SPEEDS + n:ROTOR_SPEEDS + 2 * n], mode == TILTING)
+            force_held, torque_held = force, torque
         code = advance(plant, plant_state, published[(k + 1) % 2])
         if code != RUNNING:
             return DIVERGED, k, code
@@ -400,8 +403,9 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
             measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,
                              rotation_k, rotation_next, now, force, torque, force_start, torque_start, force_end,
                              torque_end, estimate)
-        elif with_estimator and measures.truth:  # wrench actuation: the command is what acts
+        elif with_estimator and measures.truth:  # wrench actuation: the command, or the wrench lagging it
             measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,
-                             rotation_k, rotation_next, now, force, torque, force, torque, force, torque, estimate)
+                             rotation_k, rotation_next, now, force, torque, force_held, torque_held, force_held,
+                             torque_held, estimate)
         rotation_k = rotation_next
     return FINISHED, step_count, 0

@@ -9,7 +9,9 @@ time-varying disturbances) are evaluated at every RK4 stage. Two actuations:
   (:func:`advance_actuators`), approached by a first-order lag; ``f_b = sum c_f r_i u_w,i z_i``,
   ``tau_b = sum u_w,i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the thrust ratio ``r_i`` of
   :mod:`fsr_sim.core.surfaces` (drag torque is not scaled);
-* wrench: the commanded body wrench directly; surfaces then only act through contact.
+* wrench: the commanded body wrench directly - or, with a rotor time constant, the wrench lagging it by the same
+  first-order lag per component (the rotors' speed lag linearised about hover has that time constant); surfaces
+  then only act through contact.
 
 Ground and ceiling are solid: after each RK4 step a vehicle whose feet are below the ground (top above the
 ceiling) is put back on it with zero velocity and angular velocity (held: no bounce, no sliding); the fastest
@@ -44,7 +46,8 @@ RUNNING, NOT_FINITE, TOO_FAST, SPINNING, GROUND_CRASH, CEILING_CRASH = 0, 1, 2, 
 # PlantState.status entries
 STEP_INDEX, IN_CONTACT, AT_CEILING, MAX_IMPACT, MAX_CEILING_IMPACT = 0, 1, 2, 3, 4
 GROUND_CAP_STEPS, CEILING_CAP_STEPS, GROUND_CAPPED, CEILING_CAPPED = 5, 6, 7, 8
-STATUS_SIZE = 9
+WRENCH_COMMANDED = 9  # 1 once a wrench command came (the lagging wrench starts at the first one)
+STATUS_SIZE = 10
 
 
 class PlantParams(NamedTuple):
@@ -70,6 +73,7 @@ class PlantParams(NamedTuple):
     sensors: SensorParams  # the stage between the true state and odom (fsr_sim.core.sensors)
     rotor_lag: bool  # rotor actuation: speeds follow their command through a first-order lag (advance_actuators)
     speed_decay: float  # exp(-dt / tau_w) of the rotor time constant tau_w
+    wrench_lag: bool  # wrench actuation: the applied wrench follows its command through that lag
     tilt_lag: bool  # rotor actuation, on servos: tilts follow their command through a lag and/or a rate limit
     tilt_decay: float  # exp(-dt / tau_alpha) (0: no lag)
     tilt_step_max: float  # [rad] per RK4 step: tilt_rate_max dt (inf: no rate limit)
@@ -87,7 +91,7 @@ class PlantState(NamedTuple):
     tilts: np.ndarray  # (n,) applied tilt angles [rad]
     wrench_command: np.ndarray  # (6,) commanded body force [N] and torque [N m] (wrench actuation)
     columns: np.ndarray  # (n, 9) the rotors' columns at the applied tilts
-    body_wrench: np.ndarray  # (6,) actuator wrench of the held command away from surfaces
+    body_wrench: np.ndarray  # (6,) actuator wrench away from surfaces (wrench actuation: the applied wrench)
     ratios: np.ndarray  # (n,) scratch: thrust ratios of the current stage
     work: np.ndarray  # (5, 13) scratch: RK4 rates k1..k4 and the stage state
     status: np.ndarray  # (STATUS_SIZE,) step index, contact, impacts, surface-cap counts
@@ -105,8 +109,11 @@ def plant_time(params: PlantParams, state: PlantState) -> float:
 
 @jit_inline
 def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
-    """Cache the actuator wrench of the held command away from surfaces (constant over the period)."""
+    """Cache the actuator wrench of the held command away from surfaces (constant over an RK4 step); a lagging
+    wrench (``wrench_lag``) is the plant's state, moved by :func:`advance_actuators` only."""
     if params.wrench_actuation:
+        if params.wrench_lag:
+            return
         for i in range(6):  # element by element: an array copy would need numba's allocator (core/jit.py)
             state.body_wrench[i] = state.wrench_command[i]
     else:
@@ -148,18 +155,41 @@ def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, wit
 
 
 @jit_inline
+def lagged(value: float, target: float, decay: float) -> float:
+    """One RK4 step of a first-order lag towards a held ``target``: ``target + (value - target) decay``
+    (``decay = exp(-dt / tau)``)."""
+    return target + (value - target) * decay
+
+
+@jit_inline
+def period_mean_lagged(value: float, target: float, decay: float, steps: int) -> float:
+    """Mean over a control period of ``steps`` RK4 steps of a lagging input held over each step (what the
+    integration sees), from ``value`` at the period's start towards the held ``target``."""
+    total = 0.0
+    for _ in range(steps):
+        total += value
+        value = lagged(value, target, decay)
+    return total / steps
+
+
+@jit_inline
 def advance_actuators(params: PlantParams, state: PlantState) -> None:
     """Actuator dynamics over one RK4 step ``dt`` (after it: the inputs are held over each step).
 
     Rotor speed, first-order lag with time constant ``tau_w`` towards the command ``w_c`` (exact for a held
     command): ``w <- w_c + (w - w_c) exp(-dt / tau_w)``; tilt, a lag with ``tau_alpha`` the same way, then its
     change limited to ``tilt_rate_max dt``. Both stay within their limits (the commands are clamped and the
-    lag moves between the state and the command)."""
+    lag moves between the state and the command). In wrench actuation with a rotor time constant, each
+    component of the applied wrench ``w`` the same way: ``w <- w_c + (w - w_c) exp(-dt / tau_w)``."""
+    if params.wrench_lag:
+        decay = params.speed_decay
+        for i in range(6):
+            state.body_wrench[i] = lagged(state.body_wrench[i], state.wrench_command[i], decay)
+        return
     if params.rotor_lag:
         decay = params.speed_decay
         for i in range(state.speeds.shape[0]):
-            target = state.speed_command[i]
-            speed = target + (state.speeds[i] - target) * decay
+            speed = lagged(state.speeds[i], state.speed_command[i], decay)
             state.speeds[i] = speed
             state.speed_sq[i] = abs(speed) * speed
     if params.tilt_lag and state.tilt_command[0] == state.tilt_command[0]:
@@ -178,16 +208,24 @@ def advance_actuators(params: PlantParams, state: PlantState) -> None:
 
 @jit_inline
 def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None:  # noqa: ANN001
-    """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation)."""
+    """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation). With a lag
+    (``wrench_lag``) it is what the applied wrench approaches (:func:`advance_actuators`); the first command is
+    also the applied wrench at the start (as the rotors start spun up)."""
+    first = state.status[WRENCH_COMMANDED] == 0.0
+    state.status[WRENCH_COMMANDED] = 1.0
     for i in range(6):
         state.wrench_command[i] = wrench[i]
+        if first and params.wrench_lag:
+            state.body_wrench[i] = wrench[i]
     update_actuator_wrench(params, state)
 
 
 @jit_inline
 def cut_thrust(params: PlantParams, state: PlantState) -> None:
-    """Failsafe: all rotors stopped, zero wrench (tilts are kept); with a rotor lag they spin down."""
+    """Failsafe: all rotors stopped, zero wrench (tilts are kept); with a rotor lag they spin down (the wrench
+    decays)."""
     state.wrench_command[:] = 0.0
+    state.status[WRENCH_COMMANDED] = 1.0
     state.speed_command[:] = 0.0
     if not params.rotor_lag:
         state.speeds[:] = 0.0
@@ -290,7 +328,7 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
     for sub in range(params.substeps):
         rk4_step(params, state, time + sub * params.dt)
         apply_contact(params, state)
-        if params.rotor_lag or params.tilt_lag:
+        if params.rotor_lag or params.tilt_lag or params.wrench_lag:
             advance_actuators(params, state)
         if state.gusts.shape[0]:
             advance_gusts(params.turbulence, state.gust_states, state.gusts,
@@ -326,6 +364,23 @@ def plant_external_wrench(params: PlantParams, state: PlantState) -> tuple:
     """The true external wrench now: (force world NED [N], torque body FRD [N m]): the disturbances' and the
     turbulence's drag."""
     return external_wrench_at(params, state, plant_time(params, state), state.x, state_rotation(state.x))
+
+
+@jit
+def applied_wrench_log(params: PlantParams, state: PlantState, commands, mean) -> None:  # noqa: ANN001
+    """The body wrench a wrench-actuated plant applies for commands along a log, with the plant's own functions:
+    command ``k`` (``commands`` (N, 6): force [N], torque [N m], body FRD) held by :func:`set_wrench_command` on
+    the scratch ``state`` (fresh: the first command is the applied wrench), then ``substeps`` RK4 steps of its
+    actuator dynamics (:func:`advance_actuators`); ``mean`` (N, 6) gets the applied wrench averaged over each
+    control period's RK4 steps (:func:`period_mean_lagged`; the command without a lag)."""
+    for k in range(commands.shape[0]):
+        set_wrench_command(params, state, commands[k])
+        for i in range(6):
+            mean[k, i] = period_mean_lagged(state.body_wrench[i], state.wrench_command[i], params.speed_decay,
+                                            params.substeps) if params.wrench_lag else state.body_wrench[i]
+        if params.wrench_lag:
+            for _ in range(params.substeps):
+                advance_actuators(params, state)
 
 
 @jit

@@ -86,6 +86,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         sensors=(odometry_noise or OdometryNoise()).pack(float(dt) * int(substeps)),
         rotor_lag=actuator_lags(vehicle, actuation)[0],
         speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
+        wrench_lag=actuation == "wrench" and vehicle.rotor_time_constant > 0.0,
         tilt_lag=actuator_lags(vehicle, actuation)[1],
         tilt_decay=math.exp(-dt / vehicle.tilt_time_constant) if vehicle.tilt_time_constant > 0.0 else 0.0,
         tilt_step_max=float(vehicle.tilt_rate_max * dt),
@@ -307,6 +308,12 @@ class Plant:
     def torque_command(self) -> np.ndarray:
         """The commanded body torque [N m] (wrench actuation)."""
         return self.core_state.wrench_command[3:].copy()
+
+    @property
+    def applied_wrench(self) -> np.ndarray:
+        """The body wrench the plant applies now, force [N] and torque [N m] FRD (wrench actuation): the command,
+        or with a rotor time constant the wrench lagging it."""
+        return self.core_state.body_wrench.copy()
 
     # ----- contact and surfaces ---------------------------------------------------------------------
     def _status(self, entry: int) -> float:
