@@ -24,7 +24,8 @@ controller:
   air_mode: true                    # fixed rotors, priority: the thrust may rise to make room for roll/pitch
                                     # torque (true) | the thrust is kept and the torque scaled (false)
   acceleration_filter_hz: 0         # geometric: low-pass cutoff [Hz] on the measured acceleration its rates
-                                    # use (0: none, the report's law); for noisy odom and sharp disturbances
+                                    # use, and on the compensated estimate's rates (0: none, the report's
+                                    # law); for noisy odom and sharp disturbances
   compensation: none                # none | estimate: cancel the external wrench the controller's own
                                     # observer estimates (needs estimator.enabled; fsr_control.compensation)
 ```

@@ -16,7 +16,8 @@ model's ``g e3 - u_T R_b e3 / m`` would miss unmodelled forces: with a constant 
 an acceleration that never comes and keeps ``R_d`` turning; the model's value is used only at the first
 step), and the jerk error ``e_j`` the model's ``p_dddot = -(u_T_dot R_b e3 + u_T R_b S(w_b) e3) / m``
 (zero at any equilibrium); ``controller.acceleration_filter_hz`` low-passes that measured acceleration (first
-order; the default 0 keeps it raw: noisy velocities make it noisy a thousandfold at 1 kHz). Without the
+order; the default 0 keeps it raw: noisy velocities make it noisy a thousandfold at 1 kHz), and the
+compensated estimate's rates with it. Without the
 feedback part of these rates (only the reference's) the attitude loop lags the outer loop and, with the
 report's gains and the exercise-4 inertia (1.24 kg m^2), the lateral loop is unstable:
 ``1.49 s^4 + 12 s^3 + 12 s^2 + 200 s + 200`` fails Routh's test. The controller uses the nominal model (mass, inertia).

@@ -37,9 +37,11 @@ from fsr_sim.core.so3 import (
     matrix_rows,
 )
 
-# LawState.memory entries: the geometric law's previous sample and its filtered measured acceleration
-HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY, FILTERED_ACCELERATION = 0, 1, 2, 5  # vectors: 3 entries
-MEMORY_SIZE = 8
+# LawState.memory entries: the geometric law's previous sample, its filtered measured acceleration and the
+# filtered rates of the compensated estimate (vectors: 3 entries)
+HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY, FILTERED_ACCELERATION = 0, 1, 2, 5
+HAS_FILTERED_RATES, FILTERED_FORCE_RATE, FILTERED_FORCE_ACCELERATION = 8, 9, 12
+MEMORY_SIZE = 15
 
 
 # LawParams.kind
@@ -57,7 +59,8 @@ class LawParams(NamedTuple):
     report_feedforward: bool  # Voliro: the report's angular feed-forward
     horizon_steps: int  # reference samples ahead the law reads (0: none)
     horizon_dt: float  # their spacing [s]
-    acceleration_cutoff: float  # [Hz] of the first-order low-pass on the measured acceleration (0: none)
+    acceleration_cutoff: float  # [Hz] of the first-order low-pass on the measured acceleration and on the
+    # compensated estimate's rates (0: none)
 
 
 class Compensation(NamedTuple):
@@ -118,6 +121,33 @@ def _measured_acceleration(memory, t: float, velocity_world: Vec3, thrust: float
 
 
 @jit_inline
+def _low_pass3(memory, at: int, value: Vec3, gain: float, first: bool) -> Vec3:  # noqa: ANN001
+    """``y <- y + gain (value - y)`` on the 3 entries of ``memory`` from ``at`` (``first``: ``y = value``)."""
+    for i in range(3):
+        if first:
+            memory[at + i] = value[i]
+        else:
+            memory[at + i] += gain * (value[i] - memory[at + i])
+    return memory[at], memory[at + 1], memory[at + 2]
+
+
+@jit_inline
+def _filtered_rates(memory, t: float, compensation: Compensation, cutoff: float) -> tuple:  # noqa: ANN001
+    """The compensated estimate's rate and second rate [N/s, N/s^2] through the measured acceleration's low-pass
+    (cutoff [Hz] > 0; from their first values after the compensation (re)starts): they are backward differences
+    of the estimate, which amplify its noise by ``1 / T`` and ``1 / T^2``. Call before the measured acceleration
+    (it reads the previous sample's time)."""
+    if cutoff <= 0.0 or not compensation.active:
+        memory[HAS_FILTERED_RATES] = 0.0
+        return compensation.force_rate, compensation.force_acceleration
+    first = memory[HAS_FILTERED_RATES] == 0.0 or memory[HAS_PREVIOUS] == 0.0 or not t > memory[PREVIOUS_TIME]
+    gain = 0.0 if first else 1.0 - math.exp(-2.0 * math.pi * cutoff * (t - memory[PREVIOUS_TIME]))
+    memory[HAS_FILTERED_RATES] = 1.0
+    return (_low_pass3(memory, FILTERED_FORCE_RATE, compensation.force_rate, gain, first),
+            _low_pass3(memory, FILTERED_FORCE_ACCELERATION, compensation.force_acceleration, gain, first))
+
+
+@jit_inline
 def geometric_law(params: LawParams, memory, t: float, reference: ReferenceSample, position: Vec3,  # noqa: ANN001
                   rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
     """``(status, [0, 0, -u_T], tau_b, R_d)`` of the geometric law (:mod:`fsr_control.controllers.geometric`)."""
@@ -139,12 +169,12 @@ def geometric_law(params: LawParams, memory, t: float, reference: ReferenceSampl
     # R_d and its rates: differentiate a with the measured acceleration and the model's jerk of this thrust.
     w = angular_velocity
     z_b_dot = mat_vec3(r, (w[1], -w[0], 0.0))  # R S(w) e3
+    f_dot, f_ddot = _filtered_rates(memory, t, compensation, params.acceleration_cutoff)
     acceleration = _measured_acceleration(memory, t, velocity_world, thrust, m, z_b, params.acceleration_cutoff)
     acc_d, jerk_d = reference.acceleration, reference.jerk
     e_a = (acceleration[0] - acc_d[0], acceleration[1] - acc_d[1], acceleration[2] - acc_d[2])
     a_dot = linear_feedback(k_p, e_v, k_v, e_a, m, jerk_d)
     if compensation.active:  # the estimate changes too: R_d turns with it (w_d, w_dot_d)
-        f_dot = compensation.force_rate
         a_dot = (a_dot[0] - f_dot[0], a_dot[1] - f_dot[1], a_dot[2] - f_dot[2])
     thrust_dot = -dot3(a_dot, z_b) - dot3(a, z_b_dot)
     e_j = (-(thrust_dot * z_b[0] + thrust * z_b_dot[0]) / m - jerk_d[0],
@@ -152,7 +182,6 @@ def geometric_law(params: LawParams, memory, t: float, reference: ReferenceSampl
            -(thrust_dot * z_b[2] + thrust * z_b_dot[2]) / m - jerk_d[2])
     a_ddot = linear_feedback(k_p, e_a, k_v, e_j, m, reference.snap)
     if compensation.active:
-        f_ddot = compensation.force_acceleration
         a_ddot = (a_ddot[0] - f_ddot[0], a_ddot[1] - f_ddot[1], a_ddot[2] - f_ddot[2])
     status, rotation_desired, omega_d, omega_dot_d = attitude_from_thrust_vector(
         (-a[0], -a[1], -a[2]), (-a_dot[0], -a_dot[1], -a_dot[2]), (-a_ddot[0], -a_ddot[1], -a_ddot[2]),
