@@ -5,14 +5,18 @@ one table, with a summary and figures.
     fsr-sweep ex3_estimation --grid estimator.c0=1,10,100 --grid estimator.r=1,2,3 --out runs/observer
     fsr-sweep ex4_geometric --grid 'controller.gains.k_p=[7,7,40],[12,12,55]' --out runs/gains
     fsr-sweep ex4_geometric --sample plant.mass=normal:1.2:0.1 --n 200 --cluster tcp://10.0.0.1:8786
+    fsr-sweep ex3_estimation_noisy --grid estimator.c0=1,5,10,25,50,100 --grid estimator.r=1,2,3,4,5 \
+        --pareto estimate_settling_s,estimate_force_rms_N --out runs/observer_noise
 
 Keys are the dotted keys of ``fsr-fly --set`` (numbers only); grid values are YAML flow values (a list-valued key
 takes lists), a sample is ``uniform:LO:HI``, ``normal:MEAN:STD`` or ``loguniform:LO:HI`` drawn ``--n`` times
 with ``--seed``. Writes ``DIR/results.csv`` (and ``results.parquet`` with pyarrow), ``DIR/summary.md`` and
-figures (``heatmap.png``, one per swept key, ``ecdf.png``); ``--record-best K`` flies the K best and the K worst
-flights again and records them as MCAP (``best_1.mcap`` ...). Flights run over every core (``--workers``) or
-on a Dask cluster (``--cluster``; start one with ``dask scheduler`` and ``dask worker tcp://HOST:8786`` on each
-machine, fsr installed on every one). A flight that diverges is a row with its reason; the sweep goes on.
+figures (``heatmap.png``, one per swept key, ``ecdf.png``); ``--pareto X,Y`` marks the flights on the Pareto
+front of two metrics to make small together (a ``pareto`` column, a section of the summary, ``pareto.png``);
+``--record-best K`` flies the K best and the K worst flights again and records them as MCAP (``best_1.mcap``
+...). Flights run over every core (``--workers``) or on a Dask cluster (``--cluster``; start one with ``dask
+scheduler`` and ``dask worker tcp://HOST:8786`` on each machine, fsr installed on every one). A flight that
+diverges is a row with its reason; the sweep goes on.
 """
 
 from __future__ import annotations
@@ -26,11 +30,13 @@ from pathlib import Path
 from fsr_bringup.runner.flight import Console, sigterm_interrupts
 from fsr_bringup.sweeps.axes import SweepError, parse_grid, parse_sample
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS
+from fsr_bringup.sweeps.pareto import pareto_front, parse_pareto
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
 DEFAULT_METRIC = "position_error_rms_m"
+RANKABLE = [c for c in METRIC_COLUMNS if c not in ("end_reason", "end_detail", "gave_way")]  # numeric columns
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -53,8 +59,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--out", type=Path, help="output folder (default runs/sweep_<scenario>_<time>)")
     parser.add_argument("--workers", type=int, help="local worker processes (default: every core)")
     parser.add_argument("--cluster", metavar="ADDRESS", help="run on a Dask cluster (tcp://HOST:PORT of its scheduler)")
-    parser.add_argument("--metric", default=DEFAULT_METRIC, choices=[c for c in METRIC_COLUMNS if c not in (
-        "end_reason", "end_detail", "gave_way")], help=f"what ranks the flights (default {DEFAULT_METRIC})")
+    parser.add_argument("--metric", default=DEFAULT_METRIC, choices=RANKABLE,
+                        help=f"what ranks the flights (default {DEFAULT_METRIC})")
+    parser.add_argument("--pareto", metavar="X,Y", type=argument_type(lambda text: parse_pareto(text, RANKABLE)),
+                        help="two metrics to make small together: the flights on their Pareto front are marked "
+                             "(a 'pareto' column, a section of summary.md and pareto.png)")
     parser.add_argument("--band", type=float, default=DEFAULT_BAND_M,
                         help=f"position band of settling_time_s [m] (default {DEFAULT_BAND_M:g})")
     parser.add_argument("--record-best", type=int, default=0, metavar="K",
@@ -137,10 +146,12 @@ def main(argv: list[str] | None = None) -> int:
     console.end_progress()
     out = args.out or Path("runs") / f"sweep_{table.attrs['scenario']}_{time.strftime('%Y%m%d-%H%M%S')}"
     out.mkdir(parents=True, exist_ok=True)
+    if args.pareto:
+        table["pareto"] = pareto_front(table, *args.pareto)
     command = "fsr-sweep " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     written = write_tables(table, out)
-    (out / "summary.md").write_text(summary_markdown(table, args.metric, command), encoding="utf-8")
-    written += [out / "summary.md", *write_figures(table, out, args.metric)]
+    (out / "summary.md").write_text(summary_markdown(table, args.metric, command, args.pareto), encoding="utf-8")
+    written += [out / "summary.md", *write_figures(table, out, args.metric, args.pareto)]
     if args.record_best:
         written += record_extremes(table, args.scenario, fixed, args.duration, args.record_best, args.metric, out)
     a = table.attrs

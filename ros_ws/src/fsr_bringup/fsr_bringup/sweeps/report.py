@@ -8,6 +8,8 @@ Figures (PNG):
   samples) over the first two, a cell per pair; cells whose flights all diverged are hatched and marked "div";
 * ``<key>.png`` for each scalar swept key: the metric of every flight against the key's value (finished flights
   as dots, diverged ones as red crosses along the top of the axis);
+* ``pareto.png`` (with ``--pareto X,Y``): every finished flight in the plane of the two metrics, the flights on
+  the Pareto front joined and labelled with their swept values;
 * ``ecdf.png``: with 10 or more flights, the empirical CDF of the position error (RMS and peak) and of the
   metric, over the finished flights, the share that diverged in the legend.
 """
@@ -83,8 +85,10 @@ def _rows(frame: Any, columns: list[str]) -> list[str]:
     return lines
 
 
-def summary_markdown(table: Any, metric: str, command: str | None = None) -> str:
-    """The summary: counts and speed, divergences, quantiles of every metric, the best and worst flights."""
+def summary_markdown(table: Any, metric: str, command: str | None = None,
+                     pareto: tuple[str, str] | None = None) -> str:
+    """The summary: counts and speed, divergences, quantiles of every metric, the best and worst flights and,
+    with ``pareto`` (two metric names; the table's ``pareto`` column marks the front), the front."""
     a = table.attrs
     keys = a.get("keys", [])
     finished = int((table["end_reason"] == FINISHED).sum())
@@ -122,6 +126,13 @@ def summary_markdown(table: Any, metric: str, command: str | None = None) -> str
         columns = list(dict.fromkeys(c for c in columns if c in table.columns))
         lines += [f"## Best {min(LISTED, len(order))}", ""] + _rows(order.head(LISTED), columns) + [""]
         lines += [f"## Worst {min(LISTED, len(order))}", ""] + _rows(order.tail(LISTED)[::-1], columns) + [""]
+    if pareto is not None:
+        x, y = pareto
+        front = table[table["pareto"]].sort_values([x, y], kind="stable")
+        lines += [f"## Pareto front of {x} and {y}", "",
+                  f"{len(front)} of {finished} finished flights: none of the others is at least as small in both "
+                  "(flights where either is NaN or infinite are left out).", ""]
+        lines += _rows(front, list(dict.fromkeys([*keys, x, y]))) + [""]
     return "\n".join(lines)
 
 
@@ -195,7 +206,31 @@ def ecdf_figure(table: Any, metric: str) -> Figure | None:
     return fig
 
 
-def write_figures(table: Any, out: Path, metric: str) -> list[Path]:
+def pareto_figure(table: Any, x: str, y: str) -> Figure:
+    fig = _figure(2.6)
+    ax = fig.add_subplot()
+    done = table[(table["end_reason"] == FINISHED)]
+    shown = done[np.isfinite(done[x].to_numpy(dtype=float)) & np.isfinite(done[y].to_numpy(dtype=float))]
+    ax.plot(shown[x], shown[y], ".", color=OKABE_ITO["blue"], ms=4, label=f"flights ({len(shown)})")
+    front = shown[shown["pareto"]].sort_values([x, y], kind="stable")
+    ax.plot(front[x], front[y], "o-", color=OKABE_ITO["vermillion"], ms=4, mfc="none", lw=0.8,
+            label=f"Pareto front ({len(front)})")
+    keys = table.attrs.get("keys", [])
+    for _, row in front.iterrows():
+        text = ", ".join(f"{k.rsplit('.', 1)[-1]}={_cell(row[k])}" for k in keys)
+        ax.annotate(text, (row[x], row[y]), xytext=(3, 3), textcoords="offset points", fontsize=6)
+    if len(shown) and (shown[x] > 0).all() and shown[x].max() / shown[x].min() > 100:
+        ax.set_xscale("log")
+    if len(shown) and (shown[y] > 0).all() and shown[y].max() / shown[y].min() > 100:
+        ax.set_yscale("log")
+    ax.set_xlabel(metric_label(x))
+    ax.set_ylabel(metric_label(y))
+    ax.grid(True)
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=2)
+    return fig
+
+
+def write_figures(table: Any, out: Path, metric: str, pareto: tuple[str, str] | None = None) -> list[Path]:
     """The figures of the module docstring that apply; returns their paths."""
     figures: dict[str, Figure | None] = {}
     with matplotlib.rc_context(RC):
@@ -203,6 +238,8 @@ def write_figures(table: Any, out: Path, metric: str) -> list[Path]:
         for key in _scalar_keys(table, table.attrs.get("keys", [])):
             figures[key] = key_figure(table, key, metric)
         figures["ecdf"] = ecdf_figure(table, metric)
+        if pareto is not None:
+            figures["pareto"] = pareto_figure(table, *pareto)
         paths = []
         for name, fig in figures.items():
             if fig is not None:
