@@ -7,6 +7,7 @@ import pytest
 
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_sim.config.scenario import load_scenario
+from fsr_sim.config.validation import builtin_names
 from fsr_sim.recording.reader import open_recording
 
 SCENARIOS = Path(__file__).parents[2] / "ros_ws" / "src" / "fsr_control" / "test" / "scenarios"
@@ -32,8 +33,7 @@ def test_recording_has_the_graph_topics(tmp_path):
     assert result.mass_estimate is not None and result.mass_estimate[-1] == pytest.approx(1.32, abs=0.05)
 
 
-BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
-            "step_disturbance", "wind_rejection", "wind_rejection_turbulent")
+BUILT_IN = tuple(builtin_names("scenarios"))
 
 
 @pytest.mark.parametrize("name", BUILT_IN)

@@ -25,12 +25,11 @@ from fsr_control.planning.feasibility import (
 from fsr_control.planning.polynomial import REST_TO_REST, SepticSegment
 from fsr_control.planning.trajectory import Trajectory, Waypoint, yaw_rotation
 from fsr_sim.config.scenario import load_scenario, simulation_config
-from fsr_sim.config.validation import ConfigError
+from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.model import load_vehicle
 
 QUAD = load_vehicle("quadrotor_ex4")
-BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
-            "step_disturbance", "wind_rejection", "wind_rejection_turbulent")
+BUILT_IN = tuple(builtin_names("scenarios"))
 # max |s''(tau)| of the rest-to-rest septic s = 35 tau^4 - 84 tau^5 + 70 tau^6 - 20 tau^7 (7.51), on a fine grid
 S_DDOT_MAX = float(np.abs(polynomial.polyval(np.linspace(0.0, 1.0, 2_000_001),
                                              polynomial.polyder(REST_TO_REST, 2))).max())

@@ -74,3 +74,21 @@ def test_sweep_gives_one_result_per_pair_and_refuses_bad_orders(synthetic):
     assert settle[(20.0, 1)] < settle[(5.0, 1)] and settle[(20.0, 1)] < settle[(20.0, 2)]
     with pytest.raises(ValueError, match="r: must be an integer"):
         sweep(log, model, [5.0], [0], truth)
+
+
+def test_smoothed_settling_is_the_standard_one_through_the_low_pass_and_sees_through_noise():
+    from fsr_estimation.core.metrics import low_pass, settling_time_smoothed, smoothing_gain
+
+    gain = smoothing_gain(TS)
+    values = np.random.default_rng(0).normal(size=(50, 2))
+    expected = values.copy()
+    for k in range(1, len(values)):  # the sweep's running filter
+        expected[k] = gain * values[k] + (1.0 - gain) * expected[k - 1]
+    np.testing.assert_array_equal(low_pass(values, gain), expected)
+    level = np.array([1.0, 2.0])
+    estimate = np.stack([ramp_then_hold(1.0, 2.0), ramp_then_hold(2.0, 2.0)], axis=1)
+    noisy = estimate + 0.02 * level * np.random.default_rng(1).normal(size=estimate.shape)  # 3 % at 1.5 sigma
+    assert not (settling_time_standard(TIME, noisy, level) < 9.0).any()  # NaN, or a last sample by chance
+    smoothed = settling_time_smoothed(TIME, noisy, level)
+    assert np.all((smoothed > 1.9) & (smoothed < 3.0)), smoothed  # the ramp's end, a few tenths later
+    np.testing.assert_array_equal(settling_time(TIME, noisy, level, "smoothed"), smoothed)

@@ -200,7 +200,8 @@ def wrench_comparison(flight: RecordedFlight, settle_time: float = DEFAULT_SETTL
                       after: float | None = None) -> dict[str, Any] | None:
     """Online wrench estimate vs the effective truth (and vs the external wrench alone), body FRD [N, N m].
 
-    Per channel (``fx fy fz tx ty tz``): settling time (``settling``: ``standard`` or ``report``), MAE over
+    Per channel (``fx fy fz tx ty tz``): settling time (``settling``: ``standard``, ``report`` or ``smoothed``;
+    and ``settling_time_smoothed_s``, the ``smoothed`` one, whatever ``settling`` is), MAE over
     the flight, max error at time >= ``after`` [s] (default: the last 5 s), RMS error after ``settle_time``
     (at most half the flight), all with :mod:`fsr_estimation.core.metrics` on the estimate's samples where
     the effective truth is defined. None without ``wrench_estimate``; without the scenario's estimator model
@@ -219,7 +220,8 @@ def wrench_comparison(flight: RecordedFlight, settle_time: float = DEFAULT_SETTL
         "estimate_mean_last_s": estimate[last].mean(axis=0).tolist(),
         "truth_mean_last_s": None, "rms_error_vs_external": None,
         "effective_truth_mean_last_s": None, "rms_error": None, "max_abs_error": None,
-        "settling": settling, "settling_time_s": None, "mae": None, "max_error_after": None, "after_s": None,
+        "settling": settling, "settling_time_s": None, "settling_time_smoothed_s": None, "mae": None,
+        "max_error_after": None, "after_s": None,
     }
     if flight.wrench_truth is not None:
         truth = flight.wrench_truth
@@ -244,6 +246,7 @@ def wrench_comparison(flight: RecordedFlight, settle_time: float = DEFAULT_SETTL
         "rms_error": np.sqrt(np.mean(error[ok] ** 2, axis=0)).tolist() if ok.any() else None,
         "max_abs_error": np.abs(error[ok]).max(axis=0).tolist() if ok.any() else None,
         "settling_time_s": _channels(estimator_metrics.settling_time(t, w, truth_eff, settling)),
+        "settling_time_smoothed_s": _channels(estimator_metrics.settling_time(t, w, truth_eff, "smoothed")),
         "mae": _channels(estimator_metrics.mean_absolute_error(w, truth_eff)),
         "max_error_after": _channels(estimator_metrics.max_error_after(t, w, truth_eff, after_s, settling)),
         "after_s": after_s,

@@ -20,7 +20,8 @@ from fsr_bringup.analysis.figure_options import ANIMATION_FORMATS, AnimationOpti
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
-SETTLING_CHOICES = ("standard", "report")  # fsr_estimation.core.metrics.SETTLING_DEFINITIONS (imported lazily)
+# fsr_estimation.core.metrics.SETTLING_DEFINITIONS (imported lazily)
+SETTLING_CHOICES = ("standard", "report", "smoothed")
 PROGRESS_EVERY_S = 0.25  # s between updates of the animation's progress line (as fsr-fly's)
 
 
@@ -34,7 +35,8 @@ def add_figure_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--settling", choices=SETTLING_CHOICES, default="standard",
                         help="settling-time definition of the estimator metrics (default standard; report = the "
                              "definition of the report fsr started from, docs/model.md section 5, as "
-                             "fsr-estimate --settling report)")
+                             "fsr-estimate --settling report; smoothed = standard through a 0.1 s low-pass, "
+                             "for noisy flights)")
     parser.add_argument("--after", type=float, metavar="T",
                         help="estimator max error over t >= T [s] (default: the last 5 s)")
 

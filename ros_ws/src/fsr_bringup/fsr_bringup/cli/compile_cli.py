@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from fsr_sim.cli.arguments import ArgumentParser
+from fsr_sim.config.validation import builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 
-BUILT_IN = ("ex3_estimation", "ex4_geometric", "ex5_voliro", "octo_ground_effect", "ceiling_approach",
-            "step_disturbance", "wind_rejection", "wind_rejection_turbulent")
+BUILT_IN = tuple(builtin_names("scenarios"))
 
 
 def tour(folder: Path) -> None:

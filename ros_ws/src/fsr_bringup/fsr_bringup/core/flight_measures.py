@@ -18,7 +18,8 @@ and the controller's answer to it), into the accumulator vector ``acc`` (:data:`
   wrench at the thrust ratios of both poses, from the commanded speeds and tilts or, where the rotors lag, the
   actual ones, computed by the plant's own functions on the plant without actuator dynamics -, the ground's
   contact force, the model mismatch), and per channel the sum of
-  the squared estimate errors of the samples at ``t_k >= late_from``, the last sample outside the 3 % band, the
+  the squared estimate errors of the samples at ``t_k >= late_from``, the last sample outside the 3 % band (and
+  the same for the estimate and the truth through the ``smoothed`` settling time's low-pass), the
   sum of the truths at ``t_k >= last_from`` (their count too), the band of the last sample, and the samples whose
   truth is not finite.
 
@@ -72,7 +73,11 @@ TRUTH_LAST_SAMPLES = 38
 FINAL_BAND = 39  # 6: the band of the last sample with a truth
 TRUTH_SAMPLES = 45  # samples with a finite truth
 TRUTH_UNDEFINED = 46  # samples (before the last) whose truth is not finite
-SIZE = 47
+SMOOTHED_ESTIMATE = 47  # 6: the estimate through the smoothed settling time's low-pass
+SMOOTHED_TRUTH = 53  # 6: the truth through it
+SMOOTHED_LAST_OUTSIDE = 59  # 6: the last sample whose low-passed error is outside the band (-1: none)
+SMOOTHED_FINAL_BAND = 65  # 6: the band of the last low-passed truth
+SIZE = 71
 # The rows of rotor_rows (n each): rotor_state of t_k, the thrust ratios of t_k and t_k+1, the speeds and tilts
 # acting over the step, work rows.
 ACTUAL_SPEEDS, ACTUAL_TILTS, RATIOS, RATIOS_NEXT, SPEEDS, TILTS, GROUND, CEILING = range(8)
@@ -98,6 +103,7 @@ class MeasureParams(NamedTuple):
     inertia_delta: np.ndarray  # (3, 3): the model's minus the plant's
     gravity: float  # m/s^2
     tolerance: float  # the estimate's settling band, relative to |truth|
+    smoothing_gain: float  # the smoothed settling time's low-pass gain per sample (fsr_estimation.core.metrics)
     late_from: float  # s: the RMS error from here
     last_from: float  # s: the final truth is the mean from here
     lagging: bool  # rotors: the actual speeds (tilts) act, not the commanded ones (actuator dynamics)
@@ -119,6 +125,7 @@ def reset(acc) -> None:  # noqa: ANN001
     acc[ROTOR_SPEED_PEAK] = -math.inf
     for c in range(6):
         acc[ESTIMATE_LAST_OUTSIDE + c] = -1.0
+        acc[SMOOTHED_LAST_OUTSIDE + c] = -1.0
 
 
 @jit
@@ -289,12 +296,22 @@ def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float
         acc[ESTIMATE_LATE] += 1.0
     if last:
         acc[TRUTH_LAST_SAMPLES] += 1.0
+    gain, decay = m.smoothing_gain, 1.0 - m.smoothing_gain
     for c in range(6):
         error = estimate[c] - truth[c]
         band = m.tolerance * abs(truth[c])
         if abs(error) > band:
             acc[ESTIMATE_LAST_OUTSIDE + c] = j
         acc[FINAL_BAND + c] = band
+        if j == 0.0:
+            acc[SMOOTHED_ESTIMATE + c], acc[SMOOTHED_TRUTH + c] = estimate[c], truth[c]
+        else:  # g x + (1 - g) y, as scipy's lfilter
+            acc[SMOOTHED_ESTIMATE + c] = gain * estimate[c] + decay * acc[SMOOTHED_ESTIMATE + c]
+            acc[SMOOTHED_TRUTH + c] = gain * truth[c] + decay * acc[SMOOTHED_TRUTH + c]
+        band = m.tolerance * abs(acc[SMOOTHED_TRUTH + c])
+        if abs(acc[SMOOTHED_ESTIMATE + c] - acc[SMOOTHED_TRUTH + c]) > band:
+            acc[SMOOTHED_LAST_OUTSIDE + c] = j
+        acc[SMOOTHED_FINAL_BAND + c] = band
         if late:
             acc[ESTIMATE_SQUARES + c] += error * error
         if last:

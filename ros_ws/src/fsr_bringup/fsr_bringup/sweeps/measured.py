@@ -18,7 +18,7 @@ from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, LIMIT_TOLERANCE, MEAN
 from fsr_bringup.core import flight_measures as core
 from fsr_bringup.sweeps.metrics import SIGNIFICANT_WRENCH
 from fsr_control.core import controller as control_layout
-from fsr_estimation.core.metrics import TOLERANCE
+from fsr_estimation.core.metrics import TOLERANCE, smoothing_gain
 from fsr_sim.config.scenario import plant_from_config
 from fsr_sim.contract import FINISHED
 from fsr_sim.core.odometry import PUBLISHED_SIZE
@@ -77,6 +77,8 @@ def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSet
             plant, rotor_time_constant=0.0, tilt_time_constant=0.0, tilt_rate_max=np.inf)))
     tol = LIMIT_TOLERANCE * vehicle.rotor_speed_max
     span = (setup.steps * setup.period_ns) * 1e-9
+    # the mean spacing of the samples with a truth (0 .. K-1), as the analysis takes it from their stamps
+    truth_sample_s = ((setup.steps - 1) * setup.period_ns) * 1e-9 / max(setup.steps - 1, 1)
     inertia = np.ascontiguousarray(plant.inertia, dtype=float)
     measures = core.MeasureParams(
         band=float(band), rotors=rotors, speed_upper=vehicle.rotor_speed_max - tol,
@@ -86,7 +88,8 @@ def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSet
         tilt_limit=vehicle.tilt_angle_max * (1 - LIMIT_TOLERANCE), shortfall_tolerance=SHORTFALL_TOLERANCE,
         truth=bool(estimation.enabled), mass=float(plant.mass), mass_model=float(estimation.mass), inertia=inertia,
         inertia_delta=np.ascontiguousarray(np.asarray(estimation.inertia, float) - inertia), gravity=GRAVITY,
-        tolerance=TOLERANCE, late_from=0.0 + min(DEFAULT_SETTLE_S, 0.5 * span), last_from=span - MEAN_WINDOW_S,
+        tolerance=TOLERANCE, smoothing_gain=smoothing_gain(truth_sample_s),
+        late_from=0.0 + min(DEFAULT_SETTLE_S, 0.5 * span), last_from=span - MEAN_WINDOW_S,
         lagging=setup.actuator_dynamics, commanded_tilts=rotors and vehicle.has_servos,
         with_tilts=rotors and vehicle.has_servos and plant.has_servos,
         ground=surfaces._replace(ceiling_effect=False), ceiling=surfaces._replace(ground_effect=False))
@@ -148,22 +151,27 @@ def measured_row(flight: LoopFlight, acc: np.ndarray) -> dict[str, Any]:
             fraction = max(fraction, acc[core.TILT_STEPS] / count)
         row.update(rotor_speed_peak_rad_s=float(acc[core.ROTOR_SPEED_PEAK]), saturated_fraction=float(fraction),
                    gave_way="+".join(axis for c, axis in enumerate(WRENCH_AXES) if acc[core.GAVE_WAY + c]))
-    row.update(estimate_force_rms_N=math.nan, estimate_torque_rms_N_m=math.nan, estimate_settling_s=math.nan)
+    row.update(estimate_force_rms_N=math.nan, estimate_torque_rms_N_m=math.nan, estimate_settling_s=math.nan,
+               estimate_force_settling_s=math.nan)
     samples = int(acc[core.TRUTH_SAMPLES])
     if measures.truth and samples >= 2 and acc[core.ESTIMATE_LATE] > 0:
         rms = np.sqrt(acc[core.ESTIMATE_SQUARES:core.ESTIMATE_SQUARES + 6] / acc[core.ESTIMATE_LATE])
         last_samples = acc[core.TRUTH_LAST_SAMPLES]
         final_truth = (acc[core.TRUTH_LAST_SUM:core.TRUTH_LAST_SUM + 6] / last_samples if last_samples
                        else np.full(6, math.nan))
-        settled = []
-        for c in range(6):
-            if not abs(final_truth[c]) >= SIGNIFICANT_WRENCH:
-                continue
-            outside = acc[core.ESTIMATE_LAST_OUTSIDE + c]
-            value = math.nan if outside >= samples - 1 else time(int(outside) + 1) - time(0)
-            settled.append(value if acc[core.FINAL_BAND + c] > 0.0 else math.nan)
+        significant = [c for c in range(6) if abs(final_truth[c]) >= SIGNIFICANT_WRENCH]
+
+        def slowest(last_outside: int, final_band: int, channels: list[int]) -> float:
+            settled = []
+            for c in channels:
+                outside = acc[last_outside + c]
+                value = math.nan if outside >= samples - 1 else time(int(outside) + 1) - time(0)
+                settled.append(value if acc[final_band + c] > 0.0 else math.nan)
+            return (math.inf if any(math.isnan(v) for v in settled) else max(settled)) if settled else math.nan
+
         row.update(estimate_force_rms_N=float(np.sqrt(np.sum(rms[:3] ** 2))),
                    estimate_torque_rms_N_m=float(np.sqrt(np.sum(rms[3:] ** 2))),
-                   estimate_settling_s=(math.inf if any(math.isnan(v) for v in settled) else max(settled))
-                   if settled else math.nan)
+                   estimate_settling_s=slowest(core.ESTIMATE_LAST_OUTSIDE, core.FINAL_BAND, significant),
+                   estimate_force_settling_s=slowest(core.SMOOTHED_LAST_OUTSIDE, core.SMOOTHED_FINAL_BAND,
+                                                     [c for c in significant if c < 3]))
     return row

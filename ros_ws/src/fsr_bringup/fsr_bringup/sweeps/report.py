@@ -9,7 +9,7 @@ Figures (PNG):
 * ``<key>.png`` for each scalar swept key: the metric of every flight against the key's value (finished flights
   as dots, diverged ones as red crosses along the top of the axis);
 * ``pareto.png`` (with ``--pareto X,Y``): every finished flight in the plane of the two metrics, the flights on
-  the Pareto front joined and labelled with their swept values;
+  the Pareto front joined and numbered (their swept values in a box);
 * ``ecdf.png``: with 10 or more flights, the empirical CDF of the position error (RMS and peak) and of the
   metric, over the finished flights, the share that diverged in the legend.
 """
@@ -216,13 +216,16 @@ def pareto_figure(table: Any, x: str, y: str) -> Figure:
     ax.plot(front[x], front[y], "o-", color=OKABE_ITO["vermillion"], ms=4, mfc="none", lw=0.8,
             label=f"Pareto front ({len(front)})")
     keys = table.attrs.get("keys", [])
-    for _, row in front.iterrows():
-        text = ", ".join(f"{k.rsplit('.', 1)[-1]}={_cell(row[k])}" for k in keys)
-        ax.annotate(text, (row[x], row[y]), xytext=(3, 3), textcoords="offset points", fontsize=6)
-    if len(shown) and (shown[x] > 0).all() and shown[x].max() / shown[x].min() > 100:
-        ax.set_xscale("log")
-    if len(shown) and (shown[y] > 0).all() and shown[y].max() / shown[y].min() > 100:
-        ax.set_yscale("log")
+    names = []  # the front's points numbered in the summary's order, their swept values in a box
+    for number, (_, row) in enumerate(front.iterrows(), start=1):
+        ax.annotate(str(number), (row[x], row[y]), xytext=(3, 2), textcoords="offset points", fontsize=6)
+        names.append(f"{number}: " + ", ".join(f"{k.rsplit('.', 1)[-1]}={_cell(row[k])}" for k in keys))
+    if names and keys:
+        ax.text(0.98, 0.98, "\n".join(names[:LISTED]), transform=ax.transAxes, ha="right", va="top", fontsize=6,
+                multialignment="left", bbox={"boxstyle": "round", "fc": "white", "ec": "0.8"})
+    for values, scale in ((shown[x], ax.set_xscale), (shown[y], ax.set_yscale)):
+        if len(values) and (values > 0).all() and values.max() / values.min() > 20:
+            scale("log")
     ax.set_xlabel(metric_label(x))
     ax.set_ylabel(metric_label(y))
     ax.grid(True)

@@ -107,7 +107,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--json", metavar="OUT", type=Path, help="write the results as JSON")
     parser.add_argument("--plots", metavar="DIR", type=Path, help="write the figures (PNG) to DIR")
     parser.add_argument("--settling", choices=SETTLING_DEFINITIONS, default="standard",
-                        help="settling-time definition (default: standard)")
+                        help="settling-time definition (default: standard; smoothed: standard through a 0.1 s "
+                             "low-pass, for noisy logs)")
     parser.add_argument("--after", type=float, metavar="T",
                         help="max error over samples at time >= T [s] (default: the last 5 s of the log)")
     parser.add_argument("--allow-truncated", action="store_true",
