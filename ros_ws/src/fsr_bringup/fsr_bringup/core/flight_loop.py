@@ -47,6 +47,24 @@ def hold_command(plant: PlantParams, plant_state: PlantState, mode: int, row, fo
                           row[ROTOR_SPEEDS + n:ROTOR_SPEEDS + 2 * n], mode == TILTING)
 
 
+@jit_inline
+def closed_loop_tick(controller: ControllerParams, controller_state: ControllerState, with_estimator: bool,
+                     observer: ObserverParams, observer_state: ObserverState, t: float, odometry, row,  # noqa: ANN001
+                     estimate) -> tuple:  # noqa: ANN001
+    """The controller's answer ``row`` to the published ``odometry`` of ``t`` [s] and, with the estimator, its
+    estimate of that state and command into ``estimate``. Returns ``(status, force, torque)`` (the law's status;
+    on a failure the estimator is not called)."""
+    position, rotation, velocity_world, angular_velocity = read_odometry(odometry)
+    status = controller_tick(controller, controller_state, t, position, rotation, velocity_world, angular_velocity,
+                             row)
+    force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
+    torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
+    if status == ATTITUDE_OK and with_estimator:
+        estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force, torque,
+                            estimate)
+    return status, force, torque
+
+
 @jit
 def fly_steps(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
               controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
@@ -66,17 +84,11 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
         t = (k * period_ns) * 1e-9
         for i in range(plant_state.x.shape[0]):
             states[k, i] = plant_state.x[i]
-        position, rotation, velocity_world, angular_velocity = read_odometry(published[k])
         row = control[k]
-        status = controller_tick(controller, controller_state, t, position, rotation, velocity_world,
-                                 angular_velocity, row)
+        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, observer,
+                                                 observer_state, t, published[k], row, estimates[k])
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status
-        force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
-        torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
-        if with_estimator:
-            estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force, torque,
-                                estimates[k])
         if k == step_count:
             return FINISHED, k, 0
         hold_command(plant, plant_state, mode, row, force, torque)

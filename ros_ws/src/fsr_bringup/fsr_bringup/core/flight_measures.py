@@ -36,24 +36,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED, hold_command
+from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED, closed_loop_tick, hold_command
 from fsr_control.core.allocation import WRENCH
 from fsr_control.core.controller import (
     COMMANDED_ROTATION,
-    FORCE,
     REFERENCE_POSITION,
     ROTOR_SPEEDS,
     SHORTFALL,
-    TORQUE,
     ControllerParams,
     ControllerState,
-    controller_tick,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
+from fsr_estimation.core.observer_step import ObserverParams, ObserverState
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import advance, publish
-from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE, read_odometry
+from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, period_mean_lagged, set_rotor_command
 from fsr_sim.core.rotors import scaled_rotor_wrench
 from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
@@ -378,16 +375,10 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
                 rotor_rows[ACTUAL_SPEEDS, i] = plant_state.speeds[i]
                 rotor_rows[ACTUAL_TILTS, i] = plant_state.tilts[i]
                 rotor_rows[RATIOS, i] = rotor_rows[RATIOS_NEXT, i]
-        position, rotation, velocity_world, angular_velocity = read_odometry(now)
-        status = controller_tick(controller, controller_state, t, position, rotation, velocity_world,
-                                 angular_velocity, row)
+        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, observer,
+                                                 observer_state, t, now, row, estimate)
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status
-        force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
-        torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
-        if with_estimator:
-            estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force, torque,
-                                estimate)
         measure_sample(measures, acc, k, states, rotation_k, row)
         if k == step_count:
             return FINISHED, k, 0
