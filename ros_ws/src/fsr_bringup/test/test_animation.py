@@ -161,6 +161,19 @@ def test_bad_animation_options_exit_2_with_one_line(synthetic_recording: Path, t
     assert not (tmp_path / "out").exists()  # refused before anything was written
 
 
+@pytest.mark.parametrize(("argv", "recordings", "animate"), [
+    (["--animate", "run.mcap"], ["run.mcap"], "mp4"),
+    (["--animate", "gif", "run.mcap"], ["run.mcap"], "gif"),
+    (["--animate", "run.mcap", "--fps", "5"], ["run.mcap"], "mp4"),
+    (["run.mcap", "--animate"], ["run.mcap"], "mp4"),
+])
+def test_animate_may_come_before_the_recording(argv: list[str], recordings: list[str], animate: str) -> None:
+    from fsr_bringup.cli.analyze_cli import parse_args
+
+    args = parse_args(argv)
+    assert [str(path) for path in args.recordings] == recordings and args.animate == animate
+
+
 def test_animate_draws_one_recording(synthetic_recording: Path, tmp_path: Path, capsys) -> None:
     assert run_cli([str(synthetic_recording), str(synthetic_recording), "--labels", "a,b", "--out",
                     str(tmp_path / "out"), "--animate"]) == 2

@@ -116,6 +116,15 @@ def test_the_cli_exits_2_with_one_line_naming_the_key(tmp_path, args, message):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("out", ["/proc/fsr_sweep_out", "/dev/null/sweep"])
+def test_an_unwritable_output_folder_is_refused_before_any_flight(tmp_path, out):
+    result = fsr_sweep("ex4_geometric", "--duration", "60", "--sample", "plant.mass=uniform:1:2", "--n", "1000",
+                       "--out", out, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"fsr-sweep: --out: cannot write to '{out}'"), result.stderr
+
+
 def test_the_cli_writes_the_table_summary_figures_and_recordings(tmp_path):
     import pandas as pd
 

@@ -205,3 +205,27 @@ def test_steps_at_the_surface_effect_cap_are_counted_per_surface():
     for _ in range(20):
         far.step()
     assert far.ceiling_cap_steps == 0 and far.ground_cap_steps == 0
+
+
+@pytest.mark.parametrize(("command", "named"), [
+    ({"speeds": [400.0, 400.0, 400.0]}, "speeds: expected shape (4,), got (3,)"),
+    ({"speeds": [400.0] * 5}, "speeds: expected shape (4,), got (5,)"),
+    ({"speeds": [400.0, float("nan"), 400.0, 400.0]}, "speeds: must be finite"),
+    ({"speeds": [400.0] * 4, "tilts": [0.0, 0.0]}, "tilts: expected shape (4,), got (2,)"),
+    ({"speeds": [400.0] * 4, "tilts": [0.0, float("inf"), 0.0, 0.0]}, "tilts: must be finite"),
+])
+def test_a_rotor_command_of_the_wrong_length_or_not_finite_is_refused(command, named):
+    plant = Plant(load_vehicle("tilting_quadrotor_ex5"), position=[0, 0, -2])
+    before = plant.state_vector.copy()
+    with pytest.raises(ValueError, match=named.replace("(", r"\(").replace(")", r"\)")):
+        plant.set_rotor_command(**command)
+    plant.step()
+    assert np.all(np.isfinite(plant.state_vector)) and plant.state_vector[2] >= before[2]  # nothing was applied
+
+
+def test_a_wrench_command_not_finite_is_refused():
+    plant = Plant(load_vehicle("quadrotor_ex4"), actuation="wrench", position=[0, 0, -2])
+    with pytest.raises(ValueError, match="torque_body: must be finite"):
+        plant.set_wrench([0, 0, -11.0], [0, float("nan"), 0])
+    with pytest.raises(ValueError, match="force_body: expected shape"):
+        plant.set_wrench([0, -11.0], [0, 0, 0])

@@ -105,7 +105,21 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-figures", action="store_true", help="metrics and summary only")
     add_figure_arguments(parser)
     add_animation_arguments(parser)
-    return parser.parse_args(argv)
+    return parser.parse_args(animate_before_recording(sys.argv[1:] if argv is None else list(argv)))
+
+
+def animate_before_recording(argv: list[str]) -> list[str]:
+    """``--animate`` takes an optional format: written before a recording (``fsr-analyze --animate RUN.mcap``),
+    argparse would take the recording for the format. A word after ``--animate`` that names a recording (ends in
+    ``.mcap`` or is a file) is one: ``--animate`` then means its default format."""
+    out = list(argv)
+    for i, word in enumerate(out[:-1]):
+        if word == "--":
+            break
+        following = out[i + 1]
+        if word == "--animate" and (following.endswith(".mcap") or Path(following).is_file()):
+            out[i] = f"--animate={AnimationOptions().format}"
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,14 +29,14 @@ from pathlib import Path
 
 from fsr_bringup.runner.flight import Console, sigterm_interrupts
 from fsr_bringup.sweeps.axes import SweepError, parse_grid, parse_sample
-from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS
-from fsr_bringup.sweeps.pareto import pareto_front, parse_pareto
+from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, RANKABLE_METRICS
+from fsr_bringup.sweeps.pareto import parse_pareto
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
 DEFAULT_METRIC = "position_error_rms_m"
-RANKABLE = [c for c in METRIC_COLUMNS if c not in ("end_reason", "end_detail", "gave_way")]  # numeric columns
+RANKABLE = list(RANKABLE_METRICS)
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -113,6 +113,37 @@ def record_extremes(table, scenario: str, fixed: dict, duration: float | None, c
     return paths
 
 
+def default_output(scenario: str) -> Path:
+    """``runs/sweep_<scenario name>_<time>``."""
+    from fsr_sim.config.scenario import load_scenario
+
+    return Path("runs") / f"sweep_{load_scenario(scenario).name}_{time.strftime('%Y%m%d-%H%M%S')}"
+
+
+def usable_output(out: Path) -> list[Path]:
+    """Create the output folder ``out`` (and its parents) and check it can be written, before any flight is flown
+    (SweepError naming the folder otherwise). Returns the folders it created, deepest first."""
+    created = [folder for folder in (out, *out.parents) if not folder.exists()]
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".fsr-sweep-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as error:
+        remove_if_empty(created)
+        raise SweepError(f"--out: cannot write to '{out}': {error.strerror or error}") from None
+    return created
+
+
+def remove_if_empty(folders: list[Path]) -> None:
+    """Remove the folders :func:`usable_output` created where nothing was written into them."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            return
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     from fsr_bringup.sweeps.report import summary_markdown, write_figures, write_tables
@@ -126,28 +157,33 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         fixed = _overrides(args.overrides)
+        out = args.out or default_output(args.scenario)
+        created = usable_output(out)
+    except (SweepError, ConfigError) as error:
+        print(f"fsr-sweep: {error}", file=sys.stderr)
+        return EXIT_CONFIG_ERROR
+    try:
         with sigterm_interrupts():
             table = sweep(args.scenario, grid={a.key: list(a.values) for a in args.grid},
                           sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, n=args.n,
                           seed=args.seed, duration=args.duration, workers=args.workers, cluster=args.cluster,
-                          set=fixed, band=args.band, progress=progress)
+                          set=fixed, band=args.band, progress=progress, pareto=args.pareto)
     except (SweepError, ConfigError) as error:
         console.end_progress()
+        remove_if_empty(created)
         print(f"fsr-sweep: {error}", file=sys.stderr)
         return EXIT_CONFIG_ERROR
     except KeyboardInterrupt:
         console.end_progress()
+        remove_if_empty(created)
         print("fsr-sweep: interrupted: nothing written", file=sys.stderr)
         return EXIT_INTERRUPTED
     except (OSError, RuntimeError) as error:
         console.end_progress()
+        remove_if_empty(created)
         print(f"fsr-sweep: the sweep failed: {error}", file=sys.stderr)
         return EXIT_FAILURE
     console.end_progress()
-    out = args.out or Path("runs") / f"sweep_{table.attrs['scenario']}_{time.strftime('%Y%m%d-%H%M%S')}"
-    out.mkdir(parents=True, exist_ok=True)
-    if args.pareto:
-        table["pareto"] = pareto_front(table, *args.pareto)
     command = "fsr-sweep " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     written = write_tables(table, out)
     (out / "summary.md").write_text(summary_markdown(table, args.metric, command, args.pareto), encoding="utf-8")

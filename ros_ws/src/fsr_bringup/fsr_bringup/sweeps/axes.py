@@ -177,3 +177,25 @@ def plan_flights(grid: list[GridAxis], sample: list[SampledKey], n: int | None, 
 def flight_scenario(base: Scenario, values: dict[str, Any]) -> Scenario:
     """The scenario of one flight: the sweep's (its fixed values applied) with the flight's ``values``."""
     return scenario_from_mapping(base.data, base.source, base.base_dir, values=values)
+
+
+# The unit of a swept key by its last named part (list items and indices are skipped): what a figure's axis says.
+KEY_UNITS = {
+    "mass": "kg", "inertia": "kg m^2", "c0": "rad/s", "r": "-", "duration": "s", "hold": "s", "start": "s",
+    "end": "s", "physics_dt": "s", "rotor_time_constant": "s", "tilt_time_constant": "s",
+    "tilt_rate_max_deg_s": "deg/s", "drag_coefficients": "N s^2/m^2", "force": "N", "torque": "N m",
+    "position": "m", "velocity": "m/s", "angular_velocity": "rad/s", "attitude_rpy_deg": "deg",
+    "acceleration_filter_hz": "Hz", "frequency_hz": "Hz", "phase_deg": "deg", "wind_speed": "m/s",
+    "altitude": "m", "airspeed": "m/s", "mean": "m/s", "k_p": "N/m", "k_v": "N s/m", "k_r": "N m/rad",
+    "k_w": "N m s/rad", "k_d": "m/s^2 per m/s", "position_std": "m", "attitude_std_deg": "deg",
+    "velocity_std": "m/s", "angular_velocity_std": "rad/s", "rate_hz": "Hz", "delay_s": "s", "delay": "s",
+    "authority_margin": "-", "crash_speed": "m/s", "height": "m", "max_ratio": "-",
+}
+
+
+def key_label(key: str) -> str:
+    """An axis label of a swept key with its unit (``plant.mass`` -> ``plant.mass [kg]``; unknown: the key)."""
+    named = [part for part in key.split(".") if not part.isdigit()]
+    unit = KEY_UNITS.get(named[-1]) if named else None
+    return f"{key} [{unit}]" if unit else key
+

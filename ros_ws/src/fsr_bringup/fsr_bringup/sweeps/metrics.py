@@ -40,6 +40,7 @@ METRIC_COLUMNS = (
     "rotor_speed_peak_rad_s", "saturated_fraction", "gave_way",
     "estimate_force_rms_N", "estimate_torque_rms_N_m", "estimate_settling_s", "estimate_force_settling_s",
 )
+RANKABLE_METRICS = tuple(c for c in METRIC_COLUMNS if c not in ("end_reason", "end_detail", "gave_way"))  # numeric
 INVALID = "invalid"  # end_reason of a flight whose values were refused
 
 

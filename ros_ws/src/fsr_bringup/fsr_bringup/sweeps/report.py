@@ -6,8 +6,9 @@ Figures (PNG):
 
 * ``heatmap.png``: with two or more numeric grid axes, the ranked metric (mean over the other axes and the
   samples) over the first two, a cell per pair; cells whose flights all diverged are hatched and marked "div";
-* ``<key>.png`` for each scalar swept key: the metric of every flight against the key's value (finished flights
-  as dots, diverged ones as red crosses along the top of the axis);
+* ``<key>.png`` for each swept key: the metric of every flight against the key's value (finished flights as
+  dots, diverged ones as red crosses along the top of the axis); a list-valued key (a gain ``[7, 7, 40]``) has
+  its values as categories along the axis, in the grid's order;
 * ``pareto.png`` (with ``--pareto X,Y``): every finished flight in the plane of the two metrics, the flights on
   the Pareto front joined and numbered (their swept values in a box);
 * ``ecdf.png``: with 10 or more flights, the empirical CDF of the position error (RMS and peak) and of the
@@ -25,6 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from fsr_bringup.analysis.figures import OKABE_ITO, ONE_COLUMN_IN, PNG_DPI, RC
+from fsr_bringup.sweeps.axes import key_label
 from fsr_bringup.sweeps.metrics import INVALID, METRIC_COLUMNS
 from fsr_sim.contract import DIVERGED, FINISHED
 
@@ -114,18 +116,18 @@ def summary_markdown(table: Any, metric: str, command: str | None = None,
     done = table[table["end_reason"] == FINISHED]
     if len(done):
         lines += ["## Quantiles over the finished flights", "",
-                  "| metric | min | 5 % | median | 95 % | max |", "|---|---|---|---|---|---|"]
+                  "Over the flights with a finite value; `inf` counts the flights where the metric never came "
+                  "(e.g. never settled), `n/a` those where it does not apply (NaN).", "",
+                  "| metric | min | 5 % | median | 95 % | max | inf | n/a |", "|---|---|---|---|---|---|---|---|"]
         for name in metrics:
-            values = done[name].replace([np.inf, -np.inf], np.nan).dropna()
-            if len(values):
-                q = values.quantile(list(QUANTILES))
-                lines.append(f"| {name} | " + " | ".join(f"{v:.4g}" for v in q) + " |")
+            column = done[name].astype(float)
+            values = column[np.isfinite(column)]
+            infinite, missing = int(np.isinf(column).sum()), int(column.isna().sum())
+            q = values.quantile(list(QUANTILES)) if len(values) else [math.nan] * len(QUANTILES)
+            lines.append(f"| {name} | " + " | ".join(_cell(float(v)) for v in q) + f" | {infinite} | {missing} |")
         lines.append("")
-        order = ranked(table, metric)
-        columns = [*keys, metric, "position_error_peak_m", "saturated_fraction"]
-        columns = list(dict.fromkeys(c for c in columns if c in table.columns))
-        lines += [f"## Best {min(LISTED, len(order))}", ""] + _rows(order.head(LISTED), columns) + [""]
-        lines += [f"## Worst {min(LISTED, len(order))}", ""] + _rows(order.tail(LISTED)[::-1], columns) + [""]
+        lines += _ranked_sections(ranked(table, metric), [*keys, metric, "position_error_peak_m",
+                                                          "saturated_fraction"], table.columns)
     if pareto is not None:
         x, y = pareto
         front = table[table["pareto"]].sort_values([x, y], kind="stable")
@@ -134,6 +136,17 @@ def summary_markdown(table: Any, metric: str, command: str | None = None,
                   "(flights where either is NaN or infinite are left out).", ""]
         lines += _rows(front, list(dict.fromkeys([*keys, x, y]))) + [""]
     return "\n".join(lines)
+
+
+def _ranked_sections(order: Any, wanted: list[str], available: Any) -> list[str]:
+    """The finished flights best first: all of them when they are at most ``LISTED``, else the ``LISTED`` best
+    and, apart from those, up to ``LISTED`` worst (worst first)."""
+    columns = list(dict.fromkeys(c for c in wanted if c in available))
+    if len(order) <= LISTED:
+        return [f"## All {len(order)} finished flights, best first", ""] + _rows(order, columns) + [""]
+    worst = order.iloc[LISTED:].tail(LISTED)[::-1]
+    return ([f"## Best {LISTED}", ""] + _rows(order.head(LISTED), columns) + ["",
+            f"## Worst {len(worst)}", ""] + _rows(worst, columns) + [""])
 
 
 def _figure(height_in: float, width_in: float = ONE_COLUMN_IN) -> Figure:
@@ -161,23 +174,29 @@ def heatmap_figure(table: Any, metric: str) -> Figure | None:
             ax.text(j, i, "div", ha="center", va="center", color=OKABE_ITO["vermillion"], fontsize=7)
     ax.set_xticks(range(len(xs)), [f"{v:g}" for v in xs])
     ax.set_yticks(range(len(ys)), [f"{v:g}" for v in ys])
-    ax.set_xlabel(x_key)
-    ax.set_ylabel(y_key)
+    ax.set_xlabel(key_label(x_key))
+    ax.set_ylabel(key_label(y_key))
     return fig
 
 
 def key_figure(table: Any, key: str, metric: str) -> Figure:
     fig = _figure(2.2)
     ax = fig.add_subplot()
+    positions = table[key]
+    if key not in _scalar_keys(table, [key]):  # list values: categories in the order they first appear
+        categories = list(dict.fromkeys(map(repr, table[key])))
+        positions = table[key].map(lambda value: categories.index(repr(value)))
+        ax.set_xticks(range(len(categories)), [c.replace(" ", "") for c in categories],
+                      rotation=30 if len(categories) > 3 else 0, ha="right" if len(categories) > 3 else "center")
     done = table["end_reason"] == FINISHED
-    ax.plot(table.loc[done, key], table.loc[done, metric], ".", color=OKABE_ITO["blue"], ms=3,
+    ax.plot(positions[done], table.loc[done, metric], ".", color=OKABE_ITO["blue"], ms=3,
             label=f"finished ({int(done.sum())})")
     failed = table["end_reason"] == DIVERGED
     if failed.any():
         top = np.nanmax(table.loc[done, metric].replace(np.inf, np.nan)) if done.any() else 1.0
-        ax.plot(table.loc[failed, key], np.full(int(failed.sum()), top if np.isfinite(top) else 1.0), "x",
+        ax.plot(positions[failed], np.full(int(failed.sum()), top if np.isfinite(top) else 1.0), "x",
                 color=OKABE_ITO["vermillion"], ms=4, label=f"diverged ({int(failed.sum())})")
-    ax.set_xlabel(key)
+    ax.set_xlabel(key_label(key))
     ax.set_ylabel(metric_label(metric))
     ax.grid(True)
     ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=2)
@@ -238,7 +257,7 @@ def write_figures(table: Any, out: Path, metric: str, pareto: tuple[str, str] | 
     figures: dict[str, Figure | None] = {}
     with matplotlib.rc_context(RC):
         figures["heatmap"] = heatmap_figure(table, metric)
-        for key in _scalar_keys(table, table.attrs.get("keys", [])):
+        for key in table.attrs.get("keys", []):
             figures[key] = key_figure(table, key, metric)
         figures["ecdf"] = ecdf_figure(table, metric)
         if pareto is not None:

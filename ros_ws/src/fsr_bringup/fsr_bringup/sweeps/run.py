@@ -45,7 +45,8 @@ from fsr_bringup.sweeps.axes import (
     sampled_key,
 )
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
-from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS
+from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS, RANKABLE_METRICS
+from fsr_bringup.sweeps.pareto import pareto_front, parse_pareto
 from fsr_sim.config.scenario import Scenario, load_scenario, scenario_from_mapping
 from fsr_sim.config.validation import ConfigError
 
@@ -175,6 +176,7 @@ def sweep(
     set: dict[str, Any] | None = None,  # noqa: A002 - the name of fsr-fly's --set
     band: float = DEFAULT_BAND_M,
     progress: Callable[[int, int, float], None] | None = None,
+    pareto: tuple[str, str] | str | None = None,
 ):  # noqa: ANN201 - pandas is imported lazily
     """Fly every flight of a grid and/or a sample of a scenario; one row per flight.
 
@@ -199,6 +201,9 @@ def sweep(
         The position band [m] of the ``settling_time_s`` column.
     progress : callable, optional
         Called as batches end with ``(flights done, flights, wall seconds so far)``.
+    pareto : (str, str) or "X,Y", optional
+        Two metric columns to make small together: a ``pareto`` column marks the finished flights on their
+        Pareto front (:mod:`fsr_bringup.sweeps.pareto`), as ``fsr-sweep --pareto``.
 
     Returns
     -------
@@ -217,6 +222,8 @@ def sweep(
     """
     import pandas as pd
 
+    if pareto is not None:
+        pareto = parse_pareto(pareto if isinstance(pareto, str) else ",".join(pareto), RANKABLE_METRICS)
     start = time.perf_counter()
     plan = plan_sweep(scenario, grid, sample, n, seed, duration, set, band)
     startup = time.perf_counter() - start
@@ -242,4 +249,7 @@ def sweep(
     table.attrs.update(scenario=plan.scenario.name, seed=seed, flights=len(records), vehicle_steps=steps,
                        wall_s=time.perf_counter() - start, workers=parallel, startup_s=startup,
                        keys=plan.keys, grid=[axis.key for axis in plan.grid], sample=[s.key for s in plan.sample])
+    if pareto is not None:
+        table["pareto"] = pareto_front(table, *pareto)
+        table.attrs["pareto"] = list(pareto)
     return table

@@ -351,10 +351,18 @@ class Plant:
     def set_rotor_command(self, speeds: ArrayLike, tilts: ArrayLike | None = None) -> bool:
         """Apply rotor speeds [rad/s], shape (n,) (and tilts [rad], shape (n,), for a tilting vehicle), held
         until the next command; speeds are clamped to the vehicle's limits. Returns True if anything
-        saturated (recorded in :attr:`saturation`)."""
-        speeds = np.ascontiguousarray(speeds, dtype=float)
+        saturated (recorded in :attr:`saturation`).
+
+        Raises
+        ------
+        ValueError
+            Speeds or tilts of another shape than (n,), or holding NaN or inf (tilts are ignored for a vehicle
+            without servos).
+        """
+        n = self.vehicle.rotor_count
+        speeds = np.ascontiguousarray(finite_array(speeds, (n,), "speeds"))
         with_tilts = tilts is not None
-        tilt_array = np.ascontiguousarray(tilts, dtype=float) if with_tilts else speeds
+        tilt_array = np.ascontiguousarray(finite_array(tilts, (n,), "tilts")) if with_tilts else speeds
         return bool(core.set_rotor_command(self.params, self.core_state, speeds, tilt_array, with_tilts))
 
     def set_wrench(self, force_body: ArrayLike, torque_body: ArrayLike) -> None:
@@ -362,8 +370,8 @@ class Plant:
         next command. The report's thrust ``u_T`` is ``force_body = [0, 0, -u_T]``."""
         if self.actuation != "wrench":
             raise RuntimeError("set_wrench needs actuation='wrench' (this plant takes rotor speeds)")
-        wrench = np.concatenate((np.asarray(force_body, dtype=float).reshape(3),
-                                 np.asarray(torque_body, dtype=float).reshape(3)))
+        wrench = np.concatenate((finite_array(force_body, (3,), "force_body"),
+                                 finite_array(torque_body, (3,), "torque_body")))
         core.set_wrench_command(self.params, self.core_state, wrench)
 
     def set_wrench_command(self, thrust: float, torque_body: ArrayLike) -> None:
