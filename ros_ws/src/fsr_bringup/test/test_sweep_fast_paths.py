@@ -27,6 +27,8 @@ def assert_rows_agree(got: dict, want: dict, rel: float = 1e-9) -> None:
 
 @pytest.mark.parametrize(("scenario", "fixed", "values"), [
     ("ex4_geometric", {"duration": 1.5}, {"plant.mass": 1.3}),  # wrench actuation, estimator on
+    ("step_disturbance", {"duration": 8.0, "disturbances.0.end": 6.0, "disturbances.0.force": [0.5, 0, 0]},
+     {"plant.mass": 1.2}),  # settles after the step
     ("ex3_estimation", {"duration": 6.0}, {"estimator.c0": 7.0}),  # the RMS from the 5 s settle window on
     ("ex4_geometric", {"duration": 1.5, "estimator.mass": 1.0, "estimator.inertia": [0.02, 0.02, 0.05]},
      {"plant.mass": 1.4}),  # a model mismatch in mass and inertia

@@ -83,3 +83,25 @@ def test_sweep_marks_the_pareto_front_as_the_command_does():
                   pareto="position_error_rms_m,estimate_force_rms_N")
     expected = pareto_front(table, "position_error_rms_m", "estimate_force_rms_N")
     assert table["pareto"].tolist() == expected.tolist() and table["pareto"].any()
+
+
+def test_the_settling_time_counts_from_the_references_arrival():
+    from fsr_bringup.sweeps.metrics import settling_time
+
+    t = np.arange(11) * 0.1
+    moving = t < 0.35  # the reference arrives at 0.4 s
+    error = np.where(t < 0.65, 0.1, 0.001)  # within the band from 0.7 s
+    assert settling_time(t, error, 0.01, moving) == pytest.approx(0.3)
+    assert settling_time(t, np.full(11, 0.001), 0.01, moving) == 0.0  # within the band on arrival
+    assert settling_time(t, np.where(t < 1.05, 0.1, 0.0), 0.01, moving) == math.inf  # ends outside
+    assert math.isnan(settling_time(t, error, 0.01, np.ones(11, dtype=bool)))  # the reference still moves
+    assert settling_time(t, error, 0.01, np.zeros(11, dtype=bool)) == pytest.approx(0.7)  # at rest from the start
+
+
+@pytest.mark.slow
+def test_a_flight_ended_before_its_leg_has_no_settling_time_and_one_after_it_has():
+    from fsr_bringup import sweep
+
+    table = sweep("ex4_geometric", grid={"duration": [5.0, 25.0]}, workers=1)
+    assert math.isnan(table.loc[0, "settling_time_s"])  # the 20 s leg is still flown at 5 s
+    assert 0.0 <= table.loc[1, "settling_time_s"] < 5.0

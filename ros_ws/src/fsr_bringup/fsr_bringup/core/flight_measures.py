@@ -6,7 +6,8 @@ Per sample ``k = 0..K`` (the state stamped ``t_k = k T``, ``t_k = (k period_ns) 
 and the controller's answer to it), into the accumulator vector ``acc`` (:data:`SIZE`, indices below):
 
 * position error ``e_k = |p_k - p_d,k|`` [m]: the last finite value, the peak, ``sum e_k^2`` and the samples
-  counted (finite ones), and the last sample outside the band (NaN counts as outside);
+  counted (finite ones), and the last sample outside the band (NaN counts as outside); the last sample whose
+  position reference moves (its velocity or acceleration not zero);
 * attitude error, the angle of ``R_c,k^T R_k`` (``atan2(|vee(E - E^T)| / 2, (tr E - 1) / 2)``): the
   ``(sin, cos)`` parts of the last finite value and of the peak (the angles are taken once, at the end);
 * with rotors: the largest commanded speed (NaN if any is NaN), the steps with a commanded speed at a limit
@@ -40,7 +41,9 @@ from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED, 
 from fsr_control.core.allocation import WRENCH
 from fsr_control.core.controller import (
     COMMANDED_ROTATION,
+    REFERENCE_ACCELERATION,
     REFERENCE_POSITION,
+    REFERENCE_VELOCITY,
     ROTOR_SPEEDS,
     SHORTFALL,
     ControllerParams,
@@ -74,7 +77,8 @@ SMOOTHED_ESTIMATE = 47  # 6: the estimate through the smoothed settling time's l
 SMOOTHED_TRUTH = 53  # 6: the truth through it
 SMOOTHED_LAST_OUTSIDE = 59  # 6: the last sample whose low-passed error is outside the band (-1: none)
 SMOOTHED_FINAL_BAND = 65  # 6: the band of the last low-passed truth
-SIZE = 71
+REFERENCE_LAST_MOVING = 71  # the last sample whose position reference moves (velocity or acceleration != 0; -1: none)
+SIZE = 72
 # The rows of rotor_rows (n each): rotor_state of t_k, the thrust ratios of t_k and t_k+1, the speeds and tilts
 # acting over the step, work rows.
 ACTUAL_SPEEDS, ACTUAL_TILTS, RATIOS, RATIOS_NEXT, SPEEDS, TILTS, GROUND, CEILING = range(8)
@@ -117,6 +121,7 @@ def reset(acc) -> None:  # noqa: ANN001
     acc[POSITION_FINAL] = math.nan
     acc[POSITION_PEAK] = -math.inf
     acc[POSITION_LAST_OUTSIDE] = -1.0
+    acc[REFERENCE_LAST_MOVING] = -1.0
     acc[ATTITUDE_FINAL] = acc[ATTITUDE_FINAL + 1] = math.nan
     acc[ATTITUDE_PEAK] = acc[ATTITUDE_PEAK + 1] = math.nan
     acc[ROTOR_SPEED_PEAK] = -math.inf
@@ -159,6 +164,9 @@ def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> Non
         acc[POSITION_SAMPLES] += 1.0
     if not error <= m.band:
         acc[POSITION_LAST_OUTSIDE] = k
+    for i in range(3):
+        if not (row[REFERENCE_VELOCITY + i] == 0.0 and row[REFERENCE_ACCELERATION + i] == 0.0):
+            acc[REFERENCE_LAST_MOVING] = k
     sin_part, cos_part = relative_angle_parts(_rows(row, COMMANDED_ROTATION), rotation)
     if math.isfinite(sin_part) and math.isfinite(cos_part):
         # the peak's (sin, cos) without an atan2 per step: in the upper half plane the larger angle is the one

@@ -16,7 +16,7 @@ import numpy as np
 
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, LIMIT_TOLERANCE, MEAN_WINDOW_S, WRENCH_AXES
 from fsr_bringup.core import flight_measures as core
-from fsr_bringup.sweeps.metrics import SIGNIFICANT_WRENCH
+from fsr_bringup.sweeps.metrics import SIGNIFICANT_WRENCH, settled_after_arrival
 from fsr_control.core import controller as control_layout
 from fsr_estimation.core.metrics import TOLERANCE, smoothing_gain
 from fsr_sim.config.scenario import plant_from_config
@@ -141,7 +141,8 @@ def measured_row(flight: LoopFlight, acc: np.ndarray) -> dict[str, Any]:
         else math.nan,
         "attitude_error_final_deg": _degrees(acc, core.ATTITUDE_FINAL),
         "attitude_error_peak_deg": _degrees(acc, core.ATTITUDE_PEAK),
-        "settling_time_s": math.nan if last >= count - 1 else time(last + 1) - time(0),
+        "settling_time_s": settled_after_arrival(time(count - 1), int(acc[core.REFERENCE_LAST_MOVING]) + 1,
+                                                 last + 1, time),
     }
     if not measures.rotors:
         row.update(rotor_speed_peak_rad_s=math.nan, saturated_fraction=math.nan, gave_way="")

@@ -8,7 +8,9 @@ Columns (:data:`METRIC_COLUMNS`; NaN where a metric does not apply, e.g. no esti
 * position error ``|p - p_d|`` [m]: ``position_error_final_m``, ``_peak_m``, ``_rms_m`` over the flight;
 * attitude error against the commanded attitude ``R_c`` (angle of ``R_c^T R``) [deg]: ``attitude_error_final_deg``,
   ``_peak_deg``;
-* ``settling_time_s``: the time after which ``|p - p_d| <= band`` [m] holds to the end (NaN: it ends outside);
+* ``settling_time_s``: from the reference's arrival (the first sample from which the position reference is at
+  rest to the end) to the first sample from which ``|p - p_d| <= band`` [m] holds to the end (0: within the band on
+  arrival; inf: it ends outside; NaN: the reference still moves at the end of the flight);
 * ``rotor_speed_peak_rad_s``: the largest commanded rotor speed; ``saturated_fraction``: the fraction of steps
   with a rotor command at a speed limit (or a tilt at its limit); ``gave_way``: the wrench axes that fell short
   of the law's demand at the rotor limits (``torque_z+force_z``; empty: none);
@@ -24,12 +26,14 @@ Columns (:data:`METRIC_COLUMNS`; NaN where a metric does not apply, e.g. no esti
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from fsr_bringup.analysis import metrics as summary
 from fsr_bringup.analysis.in_memory import recorded_flight_of_run
+from fsr_bringup.analysis.load import zero_order_hold
 
 DEFAULT_BAND_M = 0.01  # m: the position band of settling_time_s
 SIGNIFICANT_WRENCH = 1e-3  # N, N m: a channel whose final effective truth is smaller has no settling time
@@ -51,13 +55,36 @@ def invalid_row(reason: str) -> dict[str, Any]:
     return row
 
 
-def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float:
-    """``t[k] - t[0]`` of the first sample after which ``error <= band`` to the end (NaN: it ends outside)."""
-    outside = ~(error <= band)  # NaN counts as outside
-    if outside[-1]:
+def settled_after_arrival(end: float, arrival: int, settled: int, time: Callable[[int], float]) -> float:
+    """The settling time of the module docstring from the sample ``arrival`` at which the reference came to rest
+    and the sample ``settled`` from which the error stays within the band (``time(k)`` [s] of sample ``k``, ``end``
+    the last sample's): NaN if the reference never rests, inf if the error ends outside."""
+    if time(arrival) > end:
         return math.nan
-    last = len(error) - 1 - int(np.argmax(outside[::-1])) if outside.any() else -1
-    return float(t[last + 1] - t[0])
+    if time(settled) > end:
+        return math.inf
+    return max(0.0, time(settled) - time(arrival))
+
+
+def settling_time(t: np.ndarray, error: np.ndarray, band: float, moving: np.ndarray) -> float:
+    """``settling_time_s`` (module docstring) of the errors ``error`` [m] at times ``t`` [s]; ``moving``: where
+    the position reference moves."""
+    def last(mask: np.ndarray) -> int:
+        return len(mask) - 1 - int(np.argmax(mask[::-1])) if mask.any() else -1
+
+    def time(k: int) -> float:
+        return float(t[k]) if k < len(t) else math.inf
+
+    return settled_after_arrival(float(t[-1]), last(moving) + 1, last(~(error <= band)) + 1, time)  # NaN: outside
+
+
+def reference_moving(flight: Any) -> np.ndarray:
+    """Per ``odom`` sample of a recorded flight: whether the position reference held there moves (its velocity
+    or acceleration is not zero)."""
+    ref = flight.reference
+    motion = np.concatenate((ref.velocity, ref.acceleration), axis=1)
+    held = zero_order_hold(ref.stamp_ns, motion, flight.odom.stamp_ns)
+    return ~np.all(held == 0.0, axis=1)
 
 
 def _number(value: Any) -> float:
@@ -75,7 +102,8 @@ def flight_row(run, band: float = DEFAULT_BAND_M) -> dict[str, Any]:  # noqa: AN
     row.update(position_error_final_m=_number(position["final"]), position_error_peak_m=_number(position["peak"]),
                position_error_rms_m=_number(position["rms"]),
                attitude_error_final_deg=_number(attitude["final"]), attitude_error_peak_deg=_number(attitude["peak"]),
-               settling_time_s=settling_time(errors.t, np.linalg.norm(errors.position, axis=1), band))
+               settling_time_s=settling_time(errors.t, np.linalg.norm(errors.position, axis=1), band,
+                                             reference_moving(flight)))
     saturation = summary.saturation(flight)
     if saturation is None:  # wrench actuation: nothing saturates
         row.update(rotor_speed_peak_rad_s=math.nan, saturated_fraction=math.nan, gave_way="")
