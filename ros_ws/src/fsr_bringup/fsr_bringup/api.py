@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -71,6 +72,8 @@ def simulate(
     else:
         loaded = load_scenario(scenario, values=values)
     checked = check_scenario(loaded)
+    for warning in checked.warnings:
+        warnings.warn(f"{checked.simulation.name}: {warning}", UserWarning, stacklevel=2)
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
     topics = None if record_topics is None else recording_selection(record_topics)

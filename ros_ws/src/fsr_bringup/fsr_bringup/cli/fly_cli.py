@@ -181,6 +181,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fsr-fly: {name}: {label}{member.checked.summary_line()}", flush=True)
         for adjustment in member.checked.controller.plan_adjustments:  # the legs beyond the authority
             print(f"fsr-fly: {name}: {label}{adjustment.text()}", flush=True)
+        for warning in member.checked.warnings:
+            print(f"fsr-fly: {name}: {label}warning: {warning}", flush=True)
     duration = max(m.checked.simulation.duration for m in members)
 
     if args.in_process:

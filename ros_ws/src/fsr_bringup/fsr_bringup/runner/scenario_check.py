@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from fsr_sim.config.plausibility import plausibility_warnings
 from fsr_sim.config.scenario import Scenario, SimulationConfig, registered_sections, simulation_config
 from fsr_sim.config.validation import ConfigError
 
@@ -24,6 +25,7 @@ class CheckedScenario:
     controller: Any
     estimator: Any
     sections: dict[str, Any] = field(default_factory=dict)  # every registered section -> its validated config
+    warnings: list[str] = field(default_factory=list)  # likely slips of units (fsr_sim.config.plausibility)
 
     @property
     def estimator_enabled(self) -> bool:
@@ -61,4 +63,5 @@ def _checked(scenario: Scenario) -> CheckedScenario:
     if missing:
         raise RuntimeError(f"no installed package validates the scenario section(s) {', '.join(missing)} (the "
                            "fsr.scenario_sections entry points of fsr_control and fsr_estimation): reinstall them")
-    return CheckedScenario(scenario, simulation, sections["controller"], sections["estimator"], sections)
+    return CheckedScenario(scenario, simulation, sections["controller"], sections["estimator"], sections,
+                           plausibility_warnings(simulation))
