@@ -254,6 +254,18 @@ def wrench_comparison(flight: RecordedFlight, settle_time: float = DEFAULT_SETTL
     return result
 
 
+def masses(flight: RecordedFlight) -> dict[str, Any] | None:
+    """Which part of the flight uses which mass [kg]: the true plant's (``plant.mass``), the controller's model
+    (the vehicle file's) and the estimator's model (``estimator.mass``; None without the estimator). None without
+    the scenario."""
+    if flight.config is None:
+        return None
+    return {"plant_kg": flight.config.plant_vehicle.mass, "controller_model_kg": flight.config.vehicle.mass,
+            "vehicle": flight.config.vehicle.name,
+            "estimator_model_kg": flight.estimator.mass if flight.estimator is not None and flight.estimator.enabled
+            else None}
+
+
 def mass_comparison(flight: RecordedFlight) -> dict[str, Any] | None:
     """Final mass estimate [kg] vs the true plant mass (and the nominal model's) from the scenario."""
     if flight.mass_estimate is None:
@@ -362,6 +374,7 @@ def flight_metrics(
         notes.append("effective truth unavailable (odom, wrench_cmd or the scenario's estimator model missing): "
                      "the estimate is compared with the external wrench only")
     metrics["mass"] = mass_comparison(flight)
+    metrics["masses"] = masses(flight)
     ratios = thrust_ratio_series(flight)
     if ratios is None:
         metrics["thrust_ratio"] = None

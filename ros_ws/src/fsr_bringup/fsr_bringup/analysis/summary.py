@@ -44,6 +44,13 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("lockstep failsafe", f"**{status.failsafe_steps} steps** on the failsafe in "
                                           f"{status.incidents} incident(s), "
                                           f"{status.late_commands} late command(s) ignored"))
+    weights = metrics.get("masses")
+    if weights:
+        text = (f"plant (true) {_num(weights['plant_kg'])}, controller's model {_num(weights['controller_model_kg'])} "
+                f"({weights['vehicle']})")
+        if weights["estimator_model_kg"] is not None:
+            text += f", estimator's model {_num(weights['estimator_model_kg'])}"
+        rows.append(("masses [kg]", text))
     tracking = metrics.get("tracking")
     if tracking:
         commanded = tracking.get("attitude_vs") == ATTITUDE_CMD.name
