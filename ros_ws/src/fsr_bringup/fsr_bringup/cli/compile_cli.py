@@ -6,10 +6,17 @@ The core (:mod:`fsr_sim.core.jit`) is compiled by numba on first use and cached 
 its sources; this command uses every entry point the nodes, the in-process loop, the analysis and the Python
 API call -- a short flight of every built-in scenario, recorded and analysed, and the node-side calls -- so
 that each is compiled (or found in the cache) here.
+
+It also prunes the cache folders of other versions of the core's sources (each edit of a core file, each
+release, makes a new one): a folder is removed when nothing in it was written for :data:`KEEP_DAYS` days, or
+when :data:`KEEP_MOST` newer ones are kept and it was last written over an hour ago (another checkout flying
+right now keeps its folder). A removed version only costs a compilation, once, if it is ever used again.
 """
 
 from __future__ import annotations
 
+import re
+import shutil
 import sys
 import tempfile
 import time
@@ -22,6 +29,32 @@ from fsr_sim.config.validation import builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
 
 BUILT_IN = tuple(builtin_names("scenarios"))
+KEEP_DAYS = 7.0  # a cache folder not written for this long is removed
+KEEP_MOST = 8  # cache folders of other source versions kept at most (the newest)
+RECENT_S = 3600.0  # s: a folder written this recently is kept whatever the count
+KEY_PATTERN = re.compile(r"[0-9a-f]{16}")  # fsr_sim.core.jit.core_key's folder names
+
+
+def prune_cache(base: Path, current: Path, now: float | None = None) -> list[Path]:
+    """Remove the cache folders of other source versions under ``base`` (module docstring); ``current`` is
+    kept. Only fsr's folders are touched (a key's name holding ``fsr_*`` module folders), so a numba cache
+    shared with other projects (``NUMBA_CACHE_DIR``) loses nothing of theirs. Returns the removed folders."""
+    now = time.time() if now is None else now
+    others = []
+    for folder in base.iterdir() if base.is_dir() else ():
+        if folder == current or not KEY_PATTERN.fullmatch(folder.name) or not folder.is_dir():
+            continue
+        if not any(child.name.startswith("fsr_") for child in folder.iterdir()):
+            continue
+        written = max((path.stat().st_mtime for path in folder.rglob("*")), default=folder.stat().st_mtime)
+        others.append((written, folder))
+    removed = []
+    for rank, (written, folder) in enumerate(sorted(others, reverse=True)):
+        age = now - written
+        if age > KEEP_DAYS * 86400.0 or (rank >= KEEP_MOST and age > RECENT_S):
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
 
 
 def tour(folder: Path) -> None:
@@ -141,6 +174,10 @@ def main(argv: list[str] | None = None) -> int:
         tour(Path(folder))
     print(f"fsr-compile: flight core compiled in {time.perf_counter() - start:.1f} s (cache: {CACHE_FOLDER})",
           file=sys.stderr)
+    removed = prune_cache(CACHE_FOLDER.parent, CACHE_FOLDER)
+    if removed:
+        print(f"fsr-compile: removed {len(removed)} cache folder(s) of other versions of the core from "
+              f"{CACHE_FOLDER.parent}", file=sys.stderr)
     return 0
 
 
