@@ -84,6 +84,7 @@ class Topic:
     frame: str = ""  # header.frame_id ("" without a header)
     child_frame: str = ""  # Odometry's child_frame_id; the trajectory's one joint
     notes: str = ""  # what it carries (the topic table of docs/architecture.md)
+    stamped_like: str = ""  # no header: message i has the stamp of the same publisher's message i on this topic
 
 
 CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", "CLOCK", SIMULATOR, True, True,
@@ -125,7 +126,8 @@ GOAL = Topic("goal", "geometry_msgs/msg/PoseStamped", "GOAL", USER, True, False,
 WRENCH_ESTIMATE = Topic("wrench_estimate", "geometry_msgs/msg/WrenchStamped", "STREAM", ESTIMATOR, True, True,
                         BODY_FRAME, notes="body frame (`R_b^T f_e`, `Q^-T tau_e`): comparable with `wrench_truth`")
 MASS_ESTIMATE = Topic("mass_estimate", "std_msgs/msg/Float64", "STREAM", ESTIMATOR, True, True,
-                      notes="`m_model + f_e,z / g` [kg]")
+                      notes="`m_model + f_e,z / g` [kg]; recorded at the stamp of the same state's `wrench_estimate`",
+                      stamped_like="wrench_estimate")
 TF = Topic("/tf", "tf2_msgs/msg/TFMessage", "STREAM", RECORDER, True, False,
            notes="`world_ned` -> `base_link_frd` of every `odom` (same stamp and pose); the frames of tilting rotors "
                  "with the markers. Written into the recording (no tf2_msgs in the pip wheels: not over DDS)")

@@ -11,9 +11,11 @@ wait set (no executor callback per message: a 1 kHz lockstep graph publishes ~10
 in arrival order.
 
 Times: ``log_time`` is the simulated time of the message: its header stamp (``/clock``: the clock value;
-``sim_status``: its ``sim_time``); messages without a stamp (``mass_estimate``) get the latest simulated
-time the recorder has seen, i.e. its sim-clock receive time (0 before the first). ``publish_time`` is the
-publisher's source timestamp (wall clock).
+``sim_status``: its ``sim_time``); a per-step topic without a stamp that the contract pairs with a stamped one
+(``mass_estimate`` with ``wrench_estimate``: :attr:`fsr_sim.contract.Topic.stamped_like`) gets the stamp of the
+partner's message of the same state (the i-th of each, both in order from one publisher: held until the partner
+arrives); other messages without a stamp get the latest simulated time the recorder has seen, i.e. their
+sim-clock receive time (0 before the first). ``publish_time`` is the publisher's source timestamp (wall clock).
 
 End: once every recorded ``sim_status`` (one per namespace) reported the end of the flight and the
 producers have gone (or nothing arrived for a while), the recorder takes what is still queued, finishes
@@ -49,6 +51,7 @@ import argparse
 import struct
 import sys
 import time
+from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -232,6 +235,16 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
                 namespace, _, base = topic.rpartition("/")
                 if base in DRAINED_TOPICS and type_name == BY_NAME[base].type:
                     self.drained[topic] = namespace
+            subscribed = {topic for _sub, topic, _stamped, _status in self.entries}
+            self.partner_of: dict[str, str] = {}  # unstamped topic -> the stamped topic whose stamps it takes
+            for topic in subscribed:
+                contract = topic_named(topic)
+                partner = f"{topic.rpartition('/')[0]}/{contract.stamped_like}" if contract is not None and \
+                    contract.stamped_like else None
+                if partner in subscribed:
+                    self.partner_of[topic] = partner
+            self.partner_stamps: dict[str, deque[int]] = {p: deque() for p in self.partner_of.values()}
+            self.unstamped: dict[str, deque[tuple[bytes, int]]] = {t: deque() for t in self.partner_of}
             self.wait_set = SubscriptionWaitSet(self, [entry[0] for entry in self.entries])
             status_topics = [topic for _sub, topic, _stamped, status in self.entries if status]
             self.flight_end = None if keep_running or not status_topics else FlightEndRule(status_topics)
@@ -314,6 +327,11 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
                         self.sim_time_ns = max(self.sim_time_ns, log_time)
                         if log_time > self.last_stamp.get(topic, -1):
                             self.last_stamp[topic] = log_time
+                        if topic in self.partner_stamps:
+                            self.partner_stamps[topic].append(log_time)
+                    elif topic in self.unstamped:
+                        self.unstamped[topic].append((data, source))
+                        continue
                     elif status:
                         status_ns = status_time_ns(data)
                         log_time = self.sim_time_ns if status_ns is None else status_ns
@@ -323,11 +341,23 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
                     else:
                         log_time = self.sim_time_ns
                     records.append((topic, data, log_time, source))
+                records += self.paired_records()
                 self.writer.write_records(records)
                 self.derive(records)
                 self.unflushed = True
             except OSError as error:
                 self.fail(error)
+
+        def paired_records(self, unmatched: bool = False) -> list[tuple[str, bytes, int, int]]:
+            """The held unstamped messages whose partner's stamp has come, at that stamp (``unmatched``: the rest
+            too, at the latest simulated time: the file is being closed)."""
+            records = []
+            for topic, held in self.unstamped.items():
+                stamps = self.partner_stamps[self.partner_of[topic]]
+                while held and (stamps or unmatched):
+                    data, source = held.popleft()
+                    records.append((topic, data, stamps.popleft() if stamps else self.sim_time_ns, source))
+            return records
 
         def derive(self, records: list[tuple[str, bytes, int, int]]) -> None:
             """Hand the batch's messages to their namespace's derived topics, one call per topic."""
@@ -408,6 +438,10 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
             """Take what is still queued, then finish the file (summary and footer) and report counts."""
             if not self.failed:
                 self.drain()
+                try:
+                    self.writer.write_records(self.paired_records(unmatched=True))
+                except OSError as error:
+                    self.fail(error)
             try:
                 self.writer.close()
             except OSError as error:
