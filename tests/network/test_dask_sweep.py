@@ -138,3 +138,17 @@ def test_a_sweep_across_two_network_namespaces_gives_the_local_table(tmp_path):
     local_out = tmp_path / "local.csv"
     local_table().to_csv(local_out)
     pd.testing.assert_frame_equal(remote, pd.read_csv(local_out, index_col="flight"))
+
+
+def test_a_study_on_a_loopback_cluster_gives_the_local_trials(tmp_path):
+    from fsr_bringup import tune
+
+    kwargs = dict(params={"controller.gains.k_p": "log:5:40,same,100", "controller.gains.k_v": "log:5:40,same,100"},
+                  seeds=2, budget=16, method="cma", seed=5, duration=1.0, holdout=2)
+    local = tune("step_disturbance", workers=2, **kwargs)
+    with cluster(tmp_path / "dask") as (address, started):
+        wait_for(lambda: registered_workers(address) == 2, "two workers registered", started)
+        remote = tune("step_disturbance", cluster=address, **kwargs)
+    assert remote.trials.equals(local.trials)
+    assert remote.best_trial == local.best_trial and remote.best_values == local.best_values
+    assert remote.validation["best"].objective == local.validation["best"].objective

@@ -13,7 +13,7 @@ setup(
     ],
     install_requires=[
         "setuptools", "numpy", "matplotlib", "PyYAML", "mcap", "mcap-ros2-support", "ros-rosidl-parser",
-        "pandas", "dask[distributed]", "pillow", "imageio-ffmpeg",
+        "pandas", "dask[distributed]", "pillow", "imageio-ffmpeg", "optuna", "cmaes",
         "fsr_sim", "fsr_control", "fsr_estimation",
     ],
     extras_require={"test": ["pytest"]},  # fsr_bringup.testing (the graph-test pytest plugin)
@@ -21,7 +21,7 @@ setup(
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",
     description="Runner (fsr-fly), MCAP recorder (fsr-record), analysis (fsr-analyze), in-process closed loop, "
-                "sweeps (fsr-sweep)",
+                "sweeps (fsr-sweep), tuning (fsr-tune)",
     license="Apache-2.0",
     tests_require=["pytest"],
     entry_points={
@@ -31,6 +31,7 @@ setup(
             "fsr-analyze = fsr_bringup.cli.analyze_cli:main",
             "fsr-compile = fsr_bringup.cli.compile_cli:main",
             "fsr-sweep = fsr_bringup.cli.sweep_cli:main",
+            "fsr-tune = fsr_bringup.cli.tune_cli:main",
         ],
         # Scenario sections this package validates (fsr_sim.config.scenario.registered_sections).
         "fsr.scenario_sections": [

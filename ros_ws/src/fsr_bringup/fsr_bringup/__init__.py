@@ -1,7 +1,8 @@
 """fsr_bringup: fsr-fly (node graph or in-process), fsr-record, fsr-analyze, and the Python API.
 
 ``from fsr_bringup import simulate`` (:func:`fsr_bringup.api.simulate`), ``from fsr_bringup import sweep``
-(:func:`fsr_bringup.sweeps.run.sweep`: many flights as one table).
+(:func:`fsr_bringup.sweeps.run.sweep`: many flights as one table), ``from fsr_bringup import tune``
+(:func:`fsr_bringup.tuning.study.tune`: parameters found by optimisation).
 """
 
 from typing import Any
@@ -17,7 +18,11 @@ def __getattr__(name: str) -> Any:
         from fsr_bringup.sweeps.run import sweep
 
         return sweep
+    if name == "tune":
+        from fsr_bringup.tuning.study import tune
+
+        return tune
     raise AttributeError(f"module 'fsr_bringup' has no attribute '{name}'")
 
 
-__all__ = ["FlightRun", "simulate", "sweep"]
+__all__ = ["FlightRun", "simulate", "sweep", "tune"]

@@ -113,11 +113,11 @@ def record_extremes(table, scenario: str, fixed: dict, duration: float | None, c
     return paths
 
 
-def default_output(scenario: str) -> Path:
-    """``runs/sweep_<scenario name>_<time>``."""
+def default_output(scenario: str, kind: str = "sweep") -> Path:
+    """``runs/<kind>_<scenario name>_<time>``."""
     from fsr_sim.config.scenario import load_scenario
 
-    return Path("runs") / f"sweep_{load_scenario(scenario).name}_{time.strftime('%Y%m%d-%H%M%S')}"
+    return Path("runs") / f"{kind}_{load_scenario(scenario).name}_{time.strftime('%Y%m%d-%H%M%S')}"
 
 
 def usable_output(out: Path) -> list[Path]:
