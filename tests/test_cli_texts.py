@@ -17,7 +17,8 @@ from fsr_sim.model.vehicle import load_vehicle
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
-COMMANDS = ("fsr-fly", "fsr-analyze", "fsr-record", "fsr-estimate", "fsr-vehicle", "fsr-compile", "fsr-sweep", "fsr-tune")
+COMMANDS = ("fsr-fly", "fsr-analyze", "fsr-record", "fsr-estimate", "fsr-vehicle", "fsr-compile", "fsr-sweep",
+            "fsr-tune")
 
 
 @pytest.mark.parametrize("command", COMMANDS)

@@ -135,12 +135,16 @@ def fsr_tune(*args: str, cwd) -> subprocess.CompletedProcess:  # noqa: ANN001
     (["--param", "estimator.c0=1:100", "--param", "estimator.c0=1:5"], "estimator.c0: given twice"),
     ([], "give at least one --param"),
 ])
-def test_the_cli_exits_2_with_one_line_naming_the_problem(tmp_path, args, message):
-    result = fsr_tune("ex4_geometric", "--duration", "0.2", "--budget", "8", "--out", str(tmp_path / "out"), *args,
-                      cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], result.stderr
+def test_the_cli_exits_2_with_one_line_naming_the_problem(tmp_path, capsys, args, message):
+    from fsr_bringup.cli.tune_cli import main
+
+    try:
+        code = main(["ex4_geometric", "--duration", "0.2", "--budget", "8", "--out", str(tmp_path / "out"), *args])
+    except SystemExit as stop:  # argparse's errors
+        code = stop.code
+    assert code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], lines
     assert not (tmp_path / "out").exists()
 
 
