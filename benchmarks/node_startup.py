@@ -1,4 +1,4 @@
-"""How fast a node can be ready on this machine: the floor under issue 11's "each node ready within 0.5 s".
+"""How fast a node can be ready on this machine: the floor under the target "each node ready within 0.5 s".
 
     .venv/bin/python benchmarks/node_startup.py [--repeat 3] [--together 4]
 

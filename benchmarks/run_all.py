@@ -1,5 +1,5 @@
 """Every speed figure in one table (min and median of ``--repeat`` runs; CPU time where it applies), with the
-targets of issue "One compiled flight core".
+targets of the compiled flight core (docs/testing.md, *Speed*).
 
     .venv/bin/python benchmarks/run_all.py                 # ~15 min on 2 cores (installs RotorPy once)
     .venv/bin/python benchmarks/run_all.py --quick         # a smoke pass (~1 min): 1 run each, 1-3 s flights,

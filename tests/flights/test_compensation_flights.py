@@ -4,7 +4,7 @@ Measured (this branch): ex3 final position error 2e-12 m (0.071 m without), atti
 octo_ground_effect holds 2 m within 2.5e-5 m and 0.16 m within 7.8e-5 m (35 mm high without); ex5 under a
 constant world wrench 8e-13 m / 2e-9 deg (last 5 s of the 30 s flight); wind_rejection peak 0.0130 m vs 0.150 m;
 step_disturbance as shipped (rotors, air_mode false) 7.4e-4 m in 9.5..10 s (0.111 m without), peak 0.227 m vs 0.247 m
-(torque-limited: not the 3x of the issue), in wrench actuation with k_R = 100, k_w = 25: 3.6e-4 m, peak 0.024 vs 0.100.
+(torque-limited: not 3x), in wrench actuation with k_R = 100, k_w = 25: 3.6e-4 m, peak 0.024 vs 0.100.
 """
 
 from __future__ import annotations

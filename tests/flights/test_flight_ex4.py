@@ -1,4 +1,4 @@
-"""Exercise 4 (geometric controller) in the in-process closed loop (issue 3's checks)."""
+"""Exercise 4 (geometric controller) in the in-process closed loop: climb thrust, hover thrust, converging errors."""
 
 import math
 from pathlib import Path

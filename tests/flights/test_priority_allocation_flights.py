@@ -1,4 +1,4 @@
-"""Issue 17 in closed loop (in-process): yaw gives way at the rotor limits, the vehicle does not fall.
+"""Priority allocation in closed loop (in-process): yaw gives way at the rotor limits, the vehicle does not fall.
 
 * ex4_geometric with rotor actuation and 90 deg of yaw in 5 s: with ``clamp`` (per-rotor clamping) it loses
   altitude and crashes (exit 3); with ``priority`` it tracks position within 0.5 m and ends on the goal.

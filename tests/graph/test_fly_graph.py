@@ -163,7 +163,7 @@ def test_killed_estimator_or_recorder_is_reported_and_the_flight_goes_on(tmp_pat
 
 
 def test_interrupted_run_records_every_message_up_to_the_last_step_and_says_interrupted(tmp_path):
-    """Issue #14: after Ctrl-C the recording used to miss the last ~0.1 s of commands and ~1 s of estimates."""
+    """After Ctrl-C the recording used to miss the last ~0.1 s of commands and ~1 s of estimates."""
     out = tmp_path / "run.mcap"
     process = start_fly(["ex4_geometric", "--set", "actuation=rotors", "--duration", "120", "--out", str(out)])
     try:

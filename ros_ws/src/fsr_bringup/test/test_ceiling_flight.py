@@ -16,7 +16,7 @@ CEILING = -3.0
 
 
 def test_a_goal_beyond_the_ceiling_stops_at_the_ceiling(tmp_path: Path) -> None:
-    """Issue #14: a waypoint 0.3 m above the ceiling used to be reached through it (hovering 0.34 m above)."""
+    """A waypoint 0.3 m above the ceiling used to be reached through it (hovering 0.34 m above)."""
     scenario = load_scenario("ceiling_approach", ["trajectory.waypoints.0.position=[0,0,-3.3]", "duration=10.0"])
     result = fly_in_process(scenario, recording=tmp_path / "ceiling.mcap")
     top = load_vehicle("quadrotor_ex4").top_height

@@ -66,7 +66,7 @@ def test_yaw_gives_way_alone_with_priority_and_clamping_costs_thrust(name):
     assert [axis for axis in WRENCH_AXES if gave_way[axis]["steps"]] == ["torque_z"]
     assert gave_way["torque_z"]["max_shortfall"] == pytest.approx(torque[2] - kept.torque_body[2])
     clamped = clamp.allocate(1.0, force, torque)
-    assert abs(clamped.shortfall[2]) > 0.1  # per-rotor clamping loses thrust (the crash of issue 17)
+    assert abs(clamped.shortfall[2]) > 0.1  # per-rotor clamping loses thrust (the crash the priority rules prevent)
     assert clamp.saturation.as_dict()["gave_way"]["force_z"]["steps"] == 1
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-GRAVITY = 9.81  # m/s^2, along +z (down) of the NED world frame
+from fsr_sim.core.rigid_body import GRAVITY  # noqa: F401 - m/s^2 along +z: declared once, with the compiled core
+
 E3 = np.array((0.0, 0.0, 1.0))  # world down axis (NED) / body down axis (FRD)
 E3.flags.writeable = False
