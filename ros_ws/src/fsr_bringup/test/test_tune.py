@@ -89,7 +89,7 @@ def test_each_method_finds_the_grids_optimum_within_5_percent(grid_optimum, meth
     result = tune("step_disturbance", BOWL_PARAMS, seeds=1, budget=48, method=method, set=BOWL, holdout=0,
                   workers=2, seed=1)
     assert result.best_objective <= 1.05 * grid_optimum, (result.best_values, result.best_objective, grid_optimum)
-    assert len(result.trials) == 48 and (result.trials["state"] == "complete").all()
+    assert len(result.trials) == 48 and (result.trials["trial_state"] == "complete").all()
 
 
 @pytest.mark.slow
@@ -102,7 +102,7 @@ def test_an_interrupted_study_is_resumed_without_flying_a_trial_twice(tmp_path):
     first = tune("step_disturbance", BOWL_PARAMS, progress=stop_after_the_first_generation, **kwargs)
     assert first.interrupted and len(first.trials) == GENERATION
     again = tune("step_disturbance", BOWL_PARAMS, resume=True, **kwargs)
-    assert not again.interrupted and (again.trials["state"] == "complete").sum() == 3 * GENERATION
+    assert not again.interrupted and (again.trials["trial_state"] == "complete").sum() == 3 * GENERATION
     assert again.flights == 1 + 2 * GENERATION  # the baseline, then only the trials still to fly
     np.testing.assert_array_equal(again.trials.iloc[:GENERATION].to_numpy(), first.trials.to_numpy())
     with pytest.raises(TuneError, match="other settings"):

@@ -65,7 +65,7 @@ def _number(value: float) -> str:
 
 def summary_markdown(result: TuneResult, command: str | None = None) -> str:
     plan, objective = result.plan, result.plan.objective
-    completed = int((result.trials["state"] == "complete").sum())
+    completed = int((result.trials["trial_state"] == "complete").sum())
     lines = [f"# Tuning of {plan.scenario.name}", ""]
     if command:
         lines += ["```", command, "```", ""]
@@ -105,7 +105,7 @@ def objective_figure(result: TuneResult) -> Figure:
     trials = result.trials
     fig = Figure(figsize=(ONE_COLUMN_IN, 2.4), constrained_layout=True)
     ax = fig.add_subplot()
-    done = trials[trials["state"] == "complete"]
+    done = trials[trials["trial_state"] == "complete"]
     ax.plot(done.index, done["objective"], ".", color=OKABE_ITO["blue"], ms=3, label="trial")
     ax.step(trials.index, trials["best_so_far"], where="post", color=OKABE_ITO["vermillion"], lw=1.0,
             label="best so far")
@@ -127,7 +127,7 @@ def parameters_figure(result: TuneResult) -> Figure:
     columns = 2 if len(ranges) > 1 else 1
     rows = math.ceil(len(ranges) / columns)
     fig = Figure(figsize=(ONE_COLUMN_IN * (1.0 if columns == 1 else 2.0), 1.9 * rows), constrained_layout=True)
-    done = result.trials[result.trials["state"] == "complete"]
+    done = result.trials[result.trials["trial_state"] == "complete"]
     values = done["objective"].to_numpy(dtype=float)
     for index, r in enumerate(ranges):
         ax = fig.add_subplot(rows, columns, index + 1)

@@ -405,9 +405,9 @@ def trials_table(study: Any, plan: TunePlan) -> Any:
         value = trial.value if trial.value is not None else math.nan
         if math.isfinite(value):
             best = min(best, value)
-        rows.append({"trial": trial.number, "state": trial.state.name.lower(), "objective": value,
+        rows.append({"trial": trial.number, "trial_state": trial.state.name.lower(), "objective": value,
                      "best_so_far": best if math.isfinite(best) else math.nan,
                      "lost": trial.user_attrs.get("lost", math.nan),
                      **{r.name: trial.params.get(r.name, math.nan) for r in plan.ranges}})
-    return pd.DataFrame.from_records(rows, columns=["trial", "state", "objective", "best_so_far", "lost",
+    return pd.DataFrame.from_records(rows, columns=["trial", "trial_state", "objective", "best_so_far", "lost",
                                                     *(r.name for r in plan.ranges)]).set_index("trial")
