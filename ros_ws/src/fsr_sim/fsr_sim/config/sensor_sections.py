@@ -25,11 +25,13 @@ ODOMETRY_SECTION, IMU_SECTION = "odometry", IMU.name  # sensors.imu: the sensor 
 STANDARD_GRAVITY = 9.80665  # m/s^2: a datasheet's g (the plant's gravity is fsr_sim.core.rigid_body.GRAVITY)
 
 # Motion capture (Vicon/OptiTrack class): poses at 200 Hz, 5 ms late, 0.5 mm and 0.1 deg per sample. The twist
-# such a system streams is a derivative of its poses: the difference of two poses MOCAP_DIFFERENCE_WINDOW apart,
-# whose noise is sqrt(2) times the pose noise over the window.
+# such a system streams is a derivative of its poses: the least-squares slope through the last
+# MOCAP_DERIVATIVE_POSES poses, whose noise is the pose noise times sqrt(12 / (N (N^2 - 1))) / T_s.
+MOCAP_RATE_HZ = 200.0
 MOCAP_POSITION_STD = 0.0005  # m
 MOCAP_ATTITUDE_STD_DEG = 0.1
-MOCAP_DIFFERENCE_WINDOW = 0.05  # s (10 poses at 200 Hz)
+MOCAP_DERIVATIVE_POSES = 20  # 0.1 s at 200 Hz
+MOCAP_DERIVATIVE_GAIN = math.sqrt(12.0 / (MOCAP_DERIVATIVE_POSES * (MOCAP_DERIVATIVE_POSES**2 - 1))) * MOCAP_RATE_HZ
 
 # Bosch BMI088 (datasheet BST-BMI088-DS001): gyroscope 0.014 deg/s/sqrt(Hz), accelerometer 175 ug/sqrt(Hz)
 # (docs/model.md §3.9 says which axes and why); bias random walks from the Allan-deviation calibration of a
@@ -44,10 +46,9 @@ PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # the true state on odom, and an ideal IMU
     "ideal": {IMU_SECTION: {"enabled": True}},
     "mocap": {ODOMETRY_SECTION: {
-        "rate_hz": 200.0, "delay_s": 0.005, "position_std": MOCAP_POSITION_STD,
-        "attitude_std_deg": MOCAP_ATTITUDE_STD_DEG,
-        "velocity_std": math.sqrt(2.0) * MOCAP_POSITION_STD / MOCAP_DIFFERENCE_WINDOW,
-        "angular_velocity_std": math.sqrt(2.0) * math.radians(MOCAP_ATTITUDE_STD_DEG) / MOCAP_DIFFERENCE_WINDOW,
+        "rate_hz": MOCAP_RATE_HZ, "delay_s": 0.005, "position_std": MOCAP_POSITION_STD,
+        "attitude_std_deg": MOCAP_ATTITUDE_STD_DEG, "velocity_std": MOCAP_DERIVATIVE_GAIN * MOCAP_POSITION_STD,
+        "angular_velocity_std": MOCAP_DERIVATIVE_GAIN * math.radians(MOCAP_ATTITUDE_STD_DEG),
     }},
     # an onboard state estimate (100 Hz, 10 ms late; its body rates the gyro's, averaged over its period) and
     # the BMI088 at 1 kHz
