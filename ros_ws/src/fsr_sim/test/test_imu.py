@@ -18,7 +18,7 @@ from fsr_sim.core.odometry import (
     IMU_TRUE_LINEAR_ACCELERATION,
     PUBLISHED_SIZE,
 )
-from fsr_sim.core.sensors import IMU_SIZE, measure_imu
+from fsr_sim.core.sensors import IMU_HISTORY, IMU_SIZE, measure_imu
 from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
 from fsr_sim.model.checks import InvalidValueError
 from fsr_sim.model.frames import GRAVITY
@@ -95,7 +95,7 @@ def test_in_flight_it_reads_every_force_but_gravity_in_the_body_frame():
 
 def stage(model: ImuModel, period: float = 0.001):
     params = model.pack(period)
-    memory = np.zeros(13 + IMU_SIZE * (params.delay + 1))
+    memory = np.zeros(IMU_HISTORY + IMU_SIZE * (params.delay + 1))
     memory[0] = -1.0
     return params, memory
 

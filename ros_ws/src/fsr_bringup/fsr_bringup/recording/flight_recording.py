@@ -3,7 +3,7 @@
 Per published state ``t_k`` the CDR bytes the node graph records, packed from the flight loop's arrays by
 the nodes' own templates (:meth:`fsr_sim.ros.cdr_pack.StampedDoubles.pack_rows`, many steps at once):
 
-* simulator: ``odom``, ``wrench_truth``, ``imu`` (with an IMU) (the published rows,
+* simulator: ``odom``, ``wrench_truth`` and, with an IMU, ``imu`` (the published rows,
   :class:`fsr_sim.nodes.state_packets.StatePackets`' templates), ``rotor_state`` (with actuator dynamics: the
   rotors' actual speeds and tilts) and ``sim_status`` (running at the start, the final state at the end);
 * controller: ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall``, ``reference``,

@@ -53,12 +53,16 @@ PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # an onboard state estimate (100 Hz, 10 ms late; its body rates the gyro's, averaged over its period) and
     # the BMI088 at 1 kHz
     "onboard": {
-        ODOMETRY_SECTION: {"rate_hz": ONBOARD_ODOMETRY_RATE_HZ, "delay_s": 0.010, "position_std": 0.01,
-                     "attitude_std_deg": 0.5, "velocity_std": 0.02,
-                     "angular_velocity_std": BMI088_GYRO_NOISE_DENSITY * math.sqrt(ONBOARD_ODOMETRY_RATE_HZ)},
-        IMU_SECTION: {"enabled": True, "rate_hz": 1000.0, "gyro_noise_density": BMI088_GYRO_NOISE_DENSITY,
-                "accelerometer_noise_density": BMI088_ACCELEROMETER_NOISE_DENSITY,
-                "gyro_bias_walk": BMI160_GYRO_BIAS_WALK, "accelerometer_bias_walk": BMI160_ACCELEROMETER_BIAS_WALK},
+        ODOMETRY_SECTION: {
+            "rate_hz": ONBOARD_ODOMETRY_RATE_HZ, "delay_s": 0.010, "position_std": 0.01, "attitude_std_deg": 0.5,
+            "velocity_std": 0.02,
+            "angular_velocity_std": BMI088_GYRO_NOISE_DENSITY * math.sqrt(ONBOARD_ODOMETRY_RATE_HZ),
+        },
+        IMU_SECTION: {
+            "enabled": True, "rate_hz": 1000.0, "gyro_noise_density": BMI088_GYRO_NOISE_DENSITY,
+            "accelerometer_noise_density": BMI088_ACCELEROMETER_NOISE_DENSITY,
+            "gyro_bias_walk": BMI160_GYRO_BIAS_WALK, "accelerometer_bias_walk": BMI160_ACCELEROMETER_BIAS_WALK,
+        },
     },
 }
 
