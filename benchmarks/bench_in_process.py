@@ -5,10 +5,11 @@ sample), the compiled closed loop, the loop with its MCAP recording, and the who
     .venv/bin/python benchmarks/bench_in_process.py [--seconds 3] [--repeat 3]
 
 For ex4 (geometric, wrench actuation), ex5 (Voliro, rotor actuation, with and without the null-space
-objective) and the octocopter with ground effect. The parts are timed by a compiled loop calling each one on
-the flight's first state (what it costs inside the loop, without Python); "loop" is the time spent in the
-compiled flight loop (:func:`fsr_bringup.core.flight_loop.fly_steps`), "+ recording" the whole
-``fly_in_process`` with its recording, per step (wall). ``run_all.py`` reports the loop's CPU time.
+objective, and with a noisy IMU: its specific force and stage per step) and the octocopter with ground effect.
+The parts are timed by a compiled loop calling each one on the flight's first state (what it costs inside the
+loop, without Python); "loop" is the time spent in the compiled flight loop
+(:func:`fsr_bringup.core.flight_loop.fly_steps`), "+ recording" the whole ``fly_in_process`` with its
+recording, per step (wall). ``run_all.py`` reports the loop's CPU time.
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ CASES = {
     "ex5 voliro (rotors)": ("ex5_voliro.yaml", []),
     "ex5 voliro + min_peak_speed": ("ex5_voliro.yaml", ["controller.secondary_objective.type=min_peak_speed"]),
     "octocopter + ground effect": ("octo_ground_effect", []),
+    "ex5 voliro + IMU (BMI088)": ("ex5_voliro.yaml", [f"sensors.imu.{key}" for key in (  # the onboard preset's IMU
+        "gyro_noise_density=0.000244", "accelerometer_noise_density=0.00172", "gyro_bias_walk=0.000022",
+        "accelerometer_bias_walk=0.00086")]),
 }
 PART_STEPS = 20_000
 

@@ -15,7 +15,10 @@ import pytest
 FLY = str(Path(sys.executable).parent / "fsr-fly")
 REALISM = {"duration": 2.0, "plant.rotor_time_constant": 0.02, "sensors.odometry.position_std": 0.001,
            "sensors.odometry.position_bias_walk": 0.001, "sensors.odometry.delay_steps": 2,
-           "sensors.odometry.rate_hz": 500, "controller.acceleration_filter_hz": 20.0}
+           "sensors.odometry.rate_hz": 500, "controller.acceleration_filter_hz": 20.0,
+           "sensors.imu": {"gyro_noise_density": 0.0003, "accelerometer_noise_density": 0.002,
+                           "gyro_bias_walk": 0.0001, "accelerometer_bias_walk": 0.001, "delay_steps": 1,
+                           "rate_hz": 500, "accelerometer_initial_bias": 0.1, "seed": 4}}
 SHORT = {"duration": 6.0}  # the transients, the estimator's settling and the octocopter's ground effect (CPython: slow)
 FLIGHTS = (("ex3_estimation", SHORT), ("ex4_geometric", {**SHORT, "actuation": "rotors"}), ("ex5_voliro", SHORT),
            ("octo_ground_effect", SHORT), ("wind_rejection_turbulent", REALISM),  # gusts, rotor lag, sensor stage
@@ -25,7 +28,10 @@ import json, sys
 import numpy as np
 from fsr_bringup import simulate
 flights = json.loads(sys.argv[1])
-print(json.dumps([simulate(name, set=values).state[-1].tolist() for name, values in flights]))
+runs = [simulate(name, set=values) for name, values in flights]
+print(json.dumps([np.concatenate([run.state[-1]] + [values.sum(axis=0) for values in (
+    run.imu_angular_velocity_measured, run.imu_specific_force_measured, run.imu_specific_force_true)
+    if values is not None]).tolist() for run in runs]))
 """
 
 
@@ -33,16 +39,18 @@ def final_states(disable_jit: bool) -> np.ndarray:
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1" if disable_jit else "0"}
     out = subprocess.run([sys.executable, "-c", FINAL_STATES, json.dumps(FLIGHTS)], env=env, capture_output=True,
                          text=True, check=True, timeout=280).stdout
-    return np.array(json.loads(out))
+    return [np.array(row) for row in json.loads(out)]
 
 
 @pytest.mark.slow
 def test_compiled_and_cpython_flights_are_bit_identical():
     """The same source, compiled (fastmath off) and under CPython (NUMBA_DISABLE_JIT=1): identical final states
     of whole flights (ex3, ex4 with rotors, ex5, the octocopter through its ground effect; turbulence, actuator
-    dynamics and the sensor stage)."""
+    dynamics and the sensor stages: the sums of an IMU's measured and true samples too)."""
     compiled, python = final_states(False), final_states(True)
-    assert np.array_equal(compiled, python), np.abs(compiled - python).max()
+    assert len(compiled[4]) == 13 + 9  # the flight with an IMU
+    for a, b in zip(compiled, python, strict=True):
+        assert np.array_equal(a, b), np.abs(a - b).max()
 
 
 SWEEP_ROWS = """

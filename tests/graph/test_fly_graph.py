@@ -96,10 +96,10 @@ def test_every_built_in_scenario_flies_records_every_step_and_analyses(tmp_path,
 
 
 def test_graph_and_in_process_runs_agree(tmp_path):
-    for scenario in ("ex4_geometric", "ex5_voliro"):
+    for scenario, sets in (("ex4_geometric", []), ("ex5_voliro", ["--set", "sensors.preset=ideal"])):  # ex5: imu
         graph, local = tmp_path / f"{scenario}_graph.mcap", tmp_path / f"{scenario}_local.mcap"
         for out, extra in ((graph, []), (local, ["--in-process"])):
-            run = fly([scenario, "--duration", "0.5", "--out", str(out), "--no-analysis", *extra])
+            run = fly([scenario, "--duration", "0.5", "--out", str(out), "--no-analysis", *sets, *extra])
             assert run.returncode == 0, run.stdout + run.stderr
         a, b = odom_positions(graph), odom_positions(local)
         assert a.shape == b.shape == (501, 3)
@@ -108,6 +108,7 @@ def test_graph_and_in_process_runs_agree(tmp_path):
         g, loc = open_recording(graph), open_recording(local)
         per_step = sorted(t for t in set(g.topics) & set(loc.topics) if t not in ("/sim_status", "/clock"))
         assert len(per_step) >= 9, per_step  # rotor_cmd too in rotor actuation
+        assert ("/imu" in per_step) == bool(sets)
         for topic in per_step:
             if topic == "/tf":  # in stamp order: the rotor frames come with the markers, after later odom in the graph
                 assert sorted(g.raw(topic)) == sorted(loc.raw(topic)), topic

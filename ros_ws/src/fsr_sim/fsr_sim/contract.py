@@ -97,6 +97,11 @@ ROTOR_STATE = Topic("rotor_state", "sensor_msgs/msg/JointState", "STREAM", SIMUL
                     notes="the rotors' actual `rotor_i` velocity [rad/s] and `tilt_i` position [rad] of the "
                           "published state; only with actuator dynamics (a rotor or servo lag: docs/model.md "
                           "§3.2), else they are `rotor_cmd`'s, clamped")
+IMU = Topic("imu", "sensor_msgs/msg/Imu", "STREAM", SIMULATOR, True, True, BODY_FRAME,
+          notes="the IMU's angular velocity [rad/s] and specific force `R^T (p_ddot - g e3)` [m/s^2] of the published "
+                "state (at rest: `[0, 0, -g]`), through its noise, bias walk, delay and rate (docs/model.md §3.9); "
+                "covariances the white noise's, orientation not provided (`orientation_covariance[0] = -1`); only "
+                "with an IMU (`sensors.imu`)")
 SIM_STATUS = Topic("sim_status", "std_msgs/msg/String", "LATCHED", SIMULATOR, True, False,
                    notes="JSON of a `SimStatus`: `state` (running, then finished, diverged or stopped), `reason`, "
                          "`sim_time` [s] of the last published state, `steps`, and the lockstep's record "
@@ -139,9 +144,9 @@ MARKERS = Topic("markers", "visualization_msgs/msg/MarkerArray", "STREAM", RECOR
                       "rotors (colour: speed between its limits), thrust arrows, true and estimated external force, "
                       "planned path, goal, reference, ground and ceiling")
 
-TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, WRENCH_TRUTH, ROTOR_STATE, SIM_STATUS, SIM_PROGRESS, ROTOR_CMD, WRENCH_CMD,
-                             WRENCH_SHORTFALL, REFERENCE, ATTITUDE_CMD, WRENCH_DESIRED, GOAL, WRENCH_ESTIMATE,
-                             MASS_ESTIMATE, TF, TF_STATIC, MARKERS)
+TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, WRENCH_TRUTH, ROTOR_STATE, IMU, SIM_STATUS, SIM_PROGRESS, ROTOR_CMD,
+                             WRENCH_CMD, WRENCH_SHORTFALL, REFERENCE, ATTITUDE_CMD, WRENCH_DESIRED, GOAL,
+                             WRENCH_ESTIMATE, MASS_ESTIMATE, TF, TF_STATIC, MARKERS)
 BY_NAME = {topic.name: topic for topic in TOPICS}
 
 

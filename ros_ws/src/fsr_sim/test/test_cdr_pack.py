@@ -16,7 +16,7 @@ from geometry_msgs.msg import QuaternionStamped, Transform, Twist, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Float64, String
 from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
 
@@ -115,6 +115,24 @@ def test_trajectory_point(pattern: int, frame: str) -> None:
         check_bytes(cdr_pack.trajectory_point(frame, frame + "_joint").pack(stamp, v), msg)
 
 
+@pytest.mark.parametrize("pattern", range(len(VALUE_PATTERNS)))
+@pytest.mark.parametrize("frame", FRAMES)
+def test_imu(pattern: int, frame: str) -> None:
+    """No orientation (identity, ``orientation_covariance[0] = -1``), diagonal covariances (zero: ideal)."""
+    for variances in ((0.0, 0.0, 0.0, 0.0, 0.0, 0.0), (6e-5, 7e-5, 8e-5, 3e-3, 2e-3, 1.5)):
+        for stamp in STAMPS:
+            v = _values(pattern, 6)
+            msg = Imu()
+            msg.header.stamp, msg.header.frame_id = _time(stamp), frame
+            msg.orientation.w, msg.orientation_covariance[0] = 1.0, -1.0
+            w, a = msg.angular_velocity, msg.linear_acceleration
+            w.x, w.y, w.z, a.x, a.y, a.z = v
+            for i in range(3):
+                msg.angular_velocity_covariance[4 * i] = variances[i]
+                msg.linear_acceleration_covariance[4 * i] = variances[3 + i]
+            check_bytes(cdr_pack.imu(frame, variances[:3], variances[3:]).pack(stamp, v), msg)
+
+
 @pytest.mark.parametrize("rotors", [1, 4, 6, 8])
 @pytest.mark.parametrize("tilting", [False, True])
 @pytest.mark.parametrize("pattern", range(len(VALUE_PATTERNS)))
@@ -194,7 +212,8 @@ def test_joint_state_reader(names: list[str]) -> None:
     cdr_pack.odometry("world_ned", "base_link_frd"), cdr_pack.wrench_stamped("ab"), cdr_pack.quaternion_stamped(""),
     cdr_pack.float64(), cdr_pack.clock(), cdr_pack.trajectory_point("world_ned", "base_link_frd"),
     cdr_pack.joint_state("base_link_frd", ["rotor_1", "rotor_2", "tilt_1", "tilt_2"], 4, 4),
-    cdr_pack.joint_state("a", ["rotor_1"], 0, 1)], ids=lambda packer: f"{packer.value_count}_values")
+    cdr_pack.joint_state("a", ["rotor_1"], 0, 1), cdr_pack.imu("base_link_frd", (1e-4, 2e-4, 3e-4), (0.0, 0.0, 0.0))],
+    ids=lambda packer: f"{packer.value_count}_values_{packer.size}_bytes")
 def test_pack_rows_is_pack_for_each_row(packer: cdr_pack.StampedDoubles) -> None:
     """A block packed at once (the in-process recording) holds, row by row, the bytes of ``pack``."""
     import numpy as np

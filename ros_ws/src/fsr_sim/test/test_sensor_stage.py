@@ -65,9 +65,15 @@ def test_the_node_graph_measures_what_one_process_measures(tmp_path):
     import subprocess
     import sys
 
-    sets = [item for key in ("position_std=0.002", "attitude_std_deg=0.1", "velocity_bias_walk=0.01",
-                             "delay_steps=3", "rate_hz=250", "seed=5")
-            for item in ("--set", f"sensors.odometry.{key}")]
+    from fsr_bringup.analysis.load import load_flight
+
+    sets = [item for key in ("odometry.position_std=0.002", "odometry.attitude_std_deg=0.1",
+                             "odometry.velocity_bias_walk=0.01", "odometry.delay_steps=3", "odometry.rate_hz=250",
+                             "odometry.seed=5", "imu.gyro_noise_density=0.0003",
+                             "imu.accelerometer_noise_density=0.002", "imu.gyro_bias_walk=0.0001",
+                             "imu.accelerometer_bias_walk=0.001", "imu.delay_s=0.002", "imu.rate_hz=500",
+                             "imu.gyro_initial_bias=[0.01, 0, 0]", "imu.seed=5")
+            for item in ("--set", f"sensors.{key}")]
     out = {}
     for label, extra in (("graph", []), ("local", ["--in-process"])):
         out[label] = tmp_path / f"{label}.mcap"
@@ -76,9 +82,13 @@ def test_the_node_graph_measures_what_one_process_measures(tmp_path):
                              env={**os.environ, "MPLBACKEND": "Agg"}, capture_output=True, text=True, timeout=180)
         assert run.returncode == 0, run.stdout + run.stderr
     graph, local = open_recording(out["graph"]), open_recording(out["local"])
-    for topic in ("/odom", "/wrench_cmd", "/wrench_estimate"):
+    for topic in ("/odom", "/imu", "/wrench_cmd", "/wrench_estimate"):
         assert graph.count(topic) == 301
         assert [d for _, d in graph.raw(topic)] == [d for _, d in local.raw(topic)], topic
+    flown = load_flight(out["graph"]).imu  # the IMU's numbers to 1e-9 (here: bit for bit) from the graph's bytes
+    run = fly_in_process(load_scenario("ex4_geometric", ["duration=0.3", *sets[1::2]]))
+    assert np.abs(flown.linear_acceleration - run.imu_specific_force_measured).max() < 1e-9
+    assert np.abs(flown.angular_velocity - run.imu_angular_velocity_measured).max() < 1e-9
 
 
 def test_a_low_pass_on_the_measured_acceleration_flies_the_geometric_law_through_velocity_noise():

@@ -11,7 +11,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_bringup.analysis.load import Attitude, Odometry, RecordedFlight, Reference, RotorCommand, Scalar, Wrench
+from fsr_bringup.analysis.load import (
+    Attitude,
+    Imu,
+    Odometry,
+    RecordedFlight,
+    Reference,
+    RotorCommand,
+    Scalar,
+    Wrench,
+)
 
 
 def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun (import cycle)
@@ -39,6 +48,8 @@ def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun
         flight.rotor_cmd = RotorCommand(stamp_ns, t, run.rotor_speeds, run.tilt_angles)
         if run.actuator_dynamics:
             flight.rotor_state = RotorCommand(stamp_ns, t, run.actual_rotor_speeds, run.actual_tilt_angles)
+    if run.imu_specific_force_measured is not None:
+        flight.imu = Imu(stamp_ns, t, run.imu_angular_velocity_measured, run.imu_specific_force_measured)
     if run.estimate_force_body is not None:
         flight.wrench_estimate = Wrench(stamp_ns, t, run.estimate_force_body, run.estimate_torque_body)
         flight.mass_estimate = Scalar(stamp_ns, t, run.mass_estimate)

@@ -26,6 +26,7 @@ from fsr_sim.config.validation import ConfigError
 from fsr_sim.contract import (
     ATTITUDE_CMD,
     CLOCK,
+    IMU,
     MASS_ESTIMATE,
     ODOM,
     REFERENCE,
@@ -95,6 +96,16 @@ class Wrench:
 
 
 @dataclass
+class Imu:
+    """``imu``: what the IMU measured, body FRD."""
+
+    stamp_ns: np.ndarray
+    t: np.ndarray
+    angular_velocity: np.ndarray  # (n, 3) [rad/s]
+    linear_acceleration: np.ndarray  # (n, 3) specific force [m/s^2]
+
+
+@dataclass
 class RotorCommand:
     stamp_ns: np.ndarray
     t: np.ndarray
@@ -131,6 +142,7 @@ class RecordedFlight:
     wrench_estimate: Wrench | None = None
     rotor_cmd: RotorCommand | None = None
     rotor_state: RotorCommand | None = None  # the rotors' actual speeds and tilts (only with actuator dynamics)
+    imu: Imu | None = None  # the IMU's measurements (only with an IMU)
     mass_estimate: Scalar | None = None
     sim_status: list[SimStatus] = field(default_factory=list)
     message_counts: dict[str, int] = field(default_factory=dict)
@@ -197,12 +209,13 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
             setattr(flight, name, loader(recording, topic))
         except (LayoutError, KeyError, ValueError) as error:
             notes.append(f"cannot decode {topic}: {error}")
-    rotor_state = resolve(ROTOR_STATE.name, namespace)  # published only with actuator dynamics: no note without
-    if recording.has(rotor_state) and recording.count(rotor_state):
-        try:
-            flight.rotor_state = _rotor_command(recording, rotor_state)
-        except (LayoutError, KeyError, ValueError) as error:
-            notes.append(f"cannot decode {rotor_state}: {error}")
+    for contract_topic, loader in ((ROTOR_STATE, _rotor_command), (IMU, _imu)):  # published only with actuator
+        topic = resolve(contract_topic.name, namespace)  # dynamics, with an IMU: no note without
+        if recording.has(topic) and recording.count(topic):
+            try:
+                setattr(flight, contract_topic.name, loader(recording, topic))
+            except (LayoutError, KeyError, ValueError) as error:
+                notes.append(f"cannot decode {topic}: {error}")
     status_topic = resolve(SIM_STATUS.name, namespace)
     if recording.has(status_topic):
         flight.sim_status = _statuses(recording, status_topic, notes)
@@ -299,6 +312,11 @@ def _attitude(recording: Recording, topic: str) -> Attitude:
 def _wrench(recording: Recording, topic: str) -> Wrench:
     stamp, c = _columns(recording, topic)
     return Wrench(stamp, stamp / NS_PER_S, _vector(c, "wrench.force"), _vector(c, "wrench.torque"))
+
+
+def _imu(recording: Recording, topic: str) -> Imu:
+    stamp, c = _columns(recording, topic)
+    return Imu(stamp, stamp / NS_PER_S, _vector(c, "angular_velocity"), _vector(c, "linear_acceleration"))
 
 
 def _rotor_command(recording: Recording, topic: str) -> RotorCommand:

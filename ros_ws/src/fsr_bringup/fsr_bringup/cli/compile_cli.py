@@ -135,6 +135,7 @@ def _python_api() -> None:
     plant.step()
     plant.divergence()
     plant.external_wrench()
+    plant.specific_force()
     plant.thrust_ratios()
     force, torque = np.array((0.0, 0.0, -12.0)), np.array((0.01, 0.0, 0.0))
     for actuation in (FixedRotorActuation(quad), TiltingActuation(tilting, objective="min_peak_speed"),

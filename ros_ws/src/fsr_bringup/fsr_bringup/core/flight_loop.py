@@ -3,9 +3,11 @@ contract, for many steps per call.
 
 Per step ``k`` (``t_k = k T``, stamps in integer ns, ``t_k = stamp * 1e-9`` as the nodes compute it):
 
-1. the simulator's published state (the ``odom`` and ``wrench_truth`` row of :mod:`fsr_sim.core.odometry`)
-   is read back by the controller (:func:`fsr_sim.core.odometry.read_odometry`),
-   the same arithmetic as over DDS, so a flight here and in the graph agree;
+1. the simulator's published state (the ``odom``, ``wrench_truth`` and, with an IMU, ``imu`` row of
+   :mod:`fsr_sim.core.odometry`: ``published[k]``, ``imu``'s numbers from ``IMU_ANGULAR_VELOCITY`` on, the
+   rotors' actual state in ``actuators[k]``) is read back by the controller
+   (:func:`fsr_sim.core.odometry.read_odometry`), the same arithmetic as over DDS, so a flight here and in the
+   graph agree;
 2. the controller's tick (:func:`fsr_control.core.controller.controller_tick`) for the state stamped ``t_k``;
 3. the estimator (:func:`fsr_estimation.core.observer_step.estimate_from_state`) on the state and the
    commanded wrench of ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd``;
@@ -70,9 +72,9 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
               controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
               observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
               states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
-    """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (19),
-    ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``), ``control`` (the controller's
-    output row) and ``estimates`` (7) gets what step ``k`` published.
+    """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (the row of
+    :mod:`fsr_sim.core.odometry`), ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``),
+    ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published.
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
     ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""

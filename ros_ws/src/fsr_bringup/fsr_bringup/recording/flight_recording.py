@@ -3,9 +3,9 @@
 Per published state ``t_k`` the CDR bytes the node graph records, packed from the flight loop's arrays by
 the nodes' own templates (:meth:`fsr_sim.ros.cdr_pack.StampedDoubles.pack_rows`, many steps at once):
 
-* simulator: ``odom``, ``wrench_truth`` (the published rows, :class:`fsr_sim.nodes.state_packets.StatePackets`'
-  templates), ``rotor_state`` (with actuator dynamics: the rotors' actual speeds and tilts) and ``sim_status``
-  (running at the start, the final state at the end);
+* simulator: ``odom``, ``wrench_truth`` and, with an IMU, ``imu`` (the published rows,
+  :class:`fsr_sim.nodes.state_packets.StatePackets`' templates), ``rotor_state`` (with actuator dynamics: the
+  rotors' actual speeds and tilts) and ``sim_status`` (running at the start, the final state at the end);
 * controller: ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall``, ``reference``,
   ``attitude_cmd``, ``wrench_desired`` (slices of the controller's output rows,
   :class:`fsr_control.nodes.packets.ControllerPackets`);
@@ -21,10 +21,12 @@ as soon as it is flown.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fsr_sim.contract import (
+    IMU,
     MASS_ESTIMATE,
     ODOM,
     ROTOR_STATE,
@@ -35,6 +37,9 @@ from fsr_sim.contract import (
     recorded_topics,
 )
 
+if TYPE_CHECKING:
+    from fsr_sim.core.sensors import ImuParams
+
 TOPIC_TYPES = {"/" + name: type_name for name, type_name in recorded_topics().items()}
 BLOCK_STEPS = 1000  # steps packed and written at once
 
@@ -43,9 +48,11 @@ class InProcessRecorder:
     """Streams one in-process flight into a standard ROS 2 MCAP file (``close()`` finishes the file)."""
 
     def __init__(self, path: Path, scenario_yaml: str, rotors: bool, rotor_count: int = 0,
-                 tilting: bool = False, topics: frozenset[str] | None = None, rotor_state: bool = False) -> None:
+                 tilting: bool = False, topics: frozenset[str] | None = None, rotor_state: bool = False,
+                 imu: ImuParams | None = None) -> None:
         """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all);
-        ``rotor_state``: the plant has actuator dynamics (the simulator then publishes ``rotor_state``)."""
+        ``rotor_state``: the plant has actuator dynamics (the simulator then publishes ``rotor_state``);
+        ``imu``: the plant's IMU stage (enabled: the simulator publishes ``imu``)."""
         from fsr_bringup.recording.derived import DerivedTopics
         from fsr_bringup.recording.metadata import scenario_from_text
         from fsr_control.nodes.packets import ControllerPackets
@@ -66,7 +73,8 @@ class InProcessRecorder:
         self.rotor_state = rotor_state
         self.rotor_count = rotor_count
         self.tilting = tilting
-        state_packets = StatePackets(rotor_count if rotor_state else 0, tilting)
+        self.imu = imu is not None and imu.enabled
+        state_packets = StatePackets(rotor_count if rotor_state else 0, tilting, imu)
         self._templates = {"/" + topic: template for packets in (state_packets, self.controller_packets,
                                                                  EstimatePackets())
                            for topic, template in packets.templates.items()}
@@ -75,21 +83,23 @@ class InProcessRecorder:
 
     def write_steps(self, stamps_ns: np.ndarray, published: np.ndarray, control: np.ndarray,
                     estimates: np.ndarray | None, actuators: np.ndarray | None = None) -> None:
-        """Record everything published for the states stamped ``stamps_ns`` (K,): their published rows (K, 19),
+        """Record everything published for the states stamped ``stamps_ns`` (K,): their published rows (K, width),
         the controller's output rows (K, width), the estimates (K, 7) or None (estimator off) and the rotors'
         actual speeds and tilts (K, 2n) (``rotor_state``, recorded with actuator dynamics)."""
-        from fsr_sim.core.odometry import ODOM_SIZE
+        from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, IMU_END, ODOM_SIZE, WRENCH_TRUTH_END
         from fsr_sim.nodes.state_packets import joint_values
 
         for start in range(0, len(stamps_ns), BLOCK_STEPS):
             block = slice(start, start + BLOCK_STEPS)
             columns = [("/" + ODOM.name, published[block, :ODOM_SIZE]),
-                       ("/" + WRENCH_TRUTH.name, published[block, ODOM_SIZE:])]
+                       ("/" + WRENCH_TRUTH.name, published[block, ODOM_SIZE:WRENCH_TRUTH_END])]
             if self.rotor_state:
                 n = self.rotor_count
                 rows = actuators[block]
                 columns.append(("/" + ROTOR_STATE.name, joint_values(rows[:, :n], rows[:, n:] if self.tilting
                                                                      else None)))
+            if self.imu:
+                columns.append(("/" + IMU.name, published[block, IMU_ANGULAR_VELOCITY:IMU_END]))
             columns += [("/" + topic, values) for topic, values in self.controller_packets.values(control[block])]
             if estimates is not None:
                 columns += [("/" + WRENCH_ESTIMATE.name, estimates[block, :6]),

@@ -24,7 +24,14 @@ from fsr_control.core.flatness import ATTITUDE_ERRORS
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
 from fsr_sim.contract import DIVERGED, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK, FINISHED, RUNNING, STOPPED
-from fsr_sim.core.odometry import PUBLISHED_SIZE, TRUTH_FORCE, TRUTH_TORQUE
+from fsr_sim.core.odometry import (
+    IMU_ANGULAR_VELOCITY,
+    IMU_LINEAR_ACCELERATION,
+    IMU_TRUE_LINEAR_ACCELERATION,
+    PUBLISHED_SIZE,
+    TRUTH_FORCE,
+    TRUTH_TORQUE,
+)
 from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import process_age
@@ -60,6 +67,12 @@ class FlightRun:
         The true external wrench, body frame (as ``wrench_truth``) [N, N m].
     estimate_force_body, estimate_torque_body, mass_estimate : numpy.ndarray or None
         The estimator's outputs (None when it is disabled).
+    imu_angular_velocity_measured, imu_specific_force_measured : numpy.ndarray, shape (K+1, 3), or None
+        What ``imu`` carries (the IMU's noise, bias, delay and rate on the true values), body FRD [rad/s],
+        [m/s^2]; None without an IMU (``sensors.imu``).
+    imu_specific_force_true : numpy.ndarray, shape (K+1, 3), or None
+        The true specific force ``R^T (p_ddot - g e3)`` [m/s^2], body FRD, of each state (the true angular
+        velocity is :attr:`angular_velocity`); None without an IMU.
     end_reason : str
         ``finished``, ``diverged`` or ``stopped`` (interrupted); ``reason`` says why.
     compensation : dict
@@ -104,6 +117,9 @@ class FlightRun:
     simulation: Any = None  # the flight's validated plant side (fsr_sim.config.scenario.SimulationConfig)
     estimator: Any = None  # its estimator config (fsr_estimation.config.estimator_config.EstimatorConfig)
     actuator_dynamics: bool = False  # the rotors lag their commands (the graph then publishes rotor_state)
+    imu_angular_velocity_measured: np.ndarray | None = None  # (K+1, 3) imu's angular velocity [rad/s], body
+    imu_specific_force_measured: np.ndarray | None = None  # (K+1, 3) imu's linear acceleration [m/s^2], body
+    imu_specific_force_true: np.ndarray | None = None  # (K+1, 3) R^T (p_ddot - g e3) [m/s^2], body
 
     @property
     def sim_time(self) -> float:
@@ -188,6 +204,11 @@ class FlightSetup:
         """The rotors lag their commands (the graph then publishes ``rotor_state``)."""
         return self.rotors and has_actuator_dynamics(self.plant.params)
 
+    @property
+    def imu(self) -> bool:
+        """The vehicle has an IMU (the graph then publishes ``imu``)."""
+        return self.simulation.imu.enabled
+
     def fly(self, first: int, last: int) -> tuple[int, int, int]:
         """Steps ``first..last`` in the compiled loop: ``(outcome, k, detail)`` of ``fly_steps``."""
         a = self.arrays
@@ -223,7 +244,7 @@ class FlightArrays:
     flights of a sweep: ``fits``)."""
 
     states: np.ndarray  # (size, 13)
-    published: np.ndarray  # (size, PUBLISHED_SIZE): odom and wrench_truth
+    published: np.ndarray  # (size, PUBLISHED_SIZE): odom, wrench_truth and imu (fsr_sim.core.odometry)
     actuators: np.ndarray  # (size, 2 rotors): the rotors' actual speeds and tilts (rotor_state)
     control: np.ndarray  # (size, controller output): the controller's output row
     estimates: np.ndarray  # (size, 7)
@@ -281,7 +302,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
         from fsr_bringup.recording.flight_recording import InProcessRecorder
 
         recorder = InProcessRecorder(Path(recording), setup.scenario.dump(), setup.rotors, n, sim.vehicle.has_servos,
-                                     record_topics, setup.actuator_dynamics)
+                                     record_topics, setup.actuator_dynamics, setup.plant.params.sensors.imu)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
@@ -337,6 +358,9 @@ def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, co
     def own(values: np.ndarray) -> np.ndarray:
         return values.copy() if copy else values
 
+    def imu(at: int) -> np.ndarray | None:
+        return own(published[:, at:at + 3]) if setup.imu else None
+
     failures = {DIVERGED: [f"flight diverged: {reason}"], STOPPED: [f"flight interrupted ({reason})"]}
     c = control_layout
     return FlightRun(
@@ -362,5 +386,7 @@ def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, co
         plan_adjustments=[item.text() for item in controller.plan_adjustments],
         reference_angular_velocity_world=columns(c.REFERENCE_ANGULAR_VELOCITY_WORLD),
         wrench_shortfall=columns(c.SHORTFALL, 6), simulation=setup.simulation, estimator=setup.estimation,
-        actuator_dynamics=setup.actuator_dynamics,
+        actuator_dynamics=setup.actuator_dynamics, imu_angular_velocity_measured=imu(IMU_ANGULAR_VELOCITY),
+        imu_specific_force_measured=imu(IMU_LINEAR_ACCELERATION),
+        imu_specific_force_true=imu(IMU_TRUE_LINEAR_ACCELERATION),
     )

@@ -22,6 +22,7 @@ import numpy as np
 import yaml
 
 from fsr_sim.config.plant_sections import disturbance_from_section, environment_from_section
+from fsr_sim.config.sensor_sections import sensors_from_section
 from fsr_sim.config.validation import (
     ConfigError,
     Section,
@@ -34,7 +35,7 @@ from fsr_sim.config.vehicle_file import dynamics_and_drag, load_vehicle_file
 from fsr_sim.model.disturbances import DisturbanceProfile
 from fsr_sim.model.environment import Environment
 from fsr_sim.model.plant import Plant
-from fsr_sim.model.sensors import OdometryNoise
+from fsr_sim.model.sensors import ImuModel, OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.turbulence import DrydenTurbulence
 from fsr_sim.model.vehicle import Vehicle
@@ -200,6 +201,7 @@ class SimulationConfig:
     failsafe: str = "hold"
     real_time_factor: float = 1.0
     odometry_noise: OdometryNoise = field(default_factory=OdometryNoise)
+    imu: ImuModel = field(default_factory=ImuModel)  # the vehicle's IMU (imu published when enabled)
 
     @property
     def control_period(self) -> float:
@@ -285,7 +287,7 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
     failsafe = lockstep.string("failsafe", "hold", choices=("hold", "cut"))
     real_time_factor = lockstep.number("real_time_factor", 1.0, strictly_positive=True)
     lockstep.reject_unknown()
-    odometry_noise = _odometry_noise(root.section("sensors"), physics_dt * substeps)
+    odometry_noise, imu = sensors_from_section(root.section("sensors"), physics_dt * substeps)
     root.reject_unknown(known=(*PLANT_KEYS, *registered_sections()))
 
     duration_steps = duration / (physics_dt * substeps)
@@ -308,36 +310,8 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
         failsafe=failsafe,
         real_time_factor=real_time_factor,
         odometry_noise=odometry_noise,
+        imu=imu,
     )
-
-
-def _odometry_noise(sensors: Section, period: float) -> OdometryNoise:
-    """``sensors.odometry``: what ``odom`` measures (:class:`fsr_sim.model.sensors.OdometryNoise`; angles in
-    degrees here, the rate in Hz: a whole divisor of the control rate ``1 / period``)."""
-    odometry = sensors.section("odometry")
-    every = 1
-    if odometry.has("rate_hz"):
-        rate = odometry.number("rate_hz", strictly_positive=True)
-        every = round(1.0 / (period * rate))
-        if every < 1 or abs(every * period * rate - 1.0) > 1e-9:
-            raise odometry.error("rate_hz", f"must divide the control rate {1.0 / period:g} Hz by a whole number, "
-                                            f"got {rate:g}")
-    noise = OdometryNoise(
-        position_std=odometry.number("position_std", 0.0, minimum=0.0),
-        attitude_std=np.deg2rad(odometry.number("attitude_std_deg", 0.0, minimum=0.0)),
-        velocity_std=odometry.number("velocity_std", 0.0, minimum=0.0),
-        angular_velocity_std=odometry.number("angular_velocity_std", 0.0, minimum=0.0),
-        seed=odometry.integer("seed", 0, minimum=0, maximum=2**32 - 1),
-        position_bias_walk=odometry.number("position_bias_walk", 0.0, minimum=0.0),
-        attitude_bias_walk=np.deg2rad(odometry.number("attitude_bias_walk_deg", 0.0, minimum=0.0)),
-        velocity_bias_walk=odometry.number("velocity_bias_walk", 0.0, minimum=0.0),
-        angular_velocity_bias_walk=odometry.number("angular_velocity_bias_walk", 0.0, minimum=0.0),
-        delay_steps=odometry.integer("delay_steps", 0, minimum=0),
-        every_steps=every,
-    )
-    odometry.reject_unknown()
-    sensors.reject_unknown()
-    return noise
 
 
 def plant_from_config(config: SimulationConfig) -> Plant:
@@ -347,5 +321,5 @@ def plant_from_config(config: SimulationConfig) -> Plant:
         config.plant_vehicle, dt=config.physics_dt, actuation=config.actuation, position=initial.position,
         rotation=initial.rotation, velocity=initial.velocity, angular_velocity=initial.angular_velocity,
         environment=config.environment, disturbances=config.disturbances, substeps=config.physics_substeps,
-        odometry_noise=config.odometry_noise, turbulence=config.turbulence,
+        odometry_noise=config.odometry_noise, turbulence=config.turbulence, imu=config.imu,
     )

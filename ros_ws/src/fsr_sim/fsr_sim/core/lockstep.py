@@ -12,18 +12,21 @@ from __future__ import annotations
 
 import math
 
+from fsr_sim.core.imu import publish_imu
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.odometry import publish_state
 from fsr_sim.core.plant import STEP_INDEX, PlantParams, PlantState, divergence, plant_external_wrench, plant_step
-from fsr_sim.core.sensors import measure
+from fsr_sim.core.sensors import measure_odometry
 
 
 @jit_inline
 def publish(params: PlantParams, state: PlantState, out) -> None:  # noqa: ANN001
-    """The published row (19,) of the current state: ``odom`` as the sensor stage measures it
-    (:mod:`fsr_sim.core.sensors`; the true state when it is off) and the true ``wrench_truth``."""
+    """The published row (:data:`fsr_sim.core.odometry.PUBLISHED_SIZE`,) of the current state: ``odom`` as the
+    sensor stage measures it (:mod:`fsr_sim.core.sensors`; the true state when it is off), the true
+    ``wrench_truth`` and, with an IMU, ``imu`` and its true values (:mod:`fsr_sim.core.imu`)."""
     publish_state(state.x, plant_external_wrench(params, state), out)
-    measure(params.sensors, state.sensor_memory, int(state.status[STEP_INDEX]), out)
+    measure_odometry(params.sensors.odometry, state.sensor_memory, int(state.status[STEP_INDEX]), out)
+    publish_imu(params, state, out)
 
 
 @jit_inline
@@ -37,8 +40,8 @@ def actuator_row(state: PlantState, out) -> None:  # noqa: ANN001
 
 @jit_inline
 def advance(params: PlantParams, state: PlantState, out) -> int:  # noqa: ANN001
-    """Step the plant one control period with the held command; publish the new state into ``out`` (19,)
-    if it is finite. Returns the divergence code (``RUNNING``: go on)."""
+    """Step the plant one control period with the held command; publish the new state into ``out`` (the
+    published row) if it is finite. Returns the divergence code (``RUNNING``: go on)."""
     plant_step(params, state)
     code = divergence(params, state)
     x = state.x

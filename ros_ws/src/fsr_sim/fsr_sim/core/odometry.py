@@ -1,13 +1,16 @@
 """The state as the simulator publishes it and as the nodes read it back (compiled core).
 
-The published row holds the numbers of ``odom`` and ``wrench_truth`` in their messages' field order
+The published row holds the numbers of ``odom``, ``wrench_truth`` and ``imu`` in their messages' field order
 (:data:`PUBLISHED_SIZE` float64), so the simulator node, the in-process loop and the recording all use the
 same values:
 
 * ``odom``: position world NED [m]; orientation the unit quaternion ``[x, y, z, w]`` body -> world with
   ``w >= 0``; twist in the body frame (ROS convention): linear ``R^T v_world`` [m/s], angular ``omega_b``
   [rad/s];
-* ``wrench_truth``: the true external force in the body frame ``R^T f_ext,world`` [N] and torque [N m].
+* ``wrench_truth``: the true external force in the body frame ``R^T f_ext,world`` [N] and torque [N m];
+* ``imu`` (with an IMU, :mod:`fsr_sim.core.imu`; else left as it is): the measured angular velocity [rad/s]
+  and specific force ``R^T (p_ddot - g e3)`` [m/s^2], body FRD, then the same two true (not published: the
+  truth the logs compare the measurement with).
 
 Read back (:func:`read_odometry`): ``R`` from that quaternion and ``v_world = R v_body``.
 """
@@ -20,13 +23,17 @@ from fsr_sim.core.so3 import mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
 ODOM_POSITION, ODOM_QUATERNION, ODOM_VELOCITY, ODOM_ANGULAR_VELOCITY = 0, 3, 7, 10
 ODOM_SIZE = 13
 TRUTH_FORCE, TRUTH_TORQUE = 13, 16
-PUBLISHED_SIZE = 19
+WRENCH_TRUTH_END = 19
+IMU_ANGULAR_VELOCITY, IMU_LINEAR_ACCELERATION = 19, 22  # imu as published (measured)
+IMU_TRUE_ANGULAR_VELOCITY, IMU_TRUE_LINEAR_ACCELERATION = 25, 28  # the true values (not published)
+IMU_END = 25
+PUBLISHED_SIZE = 31
 
 
 @jit
 def publish_state(x, external: tuple, out) -> None:  # noqa: ANN001
-    """The published row (19,) of a plant state ``x`` (13,) with the true external wrench (force world [N],
-    torque body [N m])."""
+    """The ``odom`` and ``wrench_truth`` numbers (the first 19 of the published row) of a plant state ``x`` (13,)
+    with the true external wrench (force world [N], torque body [N m])."""
     qx, qy, qz, qw = x[6], x[7], x[8], x[9]
     if qw < 0.0:
         qx, qy, qz, qw = -qx, -qy, -qz, -qw

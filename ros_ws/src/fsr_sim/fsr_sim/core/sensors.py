@@ -1,18 +1,24 @@
-"""The sensor stage between the true state and ``odom`` (compiled core): what the simulator publishes as its
-measurement of the state, in the simulator node and the in-process loop alike (:func:`fsr_sim.core.lockstep.
-publish` applies it to the published row).
+"""The sensor stages between the true plant and what the simulator publishes (compiled core): ``odom``'s
+measurement of the state and the IMU's of the specific force and angular rate, in the simulator node and the
+in-process loop alike (:func:`fsr_sim.core.lockstep.publish` applies them to the published row).
 
-The model (:func:`measure`, :class:`SensorParams`): white Gaussian noise per published state, per channel, plus a
-bias per channel that walks randomly, on position world NED [m], attitude as a body rotation vector ``n`` [rad]
-(``R_meas = R Exp(n)``), body linear velocity [m/s] and body angular velocity [rad/s]; then a delay (in
-published states) and a lower rate (a new measurement every ``every`` states, held between). With everything
-zero (the default) the stage is off and ``odom`` is the true state, bit for bit. ``wrench_truth`` stays true.
+Odometry (:func:`measure_odometry`, :class:`OdometryParams`): white Gaussian noise per published state, per
+channel, plus a bias per channel that walks randomly, on position world NED [m], attitude as a body rotation
+vector ``n`` [rad] (``R_meas = R Exp(n)``), body linear velocity [m/s] and body angular velocity [rad/s]; then
+a delay (in published states) and a lower rate (a new measurement every ``every`` states, held between). With
+everything zero (the default) the stage is off and ``odom`` is the true state, bit for bit. ``wrench_truth``
+stays true.
+
+IMU (:func:`measure_imu`, :class:`ImuParams`): the true angular rate and specific force
+(:mod:`fsr_sim.core.imu`) plus white Gaussian noise per sample and a bias per axis that starts at its initial
+value and walks randomly, then a delay and a rate, as for the odometry (docs/model.md §3.9).
 
 The numbers come from a counter-based generator: the standard normal of (seed, step, channel) is a 32-bit integer
 hash of the three (two uniforms, Box-Muller), so it depends on nothing else - not on who computes it, in which
-process, or in which order - and the node graph and the in-process loop publish the same noisy ``odom``, compiled
-and under CPython. (The hash is ``lowbias32``; integer products are masked to 32 bits, so int64 wrap-around in
-compiled code and Python's unbounded integers give the same bits.)
+process, or in which order - and the node graph and the in-process loop publish the same noisy ``odom`` and
+``imu``, compiled and under CPython. (The hash is ``lowbias32``; integer products are masked to 32 bits, so
+int64 wrap-around in compiled code and Python's unbounded integers give the same bits.) The odometry uses the
+channels 0 .. 23 and the IMU 24 .. 35, so one seed gives independent odometry and IMU noise.
 """
 
 from __future__ import annotations
@@ -20,13 +26,17 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+import numpy as np
+
 from fsr_sim.core.jit import jit, jit_inline
 
 MASK32 = 0xFFFFFFFF
 POSITION, ATTITUDE, VELOCITY, ANGULAR_VELOCITY = 0, 3, 6, 9  # first channel of each noise group
 
 
-class SensorParams(NamedTuple):
+class OdometryParams(NamedTuple):
+    """``odom``'s sensor stage (:func:`measure_odometry`)."""
+
     enabled: bool  # any standard deviation or bias walk > 0
     seed: int  # 0 .. 2^32 - 1
     position_std: float  # [m], world NED
@@ -39,13 +49,50 @@ class SensorParams(NamedTuple):
     every: int  # a new measurement every this many published states (the others hold it)
 
 
-MEMORY_STEP, MEMORY_BIAS, MEMORY_HELD, MEMORY_HISTORY = 0, 1, 13, 26  # sensor memory layout (see measure)
-BIAS_CHANNEL = 12  # the bias walks' generator channels: 12 .. 23
+MEMORY_STEP, MEMORY_BIAS, MEMORY_HELD, MEMORY_HISTORY = 0, 1, 13, 26  # odometry's memory (measure_odometry)
+BIAS_CHANNEL = 12  # the odometry's bias walks' generator channels: 12 .. 23
+
+IMU_SIZE = 6  # an IMU sample: angular velocity [rad/s], then specific force [m/s^2], body FRD (imu's field order)
+IMU_NOISE_CHANNEL, IMU_BIAS_CHANNEL = 24, 30  # the IMU's generator channels: white noise 24 .. 29, walks 30 .. 35
+IMU_STEP, IMU_BIAS, IMU_HELD, IMU_HISTORY = 0, 1, 7, 13  # the IMU's memory (measure_imu), after the odometry's
 
 
-def memory_size(delay: int) -> int:
-    """Floats of :func:`measure`'s memory for a delay of ``delay`` states."""
+class ImuParams(NamedTuple):
+    """The IMU's sensor stage (:func:`measure_imu`); each 6-tuple is gyro x y z, then accelerometer x y z."""
+
+    enabled: bool  # imu is published (its row computed)
+    noisy: bool  # any noise, bias walk or initial bias (else the true values, delayed and held)
+    seed: int  # 0 .. 2^32 - 1
+    noise_std: tuple  # white noise per sample: density sqrt(rate) [rad/s], [m/s^2]
+    walk_std: tuple  # bias increment per published state: walk sqrt(period) [rad/s], [m/s^2]
+    initial_bias: tuple  # [rad/s], [m/s^2]
+    delay: int  # published states the measurement is late by
+    every: int  # a new sample every this many published states (the others hold it)
+
+
+class SensorParams(NamedTuple):
+    """Both sensor stages (``PlantParams.sensors``)."""
+
+    odometry: OdometryParams
+    imu: ImuParams
+
+
+@jit
+def odometry_memory_size(delay: int) -> int:
+    """Floats of :func:`measure_odometry`'s memory for a delay of ``delay`` states."""
     return MEMORY_HISTORY + 13 * (delay + 1)
+
+
+def memory_size(params: SensorParams) -> int:
+    """Floats of both stages' memory (``PlantState.sensor_memory``): the odometry's, then the IMU's."""
+    return odometry_memory_size(params.odometry.delay) + IMU_HISTORY + IMU_SIZE * (params.imu.delay + 1)
+
+
+def reset_memory(params: SensorParams, memory: np.ndarray) -> None:
+    """The memory of both stages at the start of a flight (no state measured yet)."""
+    memory[:] = 0.0
+    memory[MEMORY_STEP] = -1.0
+    memory[odometry_memory_size(params.odometry.delay) + IMU_STEP] = -1.0
 
 
 @jit
@@ -69,7 +116,7 @@ def standard_normal(seed: int, step: int, channel: int) -> float:
 
 
 @jit_inline
-def sense(params: SensorParams, step: int, out, bias) -> None:  # noqa: ANN001
+def sense(params: OdometryParams, step: int, out, bias) -> None:  # noqa: ANN001
     """Turn the true published ``odom`` (the first 13 numbers of ``out``, :mod:`fsr_sim.core.odometry`) of step
     ``step`` into the measured one: white noise plus ``bias`` (12,: position, attitude rotation vector,
     velocity, angular velocity); nothing when the stage is off."""
@@ -100,9 +147,9 @@ def sense(params: SensorParams, step: int, out, bias) -> None:  # noqa: ANN001
 
 
 @jit_inline
-def measure(params: SensorParams, memory, step: int, out) -> None:  # noqa: ANN001
-    """The whole sensor stage on the published row ``out`` of step ``step`` (``memory``: :func:`memory_size`
-    floats, ``memory[MEMORY_STEP]`` = -1 at the start):
+def measure_odometry(params: OdometryParams, memory, step: int, out) -> None:  # noqa: ANN001
+    """The whole odometry stage on the published row ``out`` of step ``step`` (``memory``:
+    :func:`odometry_memory_size` floats, ``memory[MEMORY_STEP]`` = -1 at the start):
 
     1. bias random walks: per step, ``b <- b + walk sqrt(T) n`` per channel (once per step, however often the
        step is published), then white noise plus the bias (:func:`sense`);
@@ -136,3 +183,43 @@ def measure(params: SensorParams, memory, step: int, out) -> None:  # noqa: ANN0
         else:
             for i in range(13):
                 out[i] = memory[MEMORY_HELD + i]
+
+
+@jit_inline
+def measure_imu(params: ImuParams, memory, step: int, out) -> None:  # noqa: ANN001
+    """The IMU stage on ``out`` (6,): the true angular velocity [rad/s] and specific force [m/s^2] of step
+    ``step`` in, what ``imu`` publishes out (``memory``: the IMU's part of the sensor memory,
+    ``memory[IMU_STEP]`` = -1 at the start):
+
+    1. bias: its initial value at the first step, then per step ``b <- b + walk sqrt(T) n`` per axis; white
+       noise ``density sqrt(rate) n`` plus the bias (nothing of either for an ideal IMU);
+    2. delay: the sample published at step ``k`` is the measurement of step ``k - delay`` (of step 0 before);
+    3. rate: a new sample every ``every`` steps, held in between."""
+    if params.noisy:
+        if step > memory[IMU_STEP]:
+            first = memory[IMU_STEP] < 0.0
+            for i in range(IMU_SIZE):
+                if first:
+                    memory[IMU_BIAS + i] = params.initial_bias[i]
+                elif params.walk_std[i] > 0.0:
+                    memory[IMU_BIAS + i] += params.walk_std[i] * standard_normal(params.seed, step,
+                                                                                 IMU_BIAS_CHANNEL + i)
+            memory[IMU_STEP] = step
+        for i in range(IMU_SIZE):
+            out[i] += (params.noise_std[i] * standard_normal(params.seed, step, IMU_NOISE_CHANNEL + i)
+                       + memory[IMU_BIAS + i])
+    if params.delay > 0:
+        slots = params.delay + 1
+        write = IMU_HISTORY + IMU_SIZE * (step % slots)
+        for i in range(IMU_SIZE):
+            memory[write + i] = out[i]
+        read = IMU_HISTORY + (IMU_SIZE * ((step - params.delay) % slots) if step >= params.delay else 0)
+        for i in range(IMU_SIZE):
+            out[i] = memory[read + i]
+    if params.every > 1:
+        if step % params.every == 0:
+            for i in range(IMU_SIZE):
+                memory[IMU_HELD + i] = out[i]
+        else:
+            for i in range(IMU_SIZE):
+                out[i] = memory[IMU_HELD + i]

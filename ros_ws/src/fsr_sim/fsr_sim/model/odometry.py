@@ -26,9 +26,9 @@ NO_EXTERNAL_WRENCH = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
 
 def published_row(state_vector: np.ndarray, external: tuple | None = None) -> np.ndarray:
-    """The published row (19,) of :mod:`fsr_sim.core.odometry`: ``odom`` then ``wrench_truth`` numbers, for a
-    state (13,) and the true external wrench (force world [N], torque body [N m]; None: zero)."""
-    row = np.empty(core.PUBLISHED_SIZE)
+    """A published row of :mod:`fsr_sim.core.odometry`: ``odom`` then ``wrench_truth`` numbers (no IMU: zero),
+    for a state (13,) and the true external wrench (force world [N], torque body [N m]; None: zero)."""
+    row = np.zeros(core.PUBLISHED_SIZE)
     if external is None:
         external = NO_EXTERNAL_WRENCH
     else:

@@ -36,10 +36,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from fsr_sim.contract import body_force_of_thrust, thrust_of
+from fsr_sim.core import imu as core_imu
 from fsr_sim.core import plant as core
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.core.rigid_body import STATE_SIZE
-from fsr_sim.core.sensors import MEMORY_STEP, memory_size
+from fsr_sim.core.sensors import memory_size, reset_memory
 from fsr_sim.core.surfaces import has_thrust_effects
 from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.checks import InvalidValueError, finite_array
@@ -53,7 +54,7 @@ from fsr_sim.model.rigid_body import (
     RigidBodyState,
     pack_state,
 )
-from fsr_sim.model.sensors import OdometryNoise
+from fsr_sim.model.sensors import ImuModel, OdometryNoise, pack_sensors
 from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
 from fsr_sim.model.turbulence import DrydenTurbulence, pack_turbulence
 from fsr_sim.model.vehicle import Vehicle
@@ -67,7 +68,7 @@ ACTUATIONS = ("rotors", "wrench")
 def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, environment: Environment,
                disturbances: Sequence[DisturbanceProfile], crash_speed: float,
                odometry_noise: OdometryNoise | None = None,
-               turbulence: Sequence[DrydenTurbulence] = ()) -> core.PlantParams:
+               turbulence: Sequence[DrydenTurbulence] = (), imu: ImuModel | None = None) -> core.PlantParams:
     """The core's :class:`~fsr_sim.core.plant.PlantParams` of a checked vehicle and environment."""
     n = vehicle.rotor_count
     if vehicle.has_servos:
@@ -83,7 +84,7 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         tilting=vehicle.has_servos, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
         lateral_columns=lateral, surfaces=pack_surfaces(environment, vehicle), disturbances=table,
         disturbance_knots=knots, crash_speed=float(crash_speed),
-        sensors=(odometry_noise or OdometryNoise()).pack(float(dt) * int(substeps)),
+        sensors=pack_sensors(odometry_noise, imu, float(dt) * int(substeps)),
         rotor_lag=actuator_lags(vehicle, actuation)[0],
         speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
         wrench_lag=actuation == "wrench" and vehicle.rotor_time_constant > 0.0,
@@ -117,9 +118,9 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
         body_wrench=np.zeros(6), ratios=np.ones(n), work=np.zeros((5, STATE_SIZE)),
         status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),
         gust_states=params.turbulence.initial_states.copy(), gusts=params.turbulence.initial_gusts.copy(),
-        sensor_memory=np.zeros(memory_size(params.sensors.delay)),
+        sensor_memory=np.zeros(memory_size(params.sensors)),
     )
-    state.sensor_memory[MEMORY_STEP] = -1.0
+    reset_memory(params.sensors, state.sensor_memory)
     core_rotors.reset_saturation(state.saturation)
     if params.tilting:
         core_rotors.tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
@@ -176,6 +177,8 @@ class Plant:
     odometry_noise : OdometryNoise, optional
         The sensor stage between the true state and the published ``odom`` (:mod:`fsr_sim.model.sensors`;
         default: none, ``odom`` is the true state).
+    imu : ImuModel, optional
+        An IMU (:mod:`fsr_sim.model.sensors`; default: none, ``imu`` is not published).
 
     Raises
     ------
@@ -199,6 +202,7 @@ class Plant:
         attitude_rpy_deg: ArrayLike | None = None,
         odometry_noise: OdometryNoise | None = None,
         turbulence: Sequence[DrydenTurbulence] = (),
+        imu: ImuModel | None = None,
     ) -> None:
         if actuation not in ACTUATIONS:
             raise InvalidValueError("actuation", f"must be one of {', '.join(ACTUATIONS)}, got '{actuation}'")
@@ -220,8 +224,9 @@ class Plant:
         self.crash_speed = crash_speed
         self.odometry_noise = odometry_noise or OdometryNoise()
         self.turbulence = list(turbulence)
+        self.imu = imu or ImuModel()
         self.params = pack_plant(vehicle, dt, substeps, actuation, self.environment, self.disturbances, crash_speed,
-                                 self.odometry_noise, self.turbulence)
+                                 self.odometry_noise, self.turbulence, self.imu)
         self.core_state = new_plant_state(self.params, pack_state(
             finite_array(position, (3,), "position"), rotation, finite_array(velocity, (3,), "velocity"),
             finite_array(angular_velocity, (3,), "angular_velocity"),
@@ -393,6 +398,11 @@ class Plant:
         turbulence's drag."""
         force, torque = core.plant_external_wrench(self.params, self.core_state)
         return np.array(force), np.array(torque)
+
+    def specific_force(self) -> np.ndarray:
+        """What an IMU at the centre of mass senses now: ``R^T (p_ddot - g e3)`` [m/s^2], body FRD, with every
+        force acting on the current state (:mod:`fsr_sim.core.imu`)."""
+        return np.array(core_imu.true_specific_force(self.params, self.core_state))
 
     def thrust_ratios(self) -> np.ndarray:
         """Ground/ceiling thrust ratio of each rotor at the current pose (1 away from surfaces)."""

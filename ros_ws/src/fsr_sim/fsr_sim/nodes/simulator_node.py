@@ -1,6 +1,7 @@
 """Simulator node: steps the plant in lockstep with the controller and publishes the state (docs/model.md §4).
 
-Publishes ``/clock`` (if ``publish_clock``), ``odom``, ``wrench_truth`` and ``sim_status`` (a
+Publishes ``/clock`` (if ``publish_clock``), ``odom``, ``wrench_truth``, with actuator dynamics ``rotor_state``,
+with an IMU (``sensors.imu``) ``imu``, and ``sim_status`` (a
 :class:`fsr_sim.contract.SimStatus` as JSON: ``running``, then ``finished``, ``diverged`` or ``stopped``; also
 published when the controller stops answering and when it answers again), each with its QoS of
 :mod:`fsr_sim.contract`; subscribes ``rotor_cmd``
@@ -51,6 +52,7 @@ from fsr_sim.contract import (
     CLOCK,
     DIVERGED,
     FINISHED,
+    IMU,
     ODOM,
     ROTOR_CMD,
     ROTOR_STATE,
@@ -106,7 +108,8 @@ class SimulatorNode(Node):
         self.plant = plant_from_config(self.config)
         vehicle = self.config.plant_vehicle
         self.publish_rotor_state = has_actuator_dynamics(self.plant.params)
-        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos)
+        imu = self.plant.params.sensors.imu
+        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos, imu)
         self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.has_servos)
 
@@ -115,12 +118,14 @@ class SimulatorNode(Node):
         self.odom_pub = publisher(self, ODOM)
         self.wrench_pub = publisher(self, WRENCH_TRUTH)
         self.rotor_state_pub = publisher(self, ROTOR_STATE) if self.publish_rotor_state else None
+        self.imu_pub = publisher(self, IMU) if imu.enabled else None
         self.clock_pub = publisher(self, CLOCK) if self.params.publish_clock else None
         self.progress_pub = publisher(self, SIM_PROGRESS)
         self.status_pub = publisher(self, SIM_STATUS)
         self.recorded_publishers = {topic.name: pub for topic, pub in (
             (ODOM, self.odom_pub), (WRENCH_TRUTH, self.wrench_pub), (ROTOR_STATE, self.rotor_state_pub),
-            (CLOCK, self.clock_pub), (SIM_PROGRESS, self.progress_pub), (SIM_STATUS, self.status_pub))}
+            (IMU, self.imu_pub), (CLOCK, self.clock_pub), (SIM_PROGRESS, self.progress_pub),
+            (SIM_STATUS, self.status_pub))}
         self.command_sub = subscription(self, command, _unused, raw=True)  # commands are read from their CDR bytes
         self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
@@ -404,8 +409,8 @@ class SimulatorNode(Node):
         self._send_state()
 
     def _send_state(self) -> None:
-        """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``) and, with
-        actuator dynamics, ``rotor_state``."""
+        """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``; with an IMU,
+        ``imu``) and, with actuator dynamics, ``rotor_state``."""
         messages, plant = self.messages, self.plant
         messages.fill_from_row(plant.stamp_ns, self.published)
         self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
@@ -413,6 +418,8 @@ class SimulatorNode(Node):
         if self.rotor_state_pub is not None:
             state = plant.core_state
             self.rotor_state_pub.publish(messages.rotor_state(plant.stamp_ns, state.speeds, state.tilts))
+        if self.imu_pub is not None:
+            self.imu_pub.publish(messages.imu)
         if self.clock_pub is not None:
             self.clock_pub.publish(messages.clock)
         if plant.step_index % PROGRESS_STEPS == 0 or plant.step_index >= self.config.step_count:

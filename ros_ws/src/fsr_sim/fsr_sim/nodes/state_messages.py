@@ -20,6 +20,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
 from fsr_sim.contract import ODOM, WRENCH_TRUTH
+from fsr_sim.core.odometry import WRENCH_TRUTH_END
 from fsr_sim.model.odometry import published_row
 from fsr_sim.model.plant import Plant
 
@@ -52,7 +53,7 @@ class StateMessages:
         body [N m]; None: zero) at ``stamp_ns``: the simulator's conversion, also used to record a flight."""
         sec, nanosec = divmod(stamp_ns, NS_PER_S)
         x, y, z, qx, qy, qz, qw, vbx, vby, vbz, wx, wy, wz, fx, fy, fz, tx, ty, tz = published_row(
-            state_vector, external).tolist()
+            state_vector, external)[:WRENCH_TRUTH_END].tolist()
 
         odom = self.odom
         odom.header.stamp.sec = sec

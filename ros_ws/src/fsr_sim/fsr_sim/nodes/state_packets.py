@@ -1,18 +1,21 @@
 """The simulator's per-step messages as packed CDR bytes (what the simulator node publishes and an in-process
-recording writes): ``odom``, ``wrench_truth``, ``/clock`` and (with actuator dynamics) ``rotor_state`` of one
-state; :func:`joint_state_template` and :func:`joint_values` lay out ``rotor_state`` and ``rotor_cmd`` alike.
+recording writes): ``odom``, ``wrench_truth``, ``/clock``, (with actuator dynamics) ``rotor_state`` and (with an
+IMU) ``imu`` of one state; :func:`joint_state_template` and :func:`joint_values` lay out ``rotor_state`` and
+``rotor_cmd`` alike.
 
 The values are the published row of the compiled core (:mod:`fsr_sim.core.odometry`: ``odom``, then
-``wrench_truth`` force ``R^T f_ext,world`` and torque), the same as :class:`fsr_sim.nodes.state_messages.
-StateMessages`; the bytes are :mod:`fsr_sim.ros.cdr_pack`'s (no rclpy needed).
+``wrench_truth`` force ``R^T f_ext,world`` and torque, then ``imu``'s angular velocity and specific force), the
+same as :class:`fsr_sim.nodes.state_messages.StateMessages`; the bytes are :mod:`fsr_sim.ros.cdr_pack`'s (no
+rclpy needed).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fsr_sim.contract import ODOM, ROTOR_STATE, WRENCH_TRUTH, joint_names
-from fsr_sim.core.odometry import ODOM_SIZE
+from fsr_sim.contract import IMU, ODOM, ROTOR_STATE, WRENCH_TRUTH, joint_names
+from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, IMU_END, ODOM_SIZE, WRENCH_TRUTH_END
+from fsr_sim.core.sensors import ImuParams
 from fsr_sim.model.odometry import published_row
 from fsr_sim.ros import cdr_pack
 
@@ -22,6 +25,12 @@ def joint_state_template(frame_id: str, rotor_count: int, tilting: bool) -> cdr_
     velocity per joint."""
     names = joint_names(rotor_count, tilting)
     return cdr_pack.joint_state(frame_id, names, len(names), len(names))
+
+
+def imu_template(params: ImuParams) -> cdr_pack.StampedDoubles:
+    """The ``sensor_msgs/Imu`` of an IMU stage: covariances the variances of its white noise per sample."""
+    variances = [std * std for std in params.noise_std]
+    return cdr_pack.imu(IMU.frame, variances[:3], variances[3:])
 
 
 def joint_values(speeds: np.ndarray, tilts: np.ndarray | None) -> np.ndarray:
@@ -35,10 +44,12 @@ def joint_values(speeds: np.ndarray, tilts: np.ndarray | None) -> np.ndarray:
 
 
 class StatePackets:
-    """Packs the state stamped ``stamp_ns``: after :meth:`fill_from_row`, ``odom``, ``wrench`` and ``clock`` hold
-    the CDR payloads of ``odom``, ``wrench_truth`` and ``/clock``."""
+    """Packs the state stamped ``stamp_ns``: after :meth:`fill_from_row`, ``odom``, ``wrench``, ``clock`` and
+    (with an IMU) ``imu`` hold the CDR payloads of ``odom``, ``wrench_truth``, ``/clock`` and ``imu``.
+    ``rotor_count`` > 0: ``rotor_state`` too (:meth:`rotor_state`); ``imu``: the IMU stage (None or disabled:
+    no ``imu``)."""
 
-    def __init__(self, rotor_count: int = 0, tilting: bool = False) -> None:
+    def __init__(self, rotor_count: int = 0, tilting: bool = False, imu: ImuParams | None = None) -> None:
         self._odom = cdr_pack.odometry(ODOM.frame, ODOM.child_frame)
         self._wrench = cdr_pack.wrench_stamped(WRENCH_TRUTH.frame)
         self._clock = cdr_pack.clock()
@@ -46,7 +57,10 @@ class StatePackets:
         self.tilting = tilting
         if rotor_count:
             self.templates[ROTOR_STATE.name] = joint_state_template(ROTOR_STATE.frame, rotor_count, tilting)
-        self.odom = self.wrench = self.clock = b""
+        self._imu = imu_template(imu) if imu is not None and imu.enabled else None
+        if self._imu is not None:
+            self.templates[IMU.name] = self._imu
+        self.odom = self.wrench = self.clock = self.imu = b""
         self.stamp_ns = -1
 
     def fill_from(self, stamp_ns: int, state_vector: np.ndarray,
@@ -56,10 +70,12 @@ class StatePackets:
         self.fill_from_row(stamp_ns, published_row(state_vector, external))
 
     def fill_from_row(self, stamp_ns: int, row: np.ndarray) -> None:
-        """Pack a published row (19,) of :mod:`fsr_sim.core.odometry` at ``stamp_ns`` [ns]."""
+        """Pack a published row of :mod:`fsr_sim.core.odometry` at ``stamp_ns`` [ns]."""
         values = row.tolist()
         self.odom = self._odom.pack(stamp_ns, values[:ODOM_SIZE])
-        self.wrench = self._wrench.pack(stamp_ns, values[ODOM_SIZE:])
+        self.wrench = self._wrench.pack(stamp_ns, values[ODOM_SIZE:WRENCH_TRUTH_END])
+        if self._imu is not None:
+            self.imu = self._imu.pack(stamp_ns, values[IMU_ANGULAR_VELOCITY:IMU_END])
         self.clock = self._clock.pack(stamp_ns, ())
         self.stamp_ns = stamp_ns
 

@@ -250,6 +250,27 @@ def joint_state(frame_id: str, names: Sequence[str], positions: int, velocities:
     return StampedDoubles(t, stamp, runs)
 
 
+def imu(frame_id: str, angular_velocity_variance: Sequence[float], linear_acceleration_variance: Sequence[float]
+        ) -> StampedDoubles:
+    """``sensor_msgs/Imu`` without an orientation (the identity quaternion, ``orientation_covariance[0] = -1``:
+    not provided) and diagonal covariances of the angular velocity [(rad/s)^2] and linear acceleration
+    [(m/s^2)^2] per axis (fixed for a flight): values = angular velocity (3), linear acceleration (3)."""
+    t = Template()
+    stamp = t.header(frame_id)
+    orientation = t.doubles(4)
+    covariance = t.doubles(9)
+    angular = t.doubles(3)
+    angular_covariance = t.doubles(9)
+    linear = t.doubles(3)
+    linear_covariance = t.doubles(9)
+    struct.pack_into("<d", t.buffer, orientation + 24, 1.0)
+    struct.pack_into("<d", t.buffer, covariance, -1.0)
+    for i in range(3):
+        struct.pack_into("<d", t.buffer, angular_covariance + 32 * i, float(angular_velocity_variance[i]))
+        struct.pack_into("<d", t.buffer, linear_covariance + 32 * i, float(linear_acceleration_variance[i]))
+    return StampedDoubles(t, stamp, [(angular, 3), (linear, 3)])
+
+
 def trajectory_point(frame_id: str, joint_name: str) -> StampedDoubles:
     """``trajectory_msgs/MultiDOFJointTrajectory`` with one joint and one point (``time_from_start`` 0):
     values = translation (3), rotation x y z w (4), velocity linear (3), angular (3), acceleration linear (3),
