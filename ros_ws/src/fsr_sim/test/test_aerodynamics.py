@@ -139,3 +139,31 @@ def test_the_plant_flies_its_aerodynamics_and_vehicles_without_them_are_unchange
     assert not quad.has_aerodynamics
     made = plant(quad, velocity=(5.0, -3.0, 1.0), angular_velocity=(1.0, 2.0, 3.0))
     np.testing.assert_array_equal(np.concatenate(made.external_wrench()), 0.0)
+
+
+def test_a_scenario_overrides_the_vehicles_coefficients_and_refuses_bad_ones():
+    from fsr_sim.config.scenario import load_scenario, simulation_config
+    from fsr_sim.config.validation import ConfigError
+
+    config = simulation_config(load_scenario("ex4_geometric", [
+        "vehicle=hummingbird", "actuation=rotors", "plant.rotor_drag_coefficient=2.0e-4",
+        "plant.flapping_coefficient=1.0e-6", "plant.drag_coefficients=[0.0, 0.0, 0.0]"]))
+    plant_vehicle = config.plant_vehicle
+    assert plant_vehicle.rotor_drag_coefficient == 2e-4 and plant_vehicle.flapping_coefficient == 1e-6
+    assert plant_vehicle.induced_inflow_coefficient == HUMMINGBIRD.induced_inflow_coefficient  # the vehicle's
+    np.testing.assert_array_equal(plant_vehicle.drag_coefficients, 0.0)
+    assert config.vehicle.rotor_drag_coefficient == HUMMINGBIRD.rotor_drag_coefficient  # the model is the file's
+    for key, value, message in (("plant.translational_lift_coefficient", -1.0, "must be >= 0"),
+                                ("plant.induced_inflow_coefficient", "[1, 2]", "must be a number")):
+        with pytest.raises(ConfigError, match=rf"{key}: {message}") as error:
+            simulation_config(load_scenario("ex4_geometric", ["vehicle=hummingbird", f"{key}={value}"]))
+        assert "\n" not in str(error.value)
+    # a wind needs something to push on: refused without any aerodynamics, accepted with the rotors' alone
+    wind = "disturbances=[{kind: dryden, wind_speed: 3.0, altitude: 2.0}]"
+    with pytest.raises(ConfigError, match=r"disturbances\.0.*aerodynamics, and they are all zero"):
+        simulation_config(load_scenario("ex4_geometric", [wind]))
+    simulation_config(load_scenario("ex4_geometric", ["vehicle=hummingbird", "actuation=rotors", wind,
+                                                      "plant.drag_coefficients=[0.0, 0.0, 0.0]"]))
+    with pytest.raises(ConfigError, match=r"disturbances\.0"):  # wrench actuation: no rotors, no rotor terms
+        simulation_config(load_scenario("ex4_geometric", ["vehicle=hummingbird", "actuation=wrench", wind,
+                                                          "plant.drag_coefficients=[0.0, 0.0, 0.0]"]))
