@@ -19,10 +19,16 @@ REALISM = {"duration": 2.0, "plant.rotor_time_constant": 0.02, "sensors.odometry
            "sensors.imu": {"gyro_noise_density": 0.0003, "accelerometer_noise_density": 0.002,
                            "gyro_bias_walk": 0.0001, "accelerometer_bias_walk": 0.001, "delay_steps": 1,
                            "rate_hz": 500, "accelerometer_initial_bias": 0.1, "seed": 4}}
+AGILE = {"duration": 2.0, "vehicle": "hummingbird", "actuation": "rotors", "plant.flapping_coefficient": 1e-6,
+         "trajectory.waypoints": [{"position": [1.0, -0.5, -1.5], "attitude_rpy_deg": [0, 0, 30], "duration": 1.5}],
+         "controller.gains": {"k_p": [8, 8, 8], "k_v": [4, 4, 4], "k_r": [1.46, 1.47, 0.7], "k_w": [0.15, 0.15, 0.14]},
+         "disturbances": [{"kind": "dryden", "wind_speed": 4.0, "altitude": 2.0, "mean": [2.0, 1.0, 0.0], "seed": 2}]}
 SHORT = {"duration": 6.0}  # the transients, the estimator's settling and the octocopter's ground effect (CPython: slow)
 FLIGHTS = (("ex3_estimation", SHORT), ("ex4_geometric", {**SHORT, "actuation": "rotors"}), ("ex5_voliro", SHORT),
            ("octo_ground_effect", SHORT), ("wind_rejection_turbulent", REALISM),  # gusts, rotor lag, sensor stage
-           ("ex5_voliro", {"duration": 2.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120}))
+           ("ex5_voliro", {"duration": 2.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120}),
+           ("ex4_geometric", AGILE))  # the Hummingbird: motor lag and every aerodynamic term in a gusty wind
+
 FINAL_STATES = """
 import json, sys
 import numpy as np
@@ -46,7 +52,8 @@ def final_states(disable_jit: bool) -> np.ndarray:
 def test_compiled_and_cpython_flights_are_bit_identical():
     """The same source, compiled (fastmath off) and under CPython (NUMBA_DISABLE_JIT=1): identical final states
     of whole flights (ex3, ex4 with rotors, ex5, the octocopter through its ground effect; turbulence, actuator
-    dynamics and the sensor stages: the sums of an IMU's measured and true samples too)."""
+    dynamics and the sensor stages: the sums of an IMU's measured and true samples too; the Hummingbird with
+    every aerodynamic term in a gusty wind)."""
     compiled, python = final_states(False), final_states(True)
     assert len(compiled[4]) == 13 + 9  # the flight with an IMU
     for a, b in zip(compiled, python, strict=True):

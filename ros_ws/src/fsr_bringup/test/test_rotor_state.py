@@ -38,7 +38,7 @@ def test_rotor_state_is_recorded_with_actuator_dynamics_only(tmp_path):
 def test_the_effective_truth_is_made_of_the_actual_rotor_speeds(tmp_path):
     # With a 20 ms lag the commanded wrench is not the one the rotors give: the observer sees the difference
     # as an external wrench, and the effective truth (from rotor_state) says so - from rotor_cmd it would not.
-    # (ex4's climb, 12 s: smooth; measured RMS f_z 1.1e-5 vs 3.6e-4 N, tau_z 2.7e-6 vs 8.7e-5 N m.)
+    # (ex4's climb, 12 s: smooth; measured RMS f_z 1.1e-5 vs 3.5e-4 N, tau_z 2.7e-6 vs 8.5e-5 N m.)
     fly_in_process(load_scenario("ex4_geometric", ["actuation=rotors", "plant.rotor_time_constant=0.02",
                                                    "duration=12.0"]), tmp_path / "lag.mcap")
     flight = load_flight(tmp_path / "lag.mcap")
@@ -48,7 +48,7 @@ def test_the_effective_truth_is_made_of_the_actual_rotor_speeds(tmp_path):
     rms_cmd = np.array(wrench_comparison(flight)["rms_error"])
     from_cmd = effective_wrench(flight)
     defined = np.isfinite(from_state.wrench_body).all(axis=1)
-    assert np.abs(from_state.wrench_body[defined] - from_cmd.wrench_body[defined]).max() > 1e-4  # 4.8e-4 N
+    assert np.abs(from_state.wrench_body[defined] - from_cmd.wrench_body[defined]).max() > 1e-4  # 4.7e-4 N
     f_z, tau_z = 2, 5
     assert rms_state[f_z] < 0.1 * rms_cmd[f_z] and rms_state[tau_z] < 0.1 * rms_cmd[tau_z]
 
@@ -93,5 +93,5 @@ def test_a_lagging_wrench_is_in_the_effective_truth(tmp_path):
     flight.config = replace(config, plant_vehicle=replace(config.plant_vehicle, rotor_time_constant=0.0))
     commanded = effective_wrench(flight).force_world[:-1]
     error_applied, error_commanded = np.abs(applied - residual).max(), np.abs(commanded - residual).max()
-    # measured 7.1e-6 N (8.6e-6 without the lag: the trapezoid of R over the step) against 0.53 N
+    # measured 6.9e-6 N (8.6e-6 without the lag: the trapezoid of R over the step) against 0.51 N
     assert error_applied < 2e-5 and error_commanded > 0.1, (error_applied, error_commanded)

@@ -1,6 +1,6 @@
-"""Actuator dynamics of the true plant (fsr_sim.core.plant.advance_actuators): rotor speeds and servo tilts follow
-their commands through a first-order lag (and a rate limit for the servos), within their limits; with no
-dynamics the plant is the plant without them, exactly."""
+"""Actuator dynamics of the true plant (fsr_sim.core.plant.actuators_at): rotor speeds and servo tilts follow
+their commands through a first-order lag (and a rate limit for the servos), within their limits, exactly at
+every RK4 stage; with no dynamics the plant is the plant without them, exactly."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ from fsr_bringup import simulate
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
 from fsr_sim.model import load_vehicle
+from fsr_sim.model.environment import Environment, Surface
 from fsr_sim.model.plant import Plant
 
 QUAD = load_vehicle("quadrotor_ex4")
@@ -112,7 +113,6 @@ def test_a_lagging_wrench_gives_the_first_order_response_and_is_what_the_plant_f
     # wrench actuation with a rotor time constant: each component of the applied wrench lags its command
     tau = 0.025
     lagging = Plant(replace(QUAD, rotor_time_constant=tau), DT, actuation="wrench", position=(0.0, 0.0, -50.0))
-    plain = Plant(QUAD, DT, actuation="wrench", position=(0.0, 0.0, -50.0))  # flown with the applied wrench
     start = np.array((0.0, 0.0, -QUAD.weight, 0.01, -0.02, 0.005))
     target = np.array((0.0, 0.0, -1.3 * QUAD.weight, -0.03, 0.02, -0.01))
     lagging.set_wrench(start[:3], start[3:])  # the first command is also the applied wrench
@@ -120,17 +120,25 @@ def test_a_lagging_wrench_gives_the_first_order_response_and_is_what_the_plant_f
     lagging.set_wrench(target[:3], target[3:])
     np.testing.assert_array_equal(lagging.applied_wrench, start)  # a command does not act at once
     for k in range(1, 201):
-        applied = lagging.applied_wrench
-        plain.set_wrench(applied[:3], applied[3:])
         lagging.step()
-        plain.step()
         expected = target + (start - target) * math.exp(-k * DT / tau)
         np.testing.assert_allclose(lagging.applied_wrench, expected, rtol=0.0, atol=1e-9)
-        np.testing.assert_array_equal(lagging.state_vector, plain.state_vector)
     np.testing.assert_array_equal(lagging.force_command, target[:3])
     lagging.cut_thrust()  # the failsafe: the wrench decays to zero
     lagging.step()
     np.testing.assert_allclose(lagging.applied_wrench, expected * math.exp(-DT / tau), rtol=0.0, atol=1e-9)
+    # What each RK4 step applies is the lag within it: for a force alone (level, no torque) the velocity changes
+    # by dt (g e3 + f / m) with f the exact mean of the exponential over the step
+    level = Plant(replace(QUAD, rotor_time_constant=tau), DT, actuation="wrench", position=(0.0, 0.0, -50.0))
+    level.set_wrench(start[:3], (0.0, 0.0, 0.0))
+    level.set_wrench(target[:3], (0.0, 0.0, 0.0))
+    weight = tau / DT * (1.0 - math.exp(-DT / tau))
+    for _ in range(50):
+        applied, velocity = level.applied_wrench[:3], level.velocity.copy()
+        level.step()
+        mean = target[:3] + (applied - target[:3]) * weight
+        np.testing.assert_allclose(level.velocity - velocity, DT * (mean / QUAD.mass + (0.0, 0.0, 9.81)),
+                                   rtol=0.0, atol=1e-15)
 
 
 def test_a_zero_time_constant_leaves_wrench_actuation_exactly_as_it_was():
@@ -140,3 +148,57 @@ def test_a_zero_time_constant_leaves_wrench_actuation_exactly_as_it_was():
     np.testing.assert_array_equal(zero.estimate_force_body, plain.estimate_force_body)
     lagging = simulate("ex3_estimation", duration=2.0, set={"plant.rotor_time_constant": 0.03})
     assert lagging.end_reason == "finished" and np.abs(lagging.state - plain.state).max() > 1e-6
+
+
+def vertical_flight(tau: float, dt: float, seconds: float, start: float, command: float) -> tuple[float, float]:
+    """(v_z, z) after ``seconds`` of a level climb: the rotors from ``start`` to ``command`` [rad/s] with lag tau."""
+    plant = Plant(replace(QUAD, rotor_time_constant=tau), dt, position=(0.0, 0.0, -50.0),
+                  environment=Environment(ground=Surface(enabled=False)))
+    plant.set_rotor_command(np.full(4, start))
+    plant.set_rotor_command(np.full(4, command))
+    for _ in range(int(round(seconds / dt))):
+        plant.step()
+    return float(plant.velocity[2]), float(plant.position[2])
+
+
+def exact_vertical_flight(tau: float, seconds: float, start: float, command: float) -> tuple[float, float]:
+    """The same from the closed form: ``w(t) = w_c + d exp(-t / tau)``, ``m v_z' = m g - 4 c_f w^2``."""
+    d, t, k = start - command, seconds, 4.0 * QUAD.c_f / QUAD.mass
+    if tau == 0.0:
+        once, twice = command**2 * t, command**2 * t * t / 2.0
+    else:
+        once = command**2 * t + 2.0 * command * d * tau * -math.expm1(-t / tau) \
+            + d * d * tau / 2.0 * -math.expm1(-2.0 * t / tau)
+        twice = command**2 * t * t / 2.0 + 2.0 * command * d * (tau * t + tau * tau * math.expm1(-t / tau)) \
+            + d * d * (tau * t / 2.0 + tau * tau / 4.0 * math.expm1(-2.0 * t / tau))
+    return 9.81 * t - k * once, -50.0 + 9.81 * t * t / 2.0 - k * twice
+
+
+def test_the_lag_is_integrated_to_fourth_order_within_each_step():
+    # A step in the commanded speed with a 5 ms motor: each RK4 step applies the exact mean of the lagging thrust,
+    # so the velocity is the closed form's to rounding, and the position's error falls as dt^4 (16x per halving).
+    # Holding each step's speeds over it (the old integration) erred by half a step of lag: first order.
+    hover = hover_speed(QUAD)
+    velocity, position = exact_vertical_flight(0.005, 0.048, hover, 1.5 * hover)
+    errors = []
+    for dt in (4e-3, 2e-3, 1e-3):
+        v, z = vertical_flight(0.005, dt, 0.048, hover, 1.5 * hover)
+        assert v == pytest.approx(velocity, abs=1e-14)
+        errors.append(abs(z - position))
+    assert errors[0] > 1e-8  # 7.9e-8, 4.5e-9, 2.7e-10 m
+    for coarse, fine in zip(errors, errors[1:], strict=False):
+        assert 14.0 < coarse / fine < 20.0, errors
+
+
+def test_a_time_constant_below_the_step_is_almost_no_lag():
+    # tau -> 0 approaches tau = 0 as the physics does (the difference falls with tau, as the closed form's), not a
+    # step's delay; at 1 ms a 0.1 ms motor is 0.1 ms of lag
+    hover = hover_speed(QUAD)
+    none = vertical_flight(0.0, 1e-3, 0.02, hover, 1.5 * hover)
+    for tau in (1e-3, 1e-4, 1e-5):
+        flown = vertical_flight(tau, 1e-3, 0.02, hover, 1.5 * hover)
+        exact = exact_vertical_flight(tau, 0.02, hover, 1.5 * hover)
+        assert flown[0] == pytest.approx(exact[0], abs=1e-14)
+        assert abs(flown[1] - exact[1]) < 2e-7  # 8e-9, 1.2e-7, 1.4e-9 m
+        np.testing.assert_allclose(np.subtract(flown, none), np.subtract(exact, exact_vertical_flight(
+            0.0, 0.02, hover, 1.5 * hover)), rtol=5e-3)

@@ -80,3 +80,17 @@ def test_a_vehicle_that_cannot_hover_is_still_printed_with_the_reason(tmp_path, 
     assert data["authority"] is None and "vehicle 'heavy' cannot hover" in data["authority_error"]
     assert main([str(path)]) == 0
     assert "Authority at hover: none (vehicle 'heavy' cannot hover" in capsys.readouterr().out
+
+
+def test_the_rotorpy_vehicles_print_their_authority_lag_and_aerodynamics(capsys):
+    assert main(["hummingbird", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["rotor_time_constant"] == 0.005 and data["drag_coefficients"] == [0.005, 0.005, 0.01]
+    assert data["rotor_drag_coefficient"] == 1.19e-4 and data["translational_lift_coefficient"] == 3.39e-3
+    authority = data["authority"]
+    assert authority["thrust_max"] == __import__("pytest").approx(4 * 5.57e-6 * 1500.0**2)
+    assert authority["roll_torque"] > 0.5 and authority["yaw_torque"] > 0.1  # 0.590 and 0.120 N m
+    assert main(["crazyflie"]) == 0
+    out = capsys.readouterr().out
+    assert "| roll torque (+-) |" in out and "| rotor time constant | 0.072 s |" in out
+    assert "| hover rotor speed | 1788.6 rad/s |" in out

@@ -11,11 +11,13 @@ while the true plant (mass ``m``, inertia ``I``) obeys, averaged over the same s
 
     m a_k = m g e3 + <R f_a> + f_ext + f_contact
 
-with ``f_a`` the body force the rotors really produce (from their speeds and tilts - ``rotor_cmd``'s, or
-``rotor_state``'s where actuator dynamics make them lag the command - scaled per rotor by the ground/ceiling
-thrust ratio; in wrench actuation ``f_c`` itself, or with a rotor time constant the applied wrench lagging it,
-replayed from the commands by the plant's own lag and averaged over the RK4 steps it is held over) and
-``<.>`` the mean over the step (trapezoid of its ends). Eliminating ``a_k`` gives the effective force::
+with ``f_a`` the body force the rotors really produce (from their speeds and tilts - ``rotor_cmd``'s held over
+the step, or ``rotor_state``'s of both ends where actuator dynamics make them lag the command - scaled per rotor
+by the ground/ceiling thrust ratio; in wrench actuation ``f_c`` itself, or with a rotor time constant the
+applied wrench lagging it, replayed from the commands by the plant's own lag as its RK4 steps apply it) and
+``<.>`` the mean over the step (trapezoid of its ends). ``f_ext`` (``wrench_truth``) is everything beyond the
+rotors' ``c_f w^2``, ``c_m w^2``: the disturbances and the aerodynamics. Eliminating ``a_k`` gives the effective
+force::
 
     f_eff = f_ext + (<R f_a> - R_k f_c) + f_contact + (m_e - m) (a_k - g e3)      [N, world NED]
 
@@ -100,8 +102,8 @@ def applied_wrench(config: SimulationConfig, force: np.ndarray, torque: np.ndarr
     """Body wrench a wrench-actuated plant applies along a log of commands ``force``, ``torque`` (n, 3) [N, N m],
     body FRD, one per control period, computed by the plant itself (:func:`fsr_sim.core.plant.applied_wrench_log`:
     with a rotor time constant each component lags its command, the first command applied at once), as its mean
-    over each period's RK4 steps. Returns force and torque, (n, 3) each; rows whose command is not finite are
-    NaN (the lag is carried through them with a zero command)."""
+    over each period's RK4 steps as they apply it (their stages). Returns force and torque, (n, 3) each; rows
+    whose command is not finite are NaN (the lag is carried through them with a zero command)."""
     plant = plant_from_config(config)
     commands = np.ascontiguousarray(np.nan_to_num(np.hstack((force, torque)).astype(float)))
     mean = np.zeros_like(commands)
@@ -142,9 +144,13 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
                 tilts[0] = zero_order_hold(flight.rotor_cmd.stamp_ns, flight.rotor_cmd.tilts, target[:1])[0]
         series = thrust_ratio_series(flight)
         ratios = series[1] * series[2] if series is not None else np.ones_like(speeds)
-        # The same command acts at the end of the step, where the ratios (pose) have moved on.
+        # The same command acts at the end of the step, where the ratios (pose) have moved on - and, where the
+        # rotors lag, their speeds and tilts too (rotor_state of t_k+1).
         f_start, tau_start = actuator_wrench(config, speeds, tilts, ratios)
         next_ratios = np.vstack((ratios[1:], ratios[-1:]))
+        if rotors is flight.rotor_state:
+            speeds = np.vstack((speeds[1:], speeds[-1:]))
+            tilts = np.vstack((tilts[1:], tilts[-1:])) if tilts is not None else None
         f_end, tau_end = actuator_wrench(config, speeds, tilts, next_ratios)
     elif config.actuation == "wrench" and plant.rotor_time_constant > 0.0:
         f_start, tau_start = f_end, tau_end = applied_wrench(config, f_cmd, tau_cmd)

@@ -17,7 +17,7 @@ and the controller's answer to it), into the accumulator vector ``acc`` (:data:`
   :mod:`fsr_bringup.analysis.effective`, from the states ``k`` and ``k + 1``: the external wrench, the actuator's
   wrench against the commanded one - in wrench actuation the turn of ``R`` within the step; with rotors their
   wrench at the thrust ratios of both poses, from the commanded speeds and tilts or, where the rotors lag, the
-  actual ones, computed by the plant's own functions on the plant without actuator dynamics -, the ground's
+  actual ones of both ends, computed by the plant's own functions on the plant without actuator dynamics -, the ground's
   contact force, the model mismatch), and per channel the sum of
   the squared estimate errors of the samples at ``t_k >= late_from``, the last sample outside the 3 % band (and
   the same for the estimate and the truth through the ``smoothed`` settling time's low-pass), the
@@ -391,14 +391,14 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         if k == step_count:
             return FINISHED, k, 0
         hold_command(plant, plant_state, mode, row, force, torque)
-        if plant.wrench_lag:  # the applied wrench over the step (held over each RK4 step, lagging the command)
+        if plant.wrench_lag:  # the applied wrench over the step (as the RK4 steps apply it, lagging the command)
             w = plant_state.body_wrench
             c = plant_state.wrench_command
-            d, s = plant.speed_decay, plant.substeps
-            force_held = (period_mean_lagged(w[0], c[0], d, s), period_mean_lagged(w[1], c[1], d, s),
-                          period_mean_lagged(w[2], c[2], d, s))
-            torque_held = (period_mean_lagged(w[3], c[3], d, s), period_mean_lagged(w[4], c[4], d, s),
-                           period_mean_lagged(w[5], c[5], d, s))
+            d, h, s = plant.speed_decay, plant.speed_mean, plant.substeps
+            force_held = (period_mean_lagged(w[0], c[0], d, h, s), period_mean_lagged(w[1], c[1], d, h, s),
+                          period_mean_lagged(w[2], c[2], d, h, s))
+            torque_held = (period_mean_lagged(w[3], c[3], d, h, s), period_mean_lagged(w[4], c[4], d, h, s),
+                           period_mean_lagged(w[5], c[5], d, h, s))
         else:
             force_held, torque_held = force, torque
         code = advance(plant, plant_state, published[(k + 1) % 2])
@@ -414,6 +414,9 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
                               measures.with_tilts)
             force_start, torque_start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
                                                             rotor_rows[RATIOS])
+            if measures.lagging:  # the rotors move within the step: at its end, their speeds and tilts of t_k+1
+                set_rotor_command(actuator_plant, actuator_state, plant_state.speeds, plant_state.tilts,
+                                  measures.with_tilts)
             force_end, torque_end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
                                                         rotor_rows[RATIOS_NEXT])
             measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,

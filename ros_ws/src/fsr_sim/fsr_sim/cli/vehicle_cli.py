@@ -2,7 +2,8 @@
 
 Markdown by default; ``--json`` prints an object with ``mass``, ``inertia`` (3x3), ``c_f``, ``c_m``,
 ``arm_length``, ``rotor_radius``, ``contact_height`` (landing gear below the centre of mass), rotor limits,
-``rotors`` (position, spin, tilt axis), ``allocation``
+``rotor_time_constant`` [s], ``drag_coefficients`` [N s^2/m^2] and the rotors' aerodynamic coefficients
+(``rotor_drag_coefficient``, ... : docs/vehicles.md), ``rotors`` (position, spin, tilt axis), ``allocation``
 (6 x n, squared rotor speeds -> body wrench, rows f_x f_y f_z tau_x tau_y tau_z), for a coplanar vehicle
 also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a tilting vehicle
 ``allocation_static`` (6 x 2n, docs/model.md §3.2); ``authority`` is what the rotors give at hover at margin 1
@@ -28,7 +29,7 @@ from fsr_sim.model.allocation import (
     wrench_from_rotor_speed_sq,
 )
 from fsr_sim.model.authority import Authority, authority
-from fsr_sim.model.vehicle import Vehicle, load_vehicle
+from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle, load_vehicle
 
 WRENCH_ROWS = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
 
@@ -59,6 +60,9 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
         "rotor_speed_min": vehicle.rotor_speed_min,
         "rotor_speed_max": vehicle.rotor_speed_max,
         "hover_rotor_speed": float(np.sqrt(vehicle.weight / (vehicle.c_f * np.sum(-vehicle.thrust_axes[:, 2])))),
+        "rotor_time_constant": vehicle.rotor_time_constant,
+        "drag_coefficients": vehicle.drag_coefficients.tolist(),
+        **{name: getattr(vehicle, name) for name in ROTOR_AERODYNAMICS},
         "rotors": rotors,
         "fully_actuated": vehicle.fully_actuated,
         "allocation_rows": list(WRENCH_ROWS),
@@ -119,6 +123,12 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
         f"| rotor speed | {vehicle.rotor_speed_min} .. {vehicle.rotor_speed_max} rad/s |",
         f"| hover rotor speed | {s['hover_rotor_speed']:.1f} rad/s |",
         f"| fully actuated | {'yes' if vehicle.fully_actuated else 'no'} |",
+        f"| rotor time constant | {vehicle.rotor_time_constant:g} s |",
+        f"| parasitic drag c_x, c_y, c_z | {vehicle.drag_coefficients.tolist()} N s^2/m^2 |",
+        f"| rotor drag k_d, inflow k_z | {vehicle.rotor_drag_coefficient:.6g}, "
+        f"{vehicle.induced_inflow_coefficient:.6g} kg/rad |",
+        f"| translational lift k_h | {vehicle.translational_lift_coefficient:.6g} kg/m |",
+        f"| blade flapping k_flap | {vehicle.flapping_coefficient:.6g} kg m/rad |",
         "",
         "| rotor | position [m] | spin k_i | thrust axis | tilt axis |",
         "|---|---|---|---|---|",

@@ -32,13 +32,14 @@ from fsr_sim.config.validation import (
     yaml_error_text,
 )
 from fsr_sim.config.vehicle_file import dynamics_and_drag, load_vehicle_file
+from fsr_sim.core.aerodynamics import has_aerodynamics
 from fsr_sim.model.disturbances import DisturbanceProfile
 from fsr_sim.model.environment import Environment
-from fsr_sim.model.plant import Plant
+from fsr_sim.model.plant import Plant, pack_aerodynamics
 from fsr_sim.model.sensors import ImuModel, OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.turbulence import DrydenTurbulence
-from fsr_sim.model.vehicle import Vehicle
+from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle
 
 SECTION_GROUP = "fsr.scenario_sections"
 PLANT_KEYS = (
@@ -265,7 +266,7 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
     inertia = checked_spd(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
     # actuator dynamics and drag of the true plant (the controller knows none of them)
     plant_overrides = dynamics_and_drag(plant, {name: getattr(vehicle, name) for name in (
-        "rotor_time_constant", "tilt_time_constant", "tilt_rate_max", "drag_coefficients")})
+        "rotor_time_constant", "tilt_time_constant", "tilt_rate_max", "drag_coefficients", *ROTOR_AERODYNAMICS)})
     plant.reject_unknown()
 
     environment = environment_from_section(root.section("environment"))
@@ -276,10 +277,12 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
               for i, item in enumerate(disturbance_list)]
     disturbances = [item for item in parsed if isinstance(item, DisturbanceProfile)]
     turbulence = [item for item in parsed if isinstance(item, DrydenTurbulence)]
-    if turbulence and not np.any(plant_overrides["drag_coefficients"] > 0.0):
+    plant_vehicle = replace(vehicle.with_mass_properties(mass, inertia), **plant_overrides)
+    if turbulence and not has_aerodynamics(pack_aerodynamics(plant_vehicle, actuation)):
         index = next(i for i, item in enumerate(parsed) if isinstance(item, DrydenTurbulence))
-        raise root.error(f"disturbances.{index}", "a dryden turbulence pushes through the vehicle's drag, and its "
-                         "drag_coefficients are all zero: set plant.drag_coefficients (or the vehicle file's)")
+        raise root.error(f"disturbances.{index}", "a dryden wind pushes through the vehicle's aerodynamics, and "
+                         "they are all zero: set plant.drag_coefficients (or the vehicle file's aerodynamic "
+                         "coefficients)")
 
     lockstep = root.section("lockstep")
     lockstep_enabled = lockstep.boolean("enabled", True)
@@ -296,7 +299,7 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
     return SimulationConfig(
         name=scenario.name,
         vehicle=vehicle,
-        plant_vehicle=replace(vehicle.with_mass_properties(mass, inertia), **plant_overrides),
+        plant_vehicle=plant_vehicle,
         duration=duration,
         physics_dt=physics_dt,
         physics_substeps=substeps,

@@ -2,7 +2,8 @@
 
 A file gives ``name``, ``mass`` [kg], ``inertia`` (3 numbers or 3x3) [kg m^2], ``c_f``, ``c_m``,
 ``rotor_radius`` [m], ``rotor_speed_min``/``rotor_speed_max`` [rad/s], optional ``tilt_angle_max_deg``,
-``contact_height`` and ``top_height`` [m], and either a ``layout`` (``count`` rotors on a circle of radius
+``contact_height`` and ``top_height`` [m], the actuator dynamics and aerodynamics of :func:`dynamics_and_drag`,
+and either a ``layout`` (``count`` rotors on a circle of radius
 ``arm_length``, rotor ``i`` at angle ``first_angle_deg + (i-1) 360/count``, ``k_i = (-1)^i`` so rotor 1 is CW;
 optional ``cant_deg``: each rotor's thrust axis turned about its arm by ``+cant``, ``-cant``, ... alternately
 (a fully actuated "tilted-arm" multirotor); optional ``tilting: true`` for a servo tilt axis along each arm)
@@ -26,7 +27,7 @@ from fsr_sim.config.validation import (
     resolve_config_path,
 )
 from fsr_sim.model.checks import InvalidValueError
-from fsr_sim.model.vehicle import Vehicle
+from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle
 
 
 def load_vehicle_file(name_or_path: str | Path) -> Vehicle:
@@ -70,7 +71,8 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
     contact_height = root.number("contact_height", 0.1, minimum=0.0)
     top_height = root.number("top_height", contact_height, minimum=0.0)  # default: symmetric about the CoM
     dynamics = dynamics_and_drag(root, {"rotor_time_constant": 0.0, "tilt_time_constant": 0.0,
-                                        "tilt_rate_max": np.inf, "drag_coefficients": np.zeros(3)})
+                                        "tilt_rate_max": np.inf, "drag_coefficients": np.zeros(3),
+                                        **dict.fromkeys(ROTOR_AERODYNAMICS, 0.0)})
 
     if root.has("layout") == root.has("rotors"):
         raise root.error("layout", "give exactly one of 'layout' or 'rotors'")
@@ -107,10 +109,12 @@ def vehicle_from_mapping(data: dict[str, Any], source: str = "", default_name: s
 
 
 def dynamics_and_drag(section: Section, defaults: dict[str, Any]) -> dict[str, Any]:
-    """The actuator dynamics and the drag of a vehicle file, or of a scenario's ``plant`` section over its
-    vehicle's: ``rotor_time_constant`` [s] >= 0, ``tilt_time_constant`` [s] >= 0, ``tilt_rate_max_deg_s`` > 0
-    (absent: ``defaults``'), ``drag_coefficients`` (3 numbers >= 0) - as :class:`Vehicle` fields (``defaults``
-    too: ``tilt_rate_max`` in rad/s)."""
+    """The actuator dynamics and the aerodynamics of a vehicle file, or of a scenario's ``plant`` section over
+    its vehicle's: ``rotor_time_constant`` [s] >= 0, ``tilt_time_constant`` [s] >= 0, ``tilt_rate_max_deg_s``
+    > 0 (absent: ``defaults``'), ``drag_coefficients`` (3 numbers >= 0) and the rotors' aerodynamic
+    coefficients (``rotor_drag_coefficient``, ``induced_inflow_coefficient``, ``translational_lift_coefficient``,
+    ``flapping_coefficient``, each >= 0) - as :class:`Vehicle` fields (``defaults`` too: ``tilt_rate_max`` in
+    rad/s)."""
     drag = section.vector("drag_coefficients", 3, np.asarray(defaults["drag_coefficients"]).tolist())
     if np.any(drag < 0.0):
         raise section.error("drag_coefficients", f"must be >= 0, got {drag.tolist()}")
@@ -120,6 +124,7 @@ def dynamics_and_drag(section: Section, defaults: dict[str, Any]) -> dict[str, A
         "tilt_rate_max": float(np.deg2rad(section.number("tilt_rate_max_deg_s", strictly_positive=True)))
         if section.has("tilt_rate_max_deg_s") else defaults["tilt_rate_max"],  # absent: no rate limit (inf)
         "drag_coefficients": drag,
+        **{name: section.number(name, defaults[name], minimum=0.0) for name in ROTOR_AERODYNAMICS},
     }
 
 

@@ -1,12 +1,13 @@
 """The true plant per step (compiled core): rigid body + rotors (with ground/ceiling effect) + disturbances +
-contact, and the drag of Dryden gusts (:mod:`fsr_sim.core.turbulence`).
+aerodynamics (:mod:`fsr_sim.core.aerodynamics`, in the wind of :mod:`fsr_sim.core.turbulence`) + contact.
 
-Inputs are held over a step (zero-order hold) while the state-dependent parts (thrust ratios near surfaces,
-time-varying disturbances) are evaluated at every RK4 stage. Two actuations:
+Commands are held over a control period (zero-order hold) while everything that moves within it (the actuators
+lagging their commands, thrust ratios near surfaces, time-varying disturbances, the aerodynamics) is evaluated
+at every RK4 stage. Two actuations:
 
 * rotors: speeds ``w_i`` [rad/s] clamped to the vehicle's limits (saturation recorded) and, for a tilting
   vehicle, tilts ``alpha_i`` [rad] clamped to ``+-tilt_max``, applied at once - or, with actuator dynamics
-  (:func:`advance_actuators`), approached by a first-order lag; ``f_b = sum c_f r_i u_w,i z_i``,
+  (:func:`actuators_at`), approached by a first-order lag; ``f_b = sum c_f r_i u_w,i z_i``,
   ``tau_b = sum u_w,i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the thrust ratio ``r_i`` of
   :mod:`fsr_sim.core.surfaces` (drag torque is not scaled);
 * wrench: the commanded body wrench directly - or, with a rotor time constant, the wrench lagging it by the same
@@ -28,14 +29,15 @@ from typing import NamedTuple
 
 import numpy as np
 
+from fsr_sim.core.aerodynamics import AeroParams, aerodynamic_wrench, has_aerodynamics
 from fsr_sim.core.disturbances import external_wrench
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.rigid_body import rigid_body_rates, rk4_combine, stage_state, state_rotation
 from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, scaled_rotor_wrench, tilted_columns
 from fsr_sim.core.sensors import SensorParams
-from fsr_sim.core.so3 import Mat3, mat_vec3
+from fsr_sim.core.so3 import Mat3, mat_t_vec3, mat_vec3
 from fsr_sim.core.surfaces import Surfaces, ceiling_rest_z, ground_rest_z, has_thrust_effects, thrust_ratios
-from fsr_sim.core.turbulence import TurbulenceParams, advance_gusts, drag_force
+from fsr_sim.core.turbulence import TurbulenceParams, advance_gusts, wind_velocity
 
 MAX_SPEED = 100.0  # m/s: beyond this the simulation is considered diverged
 MAX_SPIN = 200.0  # rad/s
@@ -71,28 +73,33 @@ class PlantParams(NamedTuple):
     disturbance_knots: np.ndarray  # (k, KNOT_WIDTH)
     crash_speed: float  # [m/s]
     sensors: SensorParams  # the stage between the true state and odom (fsr_sim.core.sensors)
-    rotor_lag: bool  # rotor actuation: speeds follow their command through a first-order lag (advance_actuators)
+    rotor_lag: bool  # rotor actuation: speeds follow their command through a first-order lag (actuators_at)
     speed_decay: float  # exp(-dt / tau_w) of the rotor time constant tau_w
+    speed_mean: float  # (tau_w / dt) (1 - exp(-dt / tau_w)): a step's mean of exp(-s / tau_w)
+    speed_stages: np.ndarray  # (3, 2) at the RK4 stages s = 0, dt/2, dt: the lag's factors (actuators_at)
     wrench_lag: bool  # wrench actuation: the applied wrench follows its command through that lag
     tilt_lag: bool  # rotor actuation, on servos: tilts follow their command through a lag and/or a rate limit
     tilt_decay: float  # exp(-dt / tau_alpha) (0: no lag)
     tilt_step_max: float  # [rad] per RK4 step: tilt_rate_max dt (inf: no rate limit)
-    turbulence: TurbulenceParams  # Dryden gusts and the drag they push with (fsr_sim.core.turbulence)
+    tilt_stages: np.ndarray  # (3, 2) at the RK4 stages: the lag's factor and the rate limit (actuators_at)
+    turbulence: TurbulenceParams  # Dryden gusts: the wind (fsr_sim.core.turbulence)
+    aero: AeroParams  # parasitic drag and the rotors' aerodynamics (fsr_sim.core.aerodynamics)
 
 
 class PlantState(NamedTuple):
     """What changes (float64 arrays, modified in place)."""
 
     x: np.ndarray  # (13,) rigid-body state, fsr_sim.core.rigid_body layout
-    speeds: np.ndarray  # (n,) applied rotor speeds [rad/s] (clamped): the rotors' actual speeds
+    speeds: np.ndarray  # (n,) applied rotor speeds [rad/s] (clamped): the rotors' actual speeds (of the RK4 stage)
     speed_command: np.ndarray  # (n,) commanded speeds, clamped [rad/s] (NaN until the first command)
     tilt_command: np.ndarray  # (n,) commanded tilts, clamped [rad] (NaN until the first command)
     speed_sq: np.ndarray  # (n,) |w| w [(rad/s)^2]
-    tilts: np.ndarray  # (n,) applied tilt angles [rad]
+    tilts: np.ndarray  # (n,) applied tilt angles [rad] (of the RK4 stage)
     wrench_command: np.ndarray  # (6,) commanded body force [N] and torque [N m] (wrench actuation)
     columns: np.ndarray  # (n, 9) the rotors' columns at the applied tilts
     body_wrench: np.ndarray  # (6,) actuator wrench away from surfaces (wrench actuation: the applied wrench)
     ratios: np.ndarray  # (n,) scratch: thrust ratios of the current stage
+    actuator_start: np.ndarray  # (max(2n, 6),) scratch: speeds and tilts (or the wrench) at the RK4 step's start
     work: np.ndarray  # (5, 13) scratch: RK4 rates k1..k4 and the stage state
     status: np.ndarray  # (STATUS_SIZE,) step index, contact, impacts, surface-cap counts
     saturation: np.ndarray  # rotor-speed saturation record (fsr_sim.core.rotors)
@@ -110,7 +117,7 @@ def plant_time(params: PlantParams, state: PlantState) -> float:
 @jit_inline
 def update_actuator_wrench(params: PlantParams, state: PlantState) -> None:
     """Cache the actuator wrench of the held command away from surfaces (constant over an RK4 step); a lagging
-    wrench (``wrench_lag``) is the plant's state, moved by :func:`advance_actuators` only."""
+    wrench (``wrench_lag``) is the plant's state, moved by the RK4 steps only (:func:`actuators_at`)."""
     if params.wrench_actuation:
         if params.wrench_lag:
             return
@@ -125,7 +132,7 @@ def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, wit
     """Hold rotor speeds (n,) [rad/s] (and, ``with_tilts`` on a tilting vehicle, tilts (n,) [rad]) until the
     next command; speeds are clamped to the limits. True if anything saturated (recorded).
 
-    With actuator dynamics the command is what the rotors (servos) approach (:func:`advance_actuators`); the
+    With actuator dynamics the command is what the rotors (servos) approach (:func:`actuators_at`); the
     first command is also their state at the start (the flight starts with the rotors spun up)."""
     n = speeds.shape[0]
     excess = state.ratios  # scratch until the next stage
@@ -156,60 +163,121 @@ def set_rotor_command(params: PlantParams, state: PlantState, speeds, tilts, wit
 
 @jit_inline
 def lagged(value: float, target: float, decay: float) -> float:
-    """One RK4 step of a first-order lag towards a held ``target``: ``target + (value - target) decay``
-    (``decay = exp(-dt / tau)``)."""
+    """A first-order lag towards a held ``target`` after a time ``s``: ``target + (value - target) decay``
+    (``decay = exp(-s / tau)``)."""
     return target + (value - target) * decay
 
 
 @jit_inline
-def period_mean_lagged(value: float, target: float, decay: float, steps: int) -> float:
-    """Mean over a control period of ``steps`` RK4 steps of a lagging input held over each step (what the
-    integration sees), from ``value`` at the period's start towards the held ``target``."""
+def period_mean_lagged(value: float, target: float, decay: float, mean: float, steps: int) -> float:
+    """Mean over a control period of ``steps`` RK4 steps of a lagging input, from ``value`` at the period's start
+    towards the held ``target``: each step applies ``target + (value - target) mean`` (``mean = (tau / dt)
+    (1 - exp(-dt / tau))``, the exact mean of the exponential: :func:`actuators_at`), then moves it by
+    ``decay = exp(-dt / tau)``."""
     total = 0.0
     for _ in range(steps):
-        total += value
+        total += lagged(value, target, mean)
         value = lagged(value, target, decay)
     return total / steps
 
 
 @jit_inline
-def advance_actuators(params: PlantParams, state: PlantState) -> None:
-    """Actuator dynamics over one RK4 step ``dt`` (after it: the inputs are held over each step).
-
-    Rotor speed, first-order lag with time constant ``tau_w`` towards the command ``w_c`` (exact for a held
-    command): ``w <- w_c + (w - w_c) exp(-dt / tau_w)``; tilt, a lag with ``tau_alpha`` the same way, then its
-    change limited to ``tilt_rate_max dt``. Both stay within their limits (the commands are clamped and the
-    lag moves between the state and the command). In wrench actuation with a rotor time constant, each
-    component of the applied wrench ``w`` the same way: ``w <- w_c + (w - w_c) exp(-dt / tau_w)``."""
+def hold_actuator_start(params: PlantParams, state: PlantState) -> None:
+    """Keep the lagging actuators' state at the start of an RK4 step (``actuator_start``): the applied wrench
+    (wrench actuation), else the rotor speeds then the tilts."""
+    start = state.actuator_start
     if params.wrench_lag:
-        decay = params.speed_decay
         for i in range(6):
-            state.body_wrench[i] = lagged(state.body_wrench[i], state.wrench_command[i], decay)
+            start[i] = state.body_wrench[i]
+        return
+    n = state.speeds.shape[0]
+    for i in range(n):
+        start[i] = state.speeds[i]
+        start[n + i] = state.tilts[i]
+
+
+@jit_inline
+def _tilts_from_start(params: PlantParams, state: PlantState, decay: float, step_max: float) -> None:
+    """Tilts moved from their start towards the command by the lag (``decay``) and at most ``step_max`` [rad]."""
+    if not state.tilt_command[0] == state.tilt_command[0]:  # never commanded: they stay
+        return
+    n = state.tilts.shape[0]
+    start = state.actuator_start
+    for i in range(n):
+        current = start[n + i]
+        change = (state.tilt_command[i] - current) * (1.0 - decay)
+        if change > step_max:
+            change = step_max
+        elif change < -step_max:
+            change = -step_max
+        state.tilts[i] = current + change
+    tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
+
+
+@jit_inline
+def actuators_at(params: PlantParams, state: PlantState, stage: int) -> None:
+    """The lagging actuators at an RK4 stage (``stage`` 0, 1, 2: ``s = 0, dt/2, dt`` into the step) from their
+    start (:func:`hold_actuator_start`) towards the held command (docs/model.md §3.2, *Actuator dynamics*).
+
+    A rotor's speed lags its command ``w_c`` as ``w' = (w_c - w) / tau_w``, so ``w(s) = w_c + (w_0 - w_c)
+    exp(-s / tau_w)`` and ``w^2`` holds ``exp(-s / tau_w)`` and ``exp(-2 s / tau_w)``. RK4 weighs its stages by
+    Simpson's rule, which overweights a transient the step does not resolve (``tau_w < dt``: the old speed for
+    ``dt / 6`` instead of ``tau_w``), so each transient is scaled by ``kappa(tau) = (exact mean of exp(-s / tau)
+    over the step) / (its Simpson mean)``: ``speed_stages[stage] = (kappa(tau_w) exp(-s / tau_w),
+    kappa(tau_w / 2) exp(-2 s / tau_w))``. The stages then apply the exact step mean; ``kappa = 1 -
+    O((dt / tau)^4)`` keeps RK4's order for a resolved lag, and ``kappa -> 6 tau / dt`` makes the lag vanish as
+    ``tau -> 0``. A tilt, the same with ``tau_alpha`` (``tilt_stages[stage, 0]``), its change then limited to
+    ``tilt_rate_max s`` (``tilt_stages[stage, 1]``); in wrench actuation with a rotor time constant, each
+    component of the applied wrench as a speed. :func:`actuators_after_step` sets their exact values at
+    ``dt``."""
+    start = state.actuator_start
+    linear = params.speed_stages[stage, 0]
+    if params.wrench_lag:
+        for i in range(6):
+            state.body_wrench[i] = lagged(start[i], state.wrench_command[i], linear)
         return
     if params.rotor_lag:
-        decay = params.speed_decay
+        square = params.speed_stages[stage, 1]
         for i in range(state.speeds.shape[0]):
-            speed = lagged(state.speeds[i], state.speed_command[i], decay)
+            target = state.speed_command[i]
+            gap = start[i] - target
+            state.speeds[i] = target + gap * linear
+            state.speed_sq[i] = target * target + (2.0 * target * gap) * linear + (gap * gap) * square  # w >= 0
+    if params.tilt_lag:
+        _tilts_from_start(params, state, params.tilt_stages[stage, 0], params.tilt_stages[stage, 1])
+    update_actuator_wrench(params, state)
+
+
+@jit_inline
+def actuators_after_step(params: PlantParams, state: PlantState) -> None:
+    """The lagging actuators at the end of the RK4 step, exactly (the lag solved over ``dt`` from their start,
+    the tilts' change then limited to ``tilt_rate_max dt``): ``w <- w_c + (w_0 - w_c) exp(-dt / tau_w)``."""
+    start = state.actuator_start
+    if params.wrench_lag:
+        for i in range(6):
+            state.body_wrench[i] = lagged(start[i], state.wrench_command[i], params.speed_decay)
+        return
+    if params.rotor_lag:
+        for i in range(state.speeds.shape[0]):
+            speed = lagged(start[i], state.speed_command[i], params.speed_decay)
             state.speeds[i] = speed
             state.speed_sq[i] = abs(speed) * speed
-    if params.tilt_lag and state.tilt_command[0] == state.tilt_command[0]:
-        step_max = params.tilt_step_max
-        for i in range(state.tilts.shape[0]):
-            current, target = state.tilts[i], state.tilt_command[i]
-            change = (target - current) * (1.0 - params.tilt_decay)
-            if change > step_max:
-                change = step_max
-            elif change < -step_max:
-                change = -step_max
-            state.tilts[i] = current + change
-        tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
+    if params.tilt_lag:
+        _tilts_from_start(params, state, params.tilt_decay, params.tilt_step_max)
     update_actuator_wrench(params, state)
+
+
+@jit_inline
+def advance_actuators(params: PlantParams, state: PlantState) -> None:
+    """The lagging actuators one RK4 step ``dt`` on (where the RK4 step leaves them)."""
+    hold_actuator_start(params, state)
+    actuators_after_step(params, state)
 
 
 @jit_inline
 def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None:  # noqa: ANN001
     """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation). With a lag
-    (``wrench_lag``) it is what the applied wrench approaches (:func:`advance_actuators`); the first command is
+    (``wrench_lag``) it is what the applied wrench approaches (:func:`actuators_at`); the first command is
     also the applied wrench at the start (as the rotors start spun up)."""
     first = state.status[WRENCH_COMMANDED] == 0.0
     state.status[WRENCH_COMMANDED] = 1.0
@@ -248,21 +316,33 @@ def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple: 
     else:
         fx, fy, fz, tx, ty, tz = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
     fx, fy, fz = mat_vec3(rotation, (fx, fy, fz))
-    if params.disturbances.shape[0] or state.gusts.shape[0]:
+    if has_external_wrench(params):
         (ex, ey, ez), (ux, uy, uz) = external_wrench_at(params, state, t, x, rotation)
         return (fx + ex, fy + ey, fz + ez), (tx + ux, ty + uy, tz + uz)
     return (fx, fy, fz), (tx, ty, tz)
 
 
 @jit_inline
+def has_external_wrench(params: PlantParams) -> bool:
+    """Whether anything beyond the rotors' ``c_f w^2``, ``c_m w^2`` acts: disturbances or aerodynamics."""
+    return params.disturbances.shape[0] > 0 or has_aerodynamics(params.aero)
+
+
+@jit_inline
 def external_wrench_at(params: PlantParams, state: PlantState, t: float, x, rotation: Mat3) -> tuple:  # noqa: ANN001
-    """The external wrench at time ``t`` in state ``x`` (attitude rows ``rotation``): the disturbances' plus the
-    turbulence's drag, (force world NED [N], torque body FRD [N m]); what the plant feels and what
-    ``wrench_truth`` publishes."""
+    """The external wrench at time ``t`` in state ``x`` (attitude rows ``rotation``), (force world NED [N], torque
+    body FRD [N m]): everything the controller's rotor model (``c_f w^2``, ``c_m w^2``) leaves out - the
+    disturbances and the aerodynamics in the wind (the rotors' at their current speeds); what the plant feels
+    beyond its rotors and what ``wrench_truth`` publishes."""
     force, torque = external_wrench(params.disturbances, params.disturbance_knots, t, rotation)
-    if state.gusts.shape[0]:
-        dx, dy, dz = drag_force(params.turbulence, state.gusts, (x[3], x[4], x[5]), rotation)
-        force = (force[0] + dx, force[1] + dy, force[2] + dz)
+    if has_aerodynamics(params.aero):
+        wx, wy, wz = wind_velocity(state.gusts)
+        air = mat_t_vec3(rotation, (x[3] - wx, x[4] - wy, x[5] - wz))
+        (ax, ay, az), (mx, my, mz) = aerodynamic_wrench(params.aero, state.columns, state.speeds, air,
+                                                         (x[10], x[11], x[12]))
+        ax, ay, az = mat_vec3(rotation, (ax, ay, az))
+        force = (force[0] + ax, force[1] + ay, force[2] + az)
+        torque = (torque[0] + mx, torque[1] + my, torque[2] + mz)
     return force, torque
 
 
@@ -274,19 +354,31 @@ def _rates(params: PlantParams, state: PlantState, t: float, x, out) -> None:  #
 
 @jit_inline
 def rk4_step(params: PlantParams, state: PlantState, t: float) -> None:
-    """One classical RK4 step of ``params.dt`` from time ``t`` [s] (the quaternion renormalised)."""
+    """One classical RK4 step of ``params.dt`` from time ``t`` [s] (the quaternion renormalised). Lagging
+    actuators move within the step (:func:`actuators_at` at each stage: fourth-order in them too) and are left
+    at their exact values of ``t + dt``."""
     x, work = state.x, state.work
     k1, k2, k3, k4, stage = work[0], work[1], work[2], work[3], work[4]
     dt = params.dt
     h = 0.5 * dt
+    lagging = params.rotor_lag or params.tilt_lag or params.wrench_lag
+    if lagging:
+        hold_actuator_start(params, state)
+        actuators_at(params, state, 0)
     _rates(params, state, t, x, k1)
+    if lagging:
+        actuators_at(params, state, 1)
     stage_state(x, k1, h, stage)
     _rates(params, state, t + h, stage, k2)
     stage_state(x, k2, h, stage)
     _rates(params, state, t + h, stage, k3)
+    if lagging:
+        actuators_at(params, state, 2)
     stage_state(x, k3, dt, stage)
     _rates(params, state, t + dt, stage, k4)
     rk4_combine(x, k1, k2, k3, k4, dt)
+    if lagging:
+        actuators_after_step(params, state)
 
 
 @jit_inline
@@ -328,8 +420,6 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
     for sub in range(params.substeps):
         rk4_step(params, state, time + sub * params.dt)
         apply_contact(params, state)
-        if params.rotor_lag or params.tilt_lag or params.wrench_lag:
-            advance_actuators(params, state)
         if state.gusts.shape[0]:
             advance_gusts(params.turbulence, state.gust_states, state.gusts,
                           int(status[STEP_INDEX]) * params.substeps + sub)
@@ -361,8 +451,7 @@ def divergence(params: PlantParams, state: PlantState) -> int:
 
 @jit_inline
 def plant_external_wrench(params: PlantParams, state: PlantState) -> tuple:
-    """The true external wrench now: (force world NED [N], torque body FRD [N m]): the disturbances' and the
-    turbulence's drag."""
+    """The true external wrench now (:func:`external_wrench_at`): (force world NED [N], torque body FRD [N m])."""
     return external_wrench_at(params, state, plant_time(params, state), state.x, state_rotation(state.x))
 
 
@@ -372,12 +461,13 @@ def applied_wrench_log(params: PlantParams, state: PlantState, commands, mean) -
     command ``k`` (``commands`` (N, 6): force [N], torque [N m], body FRD) held by :func:`set_wrench_command` on
     the scratch ``state`` (fresh: the first command is the applied wrench), then ``substeps`` RK4 steps of its
     actuator dynamics (:func:`advance_actuators`); ``mean`` (N, 6) gets the applied wrench averaged over each
-    control period's RK4 steps (:func:`period_mean_lagged`; the command without a lag)."""
+    control period's RK4 steps as they apply it (:func:`period_mean_lagged`; the command without a lag)."""
     for k in range(commands.shape[0]):
         set_wrench_command(params, state, commands[k])
         for i in range(6):
             mean[k, i] = period_mean_lagged(state.body_wrench[i], state.wrench_command[i], params.speed_decay,
-                                            params.substeps) if params.wrench_lag else state.body_wrench[i]
+                                            params.speed_mean, params.substeps) \
+                if params.wrench_lag else state.body_wrench[i]
         if params.wrench_lag:
             for _ in range(params.substeps):
                 advance_actuators(params, state)

@@ -1,4 +1,4 @@
-"""Dryden turbulence and the drag it pushes with (compiled core).
+"""Dryden turbulence (compiled core).
 
 Each turbulence entry ``p`` is three discrete filters (one per gust axis ``u, v, w``, order <= 2, state space
 ``x' = A x + B n``, ``y = C x + D n``: :mod:`fsr_sim.model.turbulence` designs them) driven by white noise
@@ -7,9 +7,8 @@ Each turbulence entry ``p`` is three discrete filters (one per gust axis ``u, v,
 The gust velocity of an entry, world NED [m/s], is ``mean + y_u a_u + y_v a_v + y_w a_w`` with the axes
 ``a`` (rows of ``axes``); it is held over each RK4 step and advanced after it (:func:`advance_gusts`).
 
-The air pushes on the vehicle through a quadratic drag per body axis (the vehicle's ``drag_coefficients``
-``d`` [N s^2/m^2]): with the air velocity relative to the vehicle in the body frame
-``r = R^T (sum_p gust_p - v)``, ``f_b,k = d_k r_k |r_k|`` (:func:`drag_force`, returned in the world frame).
+The wind is the sum of the entries' gust velocities (:func:`wind_velocity`); it pushes on the vehicle through
+the aerodynamics of :mod:`fsr_sim.core.aerodynamics` (the air velocity is the vehicle's minus the wind).
 """
 
 from __future__ import annotations
@@ -20,14 +19,13 @@ import numpy as np
 
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.sensors import standard_normal
-from fsr_sim.core.so3 import Mat3, mat_t_vec3, mat_vec3
 
 ORDER = 2  # filter states per axis (a first-order filter leaves its second state at zero)
 CHANNELS_PER_ENTRY = 3  # noise channels u, v, w
 
 
 class TurbulenceParams(NamedTuple):
-    """The packed turbulence entries (``m`` of them; ``m = 0``: no turbulence, no drag)."""
+    """The packed turbulence entries (``m`` of them; ``m = 0``: no turbulence, still air)."""
 
     seeds: np.ndarray  # (m,) int64, 0 .. 2^32 - 1
     a: np.ndarray  # (m, 3, 2, 2)
@@ -37,7 +35,6 @@ class TurbulenceParams(NamedTuple):
     noise_std: np.ndarray  # (m, 3) of the driving white noise
     axes: np.ndarray  # (m, 3, 3) rows: world NED directions of u, v, w
     mean: np.ndarray  # (m, 3) mean wind, world NED [m/s]
-    drag: np.ndarray  # (3,) the vehicle's drag coefficients per body axis [N s^2/m^2]
     initial_states: np.ndarray  # (m, 3, 2) the filters' (stationary) start
     initial_gusts: np.ndarray  # (m, 3) the gusts of the first step [m/s]
 
@@ -62,14 +59,9 @@ def advance_gusts(params: TurbulenceParams, states, gusts, step: int) -> None:  
 
 
 @jit_inline
-def drag_force(params: TurbulenceParams, gusts, velocity, rotation: Mat3) -> tuple:  # noqa: ANN001
-    """Drag of the air on the vehicle (module docstring), world NED [N]: ``velocity`` world [m/s], ``rotation``
-    rows body -> world; zero without turbulence entries."""
-    if gusts.shape[0] == 0:
-        return 0.0, 0.0, 0.0
-    ax, ay, az = -velocity[0], -velocity[1], -velocity[2]
+def wind_velocity(gusts) -> tuple:  # noqa: ANN001
+    """The wind [m/s], world NED: the sum of the entries' gust velocities ``gusts`` (m, 3) (zero without any)."""
+    wx = wy = wz = 0.0
     for p in range(gusts.shape[0]):
-        ax, ay, az = ax + gusts[p, 0], ay + gusts[p, 1], az + gusts[p, 2]
-    rx, ry, rz = mat_t_vec3(rotation, (ax, ay, az))
-    d = params.drag
-    return mat_vec3(rotation, (d[0] * rx * abs(rx), d[1] * ry * abs(ry), d[2] * rz * abs(rz)))
+        wx, wy, wz = wx + gusts[p, 0], wy + gusts[p, 1], wz + gusts[p, 2]
+    return wx, wy, wz

@@ -1,4 +1,5 @@
-"""The true plant: rigid body + rotors (with ground/ceiling effect) + disturbances + ground contact.
+"""The true plant: rigid body + rotors (with ground/ceiling effect, and their lag) + disturbances + aerodynamics
+(docs/model.md §3.4) + ground contact.
 
 A checked shell around the compiled core (:mod:`fsr_sim.core.plant`): the constructor checks its arguments and
 packs them once (:class:`~fsr_sim.core.plant.PlantParams`); every method calls the core. Inputs are held
@@ -6,7 +7,8 @@ constant over a step (zero-order hold) while the state-dependent parts (thrust r
 time-varying disturbances) are evaluated at every RK4 stage. Two actuation modes:
 
 * ``rotors``: rotor speeds ``w_i`` [rad/s] (clamped to the vehicle's limits, saturation recorded) and, for
-  a tilting vehicle, tilt angles ``alpha_i`` [rad] (clamped to +-tilt_angle_max), applied instantly;
+  a tilting vehicle, tilt angles ``alpha_i`` [rad] (clamped to +-tilt_angle_max), applied instantly (or through
+  the vehicle's first-order lags);
   ``f_b = sum c_f r_i |w_i| w_i z_i``, ``tau_b = sum |w_i| w_i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the
   thrust ratio ``r_i`` of :mod:`fsr_sim.model.environment` (drag torque is not scaled).
 * ``wrench``: the commanded body wrench directly, ``f_b`` and ``tau_b`` (the report's exercises 3 and 4 use
@@ -39,6 +41,7 @@ from fsr_sim.contract import body_force_of_thrust, thrust_of
 from fsr_sim.core import imu as core_imu
 from fsr_sim.core import plant as core
 from fsr_sim.core import rotors as core_rotors
+from fsr_sim.core.aerodynamics import AeroParams
 from fsr_sim.core.rigid_body import STATE_SIZE
 from fsr_sim.core.sensors import memory_size, reset_memory
 from fsr_sim.core.surfaces import has_thrust_effects
@@ -57,7 +60,7 @@ from fsr_sim.model.rigid_body import (
 from fsr_sim.model.sensors import ImuModel, OdometryNoise, pack_sensors
 from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
 from fsr_sim.model.turbulence import DrydenTurbulence, pack_turbulence
-from fsr_sim.model.vehicle import Vehicle
+from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle
 
 MAX_SPEED = core.MAX_SPEED
 MAX_SPIN = core.MAX_SPIN
@@ -86,13 +89,57 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         disturbance_knots=knots, crash_speed=float(crash_speed),
         sensors=pack_sensors(odometry_noise, imu, float(dt) * int(substeps)),
         rotor_lag=actuator_lags(vehicle, actuation)[0],
-        speed_decay=math.exp(-dt / vehicle.rotor_time_constant) if vehicle.rotor_time_constant > 0.0 else 0.0,
+        speed_decay=lag_decay(dt, vehicle.rotor_time_constant),
+        speed_mean=lag_step_mean(dt, vehicle.rotor_time_constant),
+        speed_stages=lag_stages(dt, vehicle.rotor_time_constant),
         wrench_lag=actuation == "wrench" and vehicle.rotor_time_constant > 0.0,
         tilt_lag=actuator_lags(vehicle, actuation)[1],
-        tilt_decay=math.exp(-dt / vehicle.tilt_time_constant) if vehicle.tilt_time_constant > 0.0 else 0.0,
+        tilt_decay=lag_decay(dt, vehicle.tilt_time_constant),
         tilt_step_max=float(vehicle.tilt_rate_max * dt),
-        turbulence=pack_turbulence(turbulence, vehicle.drag_coefficients, dt),
+        tilt_stages=np.column_stack((lag_stages(dt, vehicle.tilt_time_constant)[:, 0],
+                                     STAGE_TIMES * dt * vehicle.tilt_rate_max if math.isfinite(vehicle.tilt_rate_max)
+                                     else np.full(3, np.inf))),
+        turbulence=pack_turbulence(turbulence, dt),
+        aero=pack_aerodynamics(vehicle, actuation),
     )
+
+
+STAGE_TIMES = np.array((0.0, 0.5, 1.0))  # RK4's stage times in the step, in steps (the middle two share dt/2)
+
+
+def lag_decay(span: float, time_constant: float) -> float:
+    """``exp(-span / tau)`` of a first-order lag over ``span`` [s] (0 without a lag, ``tau = 0``)."""
+    return math.exp(-span / time_constant) if time_constant > 0.0 else 0.0
+
+
+def lag_step_mean(dt: float, time_constant: float) -> float:
+    """``(tau / dt) (1 - exp(-dt / tau))``: the mean of ``exp(-s / tau)`` over an RK4 step (0 without a lag)."""
+    return -math.expm1(-dt / time_constant) * time_constant / dt if time_constant > 0.0 else 0.0
+
+
+def lag_stages(dt: float, time_constant: float) -> np.ndarray:
+    """(3, 2): at RK4's stage times ``s = 0, dt/2, dt``, ``kappa(tau) exp(-s / tau)`` and ``kappa(tau / 2)
+    exp(-2 s / tau)``, with ``kappa(tau)`` the exact mean of ``exp(-s / tau)`` over the step divided by its
+    Simpson mean (:func:`fsr_sim.core.plant.actuators_at`; zeros without a lag)."""
+    out = np.zeros((3, 2))
+    if time_constant > 0.0:
+        for column, tau in enumerate((time_constant, 0.5 * time_constant)):
+            decay = np.exp(-STAGE_TIMES * dt / tau)
+            simpson = (decay[0] + 4.0 * decay[1] + decay[2]) / 6.0
+            out[:, column] = lag_step_mean(dt, tau) / simpson * decay
+    return out
+
+
+def pack_aerodynamics(vehicle: Vehicle, actuation: str) -> AeroParams:
+    """The core's :class:`~fsr_sim.core.aerodynamics.AeroParams` of a vehicle; in wrench actuation the rotors are
+    not modelled, so only the parasitic drag acts."""
+    rotor_terms = [getattr(vehicle, name) for name in ROTOR_AERODYNAMICS]
+    return AeroParams(
+        parasitic=bool(np.any(vehicle.drag_coefficients > 0.0)),
+        rotor=actuation == "rotors" and any(value > 0.0 for value in rotor_terms),
+        drag=np.ascontiguousarray(vehicle.drag_coefficients, dtype=float), rotor_drag=float(rotor_terms[0]),
+        inflow=float(rotor_terms[1]), lift=float(rotor_terms[2]), flapping=float(rotor_terms[3]),
+        positions=np.ascontiguousarray(vehicle.positions, dtype=float), thrust_coefficient=float(vehicle.c_f))
 
 
 def actuator_lags(vehicle: Vehicle, actuation: str) -> tuple[bool, bool]:
@@ -115,7 +162,8 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
         x=np.array(state_vector, dtype=float), speeds=np.zeros(n), speed_command=np.full(n, np.nan),
         tilt_command=np.full(n, np.nan), speed_sq=np.zeros(n), tilts=np.zeros(n),
         wrench_command=np.zeros(6), columns=params.vertical_columns.copy(),
-        body_wrench=np.zeros(6), ratios=np.ones(n), work=np.zeros((5, STATE_SIZE)),
+        body_wrench=np.zeros(6), ratios=np.ones(n), actuator_start=np.zeros(max(2 * n, 6)),
+        work=np.zeros((5, STATE_SIZE)),
         status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),
         gust_states=params.turbulence.initial_states.copy(), gusts=params.turbulence.initial_gusts.copy(),
         sensor_memory=np.zeros(memory_size(params.sensors)),
@@ -394,8 +442,8 @@ class Plant:
 
     # ----- dynamics ---------------------------------------------------------------------------------
     def external_wrench(self) -> tuple[np.ndarray, np.ndarray]:
-        """True external wrench now: (force world NED [N], torque body FRD [N m]): the disturbances' and the
-        turbulence's drag."""
+        """True external wrench now: (force world NED [N], torque body FRD [N m]): everything beyond the rotors'
+        ``c_f w^2``, ``c_m w^2`` - the disturbances and the aerodynamics (``wrench_truth``)."""
         force, torque = core.plant_external_wrench(self.params, self.core_state)
         return np.array(force), np.array(torque)
 

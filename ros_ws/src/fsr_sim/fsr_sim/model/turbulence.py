@@ -19,8 +19,9 @@ is as smooth as the model and a law that differentiates the measured acceleratio
 drives it with white noise of variance ``pi / dt`` (a unit one-sided PSD up to the Nyquist frequency
 ``pi / dt``); the filters start in their
 stationary state (:func:`scipy.linalg.solve_discrete_lyapunov`), so the gusts are stationary from ``t = 0``.
-``u`` is along the horizontal mean wind (north without one), ``v`` to its right, ``w`` down. The gust force is
-the vehicle's quadratic drag on the air's velocity relative to it (:mod:`fsr_sim.core.turbulence`).
+``u`` is along the horizontal mean wind (north without one), ``v`` to its right, ``w`` down. The wind pushes
+through the vehicle's aerodynamics (:mod:`fsr_sim.core.aerodynamics`: the air velocity is the vehicle's minus
+the wind).
 """
 
 from __future__ import annotations
@@ -121,9 +122,9 @@ class DrydenTurbulence:
         return out
 
 
-def pack_turbulence(entries: Sequence[DrydenTurbulence], drag: ArrayLike, dt: float) -> TurbulenceParams:
-    """The core's :class:`~fsr_sim.core.turbulence.TurbulenceParams` of ``entries`` at the RK4 step ``dt`` [s]
-    with the vehicle's drag coefficients ``drag`` (3,), the filters' stationary start included."""
+def pack_turbulence(entries: Sequence[DrydenTurbulence], dt: float) -> TurbulenceParams:
+    """The core's :class:`~fsr_sim.core.turbulence.TurbulenceParams` of ``entries`` at the RK4 step ``dt`` [s],
+    the filters' stationary start included."""
     if any(entry.wind_speed > 0.0 for entry in entries):  # only gusts need scipy (importing it takes ~1 s)
         from scipy.linalg import solve_discrete_lyapunov
         from scipy.signal import cont2discrete, tf2ss
@@ -149,5 +150,4 @@ def pack_turbulence(entries: Sequence[DrydenTurbulence], drag: ArrayLike, dt: fl
             gusts[p] += (c_j[0] @ states[p, j, :k]) * axes[p, j]  # the first step's gust (its noise term aside)
     return TurbulenceParams(
         seeds=np.array([entry.seed for entry in entries], dtype=np.int64), a=a, b=b, c=c, d=d,
-        noise_std=noise_std, axes=axes, mean=mean, drag=np.ascontiguousarray(drag, dtype=float),
-        initial_states=states, initial_gusts=gusts)
+        noise_std=noise_std, axes=axes, mean=mean, initial_states=states, initial_gusts=gusts)

@@ -25,6 +25,8 @@ from fsr_sim.model.checks import InvalidValueError, finite_array, symmetric_posi
 from fsr_sim.model.frames import GRAVITY
 
 UNCANTED_THRUST_AXIS = (0.0, 0.0, -1.0)  # body FRD: thrust along -z_b
+ROTOR_AERODYNAMICS = ("rotor_drag_coefficient", "induced_inflow_coefficient", "translational_lift_coefficient",
+                      "flapping_coefficient")  # the rotors' aerodynamic coefficients (docs/model.md §3.4)
 
 
 def _unit_rows(rows: np.ndarray, name: str, what: str) -> np.ndarray:
@@ -74,8 +76,15 @@ class Vehicle:
     tilt_rate_max : float
         [rad/s], > 0: the servos' rate limit (inf: none).
     drag_coefficients : array-like, shape (3,)
-        ``d`` [N s^2/m^2] >= 0 per body axis: the air relative to the vehicle ``r`` (body) pushes with
-        ``d_k r_k |r_k|`` (only where a scenario has turbulence, docs/model.md §3.4).
+        ``C = diag(c_x, c_y, c_z)`` [N s^2/m^2] >= 0, the airframe's parasitic drag: with the air velocity
+        ``v_a`` (body, the vehicle's minus the wind) it pushes with ``-|v_a| C v_a`` (docs/model.md §3.4).
+    rotor_drag_coefficient, induced_inflow_coefficient : float
+        ``k_d``, ``k_z`` [kg/rad] >= 0: each rotor's drag (H-force) ``-w_i k_d v_i,p`` against its in-plane air
+        velocity and the induced inflow ``-w_i k_z v_i,z z_i`` against its axial one.
+    translational_lift_coefficient : float
+        ``k_h`` [kg/m] >= 0: each rotor's extra thrust ``k_h |v_i,p|^2`` along its axis.
+    flapping_coefficient : float
+        ``k_flap`` [kg m/rad] >= 0: each rotor's blade-flapping moment ``-k_flap w_i (v_i x z_i)``.
 
     Raises
     ------
@@ -103,6 +112,10 @@ class Vehicle:
     tilt_time_constant: float = 0.0  # [s] first-order lag of the tilts (rotors on servos; 0: none)
     tilt_rate_max: float = np.inf  # [rad/s] servo rate limit (inf: none)
     drag_coefficients: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s^2/m^2] per body axis
+    rotor_drag_coefficient: float = 0.0  # k_d [kg/rad]
+    induced_inflow_coefficient: float = 0.0  # k_z [kg/rad]
+    translational_lift_coefficient: float = 0.0  # k_h [kg/m]
+    flapping_coefficient: float = 0.0  # k_flap [kg m/rad]
 
     def __post_init__(self) -> None:
         def put(name: str, value: object) -> None:
@@ -116,7 +129,7 @@ class Vehicle:
                 raise InvalidValueError(name, f"must be > 0, got {value}")
             put(name, value)
         for name in ("c_m", "rotor_speed_min", "contact_height", "top_height", "rotor_time_constant",
-                     "tilt_time_constant"):
+                     "tilt_time_constant", *ROTOR_AERODYNAMICS):
             value = float(getattr(self, name))
             if not value >= 0.0 or not np.isfinite(value):
                 raise InvalidValueError(name, f"must be >= 0, got {value}")
@@ -155,6 +168,12 @@ class Vehicle:
                 raise InvalidValueError("tilt_axes", "each tilt axis must be normal to its rotor's thrust axis (in "
                                                      "the body x-y plane for uncanted rotors)")
             put("tilt_axes", axes)
+
+    @property
+    def has_aerodynamics(self) -> bool:
+        """Some parasitic-drag or rotor aerodynamic coefficient is not zero."""
+        return bool(np.any(self.drag_coefficients > 0.0)) or any(getattr(self, name) > 0.0
+                                                                  for name in ROTOR_AERODYNAMICS)
 
     @property
     def rotor_count(self) -> int:
