@@ -266,12 +266,12 @@ def circle_scenario(speed: float, **extra: object) -> dict:
 
 
 def test_feasibility_refuses_stretches_or_flies_an_over_fast_circle_as_it_does_a_leg():
-    """8 m/s on a 2 m circle asks 32 m/s^2 sideways: 84 N of thrust from the octocopter's 77.8 N (54.4 with the
-    margin 0.7)."""
+    """8 m/s on a 2 m circle asks 32 m/s^2 sideways: 83.7 N of thrust from the octocopter's 77.8 N (61.8 with the
+    margin 0.7), and its tilt of 73 deg turning at 4 rad/s asks torques beyond them too."""
     with pytest.raises(ConfigError) as refused:
         controller_config(scenario_from_mapping(circle_scenario(8.0, feasibility="refuse")))
     message = str(refused.value)
-    assert "trajectory.speed: circle path" in message and "of thrust, the rotors give 77.8 N" in message
+    assert "trajectory.speed: circle path (3.927 s) needs 83.7 N of thrust, the rotors give 77.8 N" in message
     assert "refused (trajectory.feasibility: refuse)" in message
     written = controller_config(scenario_from_mapping(circle_scenario(8.0, feasibility="warn")))
     (warned,) = written.plan_adjustments

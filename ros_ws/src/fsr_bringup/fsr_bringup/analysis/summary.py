@@ -82,7 +82,7 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("plan (trajectory.kind)", text))
     adjustments = metrics.get("plan_adjustments")
     if adjustments:
-        rows.append(("legs beyond the authority", "; ".join(item["text"] for item in adjustments)))
+        rows.append(("legs and paths beyond the authority", "; ".join(item["text"] for item in adjustments)))
     path = metrics.get("path")
     if path:
         flown = f"flown ({path['flown_from']})"

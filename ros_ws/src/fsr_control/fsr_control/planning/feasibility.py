@@ -298,7 +298,7 @@ class LegAdjustment:
             shortest = f"it needs at least {self.position_duration:.2f} s" + (
                 f" and its angle {self.angle_duration:.2f} s" if self.angle_duration != self.position_duration else "")
         if self.action == "shaped":
-            done = f"angle shaped to {self.angle_duration:.2f} s (the position keeps {self.duration:g} s)"
+            done = f"angle shaped to {self.angle_duration:.2f} s (the position keeps {self.duration:.4g} s)"
         elif self.action == "stretched":
             done = f"stretched to {self.position_duration:.2f} s" + (
                 f", its angle shaped to {self.angle_duration:.2f} s"
@@ -312,7 +312,7 @@ class LegAdjustment:
             reserve = f"no duration keeps the margin {self.margin:g} (what it holds at rest needs more); "
             shortest = reserve + ("it is within the rotors' limits as written" if self.action == "within the limits"
                                   else f"within the rotors' limits {shortest}")
-        return f"{self.label} ({self.duration:g} s) {needs}: {shortest}; {done}"
+        return f"{self.label} ({self.duration:.4g} s) {needs}: {shortest}; {done}"
 
     def as_dict(self) -> dict[str, object]:
         """Plain values (JSON): the label, durations, action and each shortfall."""
