@@ -77,11 +77,27 @@ def test_a_flight_that_ends_before_its_plan_is_told_it_ended_mid_path(tmp_path: 
     metrics = flight_metrics(tmp_path / "fast.mcap")
     assert metrics["plan"]["ended_mid_path"] is True and note in metrics["notes"]
     assert "**the flight ended mid-path at 10.000 s**" in markdown_summary(metrics)
-    scenario = tmp_path / "fast.yaml"
-    scenario.write_text(yaml.safe_dump(fast))
+
+
+@pytest.mark.slow
+def test_fsr_fly_says_before_the_flight_that_it_will_end_mid_path(tmp_path: Path):
+    scenario = tmp_path / "circle.yaml"
+    scenario.write_text(yaml.safe_dump(CIRCLE))
     fly = subprocess.run([str(Path(sys.executable).parent / "fsr-fly"), str(scenario), "--in-process", "--duration",
                           "0.2", "--out", str(tmp_path / "run.mcap"), "--quiet"], capture_output=True, text=True,
                          timeout=300, cwd=tmp_path, env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin"})
     assert fly.returncode == 0, fly.stderr
-    assert f"WARNING: the plan comes to rest at {run.plan_end_time:.3f} s, after the flight's 0.2 s" in fly.stderr
-    assert "ended mid-path" in fly.stdout  # the summary's note
+    assert "WARNING: the plan comes to rest at 12.512 s, after the flight's 0.2 s: the flight will end mid-path " \
+           "(raise duration to at least 12.52 s)" in fly.stderr
+    assert "**the flight ended mid-path at 0.200 s**" in fly.stdout  # the summary
+
+
+def test_legs_stretched_beyond_the_flight_end_it_mid_path_and_say_so():
+    """The waypoints kind too: a 2.5 s leg stretched to 4.43 s in a 4 s flight."""
+    leg = {"trajectory.waypoints.0": {"position": [2, 3, -6], "attitude_rpy_deg": [0, 0, 0], "duration": 2.5}}
+    run = simulate("ex4_geometric", duration=4.0, set={"actuation": "rotors", **leg})
+    assert "stretched to 4.43 s" in run.plan_adjustments[0]
+    assert run.ended_mid_path and run.plan_end_time == pytest.approx(4.43)
+    assert run.notes == ["the flight ended mid-path: it finished at 4.000 s (the scenario's duration) and its plan "
+                         "comes to rest at 4.430 s; raise duration to at least 4.43 s"]
+    assert not simulate("ex4_geometric", duration=4.5, set={"actuation": "rotors", **leg}).ended_mid_path

@@ -21,8 +21,8 @@ channels are made beyond that (``PATH_*`` columns):
   jerk and snap are continuous and zero at both ends);
 * its angle: ``YAW_CHANNEL`` (the angle's polynomial), ``YAW_RATE`` (``psi = psi_s + Omega s(t)``: the yaw
   rate ramped with the path) or ``YAW_VELOCITY`` (the heading ``h`` of the horizontal direction of motion,
-  blended at the ends: ``psi = A + r (h - A)`` wrapped, ``A`` the heading the path leaves in for the first
-  half and the one it arrives in for the second), with ``theta = psi - PATH_YAW_ORIGIN``. The direction of
+  blended in at the ends: ``psi = A + r wrap(h - A)``, ``A`` the heading the path leaves in for the first half
+  and the one it arrives in for the second), with ``theta = psi - PATH_YAW_ORIGIN``. The direction of
   motion is the path's tangent ``dp/ds`` (periodic), or the velocity divided by the powers of ``tau`` and
   ``1 - tau`` it vanishes with at a rest end (``heading``, polynomial): defined at rest too.
 
