@@ -36,5 +36,6 @@ def test_stretch_prints_the_leg_flies_it_and_the_summary_lists_it(capsys, tmp_pa
     metrics = json.loads((tmp_path / "stretched" / "metrics.json").read_text())
     (adjustment,) = metrics["plan_adjustments"]
     assert adjustment["action"] == "stretched" and adjustment["position_duration_s"] == 4.43
-    assert "| legs beyond the authority | leg 1 (2.5 s)" in (tmp_path / "stretched" / "summary.md").read_text()
+    summary = (tmp_path / "stretched" / "summary.md").read_text()
+    assert "| legs and paths beyond the authority | leg 1 (2.5 s)" in summary
     assert metrics["tracking"]["position_error_m"]["final"] <= 1e-3

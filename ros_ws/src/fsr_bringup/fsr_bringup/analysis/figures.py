@@ -38,8 +38,10 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.legend import Legend
+from matplotlib.ticker import MaxNLocator
 
 from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.figure_layout import PNG_DPI, Panel, Panels, add_zoom, arrange, envelope, panel_grid
@@ -47,7 +49,8 @@ from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
 from fsr_bringup.analysis.figure_rules import disturbance_windows, limits_near, start_transient, zoom_span
 from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.metrics import tracking_errors
-from fsr_sim.contract import REFERENCE, WRENCH_CMD
+from fsr_bringup.visualization.frames import NED_TO_ENU
+from fsr_sim.contract import ODOM, REFERENCE, WRENCH_CMD
 from fsr_sim.model.so3 import euler_zyx_from_rotation
 
 ONE_COLUMN_IN = 3.5  # in, one journal column
@@ -75,8 +78,12 @@ DISTURBANCE = {"facecolor": "0.9", "edgecolor": "none", "zorder": 0.0}  # behind
 DISTURBANCE_LABEL = "disturbance acting"
 
 # Smallest axis height per unit: a channel spanning less is drawn flat on this fixed axis, with a note.
-FLOORS = {"m": 1e-3, "m/s": 1e-3, "deg": 1e-3, "rad/s": 1e-3, "N": 1e-3, "N m": 1e-4, "kg": 1e-4, "-": 1e-4,
-          "rotor rad/s": 1e-2}
+FLOORS = {"m": 1e-3, "m/s": 1e-3, r"m/s$^2$": 1e-3, "deg": 1e-3, "rad/s": 1e-3, "N": 1e-3, "N m": 1e-4, "kg": 1e-4,
+          "-": 1e-4, "rotor rad/s": 1e-2}
+PATH_POINTS = 3000  # a path is drawn through at most this many samples
+PATH_FIGURE_HEIGHT_IN = 3.2
+PATH_FLAT_SHARE = 0.25  # the 3D box is at least this share of its widest half-extent along each axis
+PATH_3D_ZOOM = 0.85  # the 3D box within its axes (room for the tick and axis labels)
 
 RC = {
     "font.size": FONT_PT, "axes.labelsize": FONT_PT, "axes.titlesize": FONT_PT, "xtick.labelsize": FONT_PT,
@@ -450,6 +457,103 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
                        "wrench actuation)")
 
 
+def _moving_reference(runs: list[Run]) -> tuple[list[Run], object | None, str]:
+    """(runs with odom and reference, the first reference, why nothing is drawn: "" when its position moves by at
+    least the metre floor)."""
+    runs_with = [r for r in runs if r.flight.odom is not None and r.flight.reference is not None]
+    if not runs_with:
+        return [], None, "odom or reference missing"
+    reference = runs_with[0].flight.reference
+    span = np.ptp(reference.position, axis=0).max() if len(reference.t) else 0.0
+    if not span >= FLOORS["m"]:
+        return [], None, f"the reference does not move (it spans {span:.2g} m): no path to draw"
+    return runs_with, reference, ""
+
+
+def _decimated(points: np.ndarray) -> np.ndarray:
+    """At most :data:`PATH_POINTS` evenly spaced rows of ``points`` (the last kept), for drawing a path."""
+    stride = max(1, math.ceil(len(points) / PATH_POINTS))
+    return np.vstack((points[::stride], points[-1:])) if stride > 1 else points
+
+
+def path_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """The planned path (``reference``, black dashed) and each run's flown path (``odom``) in 3D and seen from
+    above (x-y top view), in east-north-up axes (``(p_y, p_x, -p_z)`` of world NED: up drawn up, north up the
+    page of the top view), one scale on every axis."""
+    runs_with, reference, reason = _moving_reference(runs)
+    if reference is None:
+        return Drawn(None, reason)
+    fig = Figure(figsize=(_width("two", options), PATH_FIGURE_HEIGHT_IN), dpi=PNG_DPI)
+    FigureCanvasAgg(fig)
+    space = fig.add_axes((0.0, 0.0, 0.5, 1.0), projection="3d", proj_type="ortho", label="path 3d")
+    top = fig.add_axes((0.6, 0.15, 0.38, 0.7), label="path top view")
+    paths = [(f"{REFERENCE.name} $p_d$", reference.position, TRUTH)]
+    paths += [(f"{run.label}: $p$", run.flight.odom.position, {"color": _colour(index), "lw": 1.0})
+              for index, run in enumerate(runs_with)]
+    for label, position, style in paths:
+        east, north, up = (_decimated(position) @ NED_TO_ENU.T).T
+        space.plot(east, north, up, label=label, **style)
+        top.plot(east, north, label=label, **style)
+    start = reference.position[0] @ NED_TO_ENU.T
+    space.scatter(*start, color=OKABE_ITO["black"], s=8, label="start", depthshade=False)
+    top.plot(start[0], start[1], "o", color=OKABE_ITO["black"], ms=3, label="start")
+    everything = np.vstack([position for _, position, _ in paths]) @ NED_TO_ENU.T
+    low, high = everything.min(axis=0), everything.max(axis=0)
+    half = 0.5 * max(float((high - low).max()), FLOORS["m"]) * 1.05
+    middle = 0.5 * (low + high)
+    extent = np.maximum(0.5 * (high - low) * 1.05, PATH_FLAT_SHARE * half)  # a flat path: a thin box, not a plane
+    for axis, setter in enumerate((space.set_xlim, space.set_ylim, space.set_zlim)):
+        setter(middle[axis] - extent[axis], middle[axis] + extent[axis])
+    for axis, extent_k in zip((space.xaxis, space.yaxis, space.zaxis), extent, strict=True):
+        axis.set_major_locator(MaxNLocator(nbins=max(2, min(5, round(5 * extent_k / half))), steps=[1, 2, 2.5, 5, 10]))
+    space.set_box_aspect(tuple(extent), zoom=PATH_3D_ZOOM)
+    space.set_xlabel(r"east $p_y$ [m]", labelpad=-2)
+    space.set_ylabel(r"north $p_x$ [m]", labelpad=-2)
+    space.set_zlabel(r"up $-p_z$ [m]", labelpad=-2)
+    space.tick_params(pad=-1)
+    top.set_xlim(middle[0] - half, middle[0] + half)
+    top.set_ylim(middle[1] - half, middle[1] + half)
+    top.set_aspect("equal", adjustable="box")
+    top.set_xlabel(r"east $p_y$ [m]" + "\nworld NED, from above")
+    top.set_ylabel(r"north $p_x$ [m]")
+    top.grid(True)
+    handles = dict(zip(*reversed(top.get_legend_handles_labels()), strict=True))
+    legend = _legend(fig, handles, 4)
+    renderer = fig.canvas.get_renderer()
+    legend_bottom = legend.get_window_extent(renderer).y0 / fig.bbox.height
+    space.set_position((0.03, 0.08, 0.47, legend_bottom - 0.1))
+    box = top.get_tightbbox(renderer)
+    frame = top.get_window_extent(renderer)
+    below = (frame.y0 - box.y0) / fig.bbox.height
+    left = (frame.x0 - box.x0) / fig.bbox.width
+    top.set_position((0.55 + left, below + 0.02, 0.43 - left, legend_bottom - below - 0.06))
+    if options.titles:
+        fig.suptitle("planned and flown path")
+    return Drawn(fig)
+
+
+def speed_figure(runs: list[Run], options: FigureOptions) -> Drawn:
+    """Speed ``|v|`` [m/s] and acceleration ``|a|`` [m/s^2] (world NED) of the reference (black dashed) and of each
+    run (``odom``'s velocity and its central differences)."""
+    runs_with, reference, reason = _moving_reference(runs)
+    if reference is None:
+        return Drawn(None, reason)
+    panels = panel_grid(2, 1, _width("one", options), row_height=1.2)
+    for index, run in enumerate(runs_with):
+        odom = run.flight.odom
+        acceleration = np.gradient(odom.velocity_world, odom.t, axis=0) if len(odom.t) > 1 else odom.velocity_world
+        style = {"color": _colour(index), "label": f"{run.label} ({ODOM.name})"}
+        panels[0, 0].plot(odom.t, np.linalg.norm(odom.velocity_world, axis=1), **style)
+        panels[1, 0].plot(odom.t, np.linalg.norm(acceleration, axis=1), **style)
+    label = f"{REFERENCE.name} $p_d$"
+    panels[0, 0].plot(reference.t, np.linalg.norm(reference.velocity, axis=1), label=label, **TRUTH)
+    panels[1, 0].plot(reference.t, np.linalg.norm(reference.acceleration, axis=1), label=label, **TRUTH)
+    panels[0, 0].label(r"speed $\|v\|$", "m/s", "world NED")
+    panels[1, 0].label(r"$\|a\|$", r"m/s$^2$", "world NED")
+    finish_panels(panels, runs_with, "speed and acceleration", options, legend_cols=2)
+    return Drawn(panels.fig)
+
+
 FIGURES: dict[str, Callable[[list[Run], FigureOptions], Drawn]] = {
     "pose": pose_figure,
     "errors": errors_figure,
@@ -458,6 +562,8 @@ FIGURES: dict[str, Callable[[list[Run], FigureOptions], Drawn]] = {
     "external_wrench": external_wrench_figure,
     "mass": mass_figure,
     "thrust_ratio": thrust_ratio_figure,
+    "path": path_figure,
+    "speed": speed_figure,
 }
 
 

@@ -33,6 +33,7 @@ def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun
     t = run.time
     rotation = run.rotation
     flight = RecordedFlight(None, "/", sim.name, sim, run.estimator)  # type: ignore[arg-type]
+    flight.plan = {"kind": run.plan_kind, "end_s": run.plan_end_time} if run.plan_end_time is not None else None
     flight.odom = Odometry(stamp_ns, t, run.position, run.state[:, 6:10], rotation, run.velocity,
                            run.angular_velocity)
     # the metrics read the attitudes as rotation matrices: the quaternions are not made (None)

@@ -132,6 +132,7 @@ class RecordedFlight:
     compensation: CompensationConfig | None = None  # controller.compensation: estimate (None: none or unknown)
     compensation_mode: str | None = None  # the scenario's controller.compensation (None without a scenario)
     plan_adjustments: list[dict] | None = None  # the legs the planner shaped or stretched (None: no scenario)
+    plan: dict | None = None  # the scenario's plan: {"kind": trajectory.kind, "end_s": when it comes to rest}
     odom: Odometry | None = None
     reference: Reference | None = None
     wrench_truth: Wrench | None = None
@@ -189,7 +190,7 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     scenario = recorded_scenario(recording, namespace, notes)
     config, scenario_name, estimator = _scenario(scenario, recording.path.stem, notes)
     flight = RecordedFlight(recording, namespace, scenario_name, config, estimator, notes=notes)
-    flight.compensation_mode, flight.compensation, flight.plan_adjustments = _controller(scenario, notes)
+    flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan = _controller(scenario, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
@@ -252,20 +253,21 @@ def _scenario(scenario: Scenario | None, fallback: str,
     return config, scenario.name, estimator
 
 
-def _controller(scenario: Scenario | None,
-                notes: list[str]) -> tuple[str | None, CompensationConfig | None, list[dict] | None]:
+def _controller(scenario: Scenario | None, notes: list[str]
+                ) -> tuple[str | None, CompensationConfig | None, list[dict] | None, dict | None]:
     """(``controller.compensation`` of the recorded scenario, its validated settings or None, the legs its
     planner shaped or stretched: :attr:`fsr_control.config.controller_config.ControllerConfig.plan_adjustments`
-    as plain values)."""
+    as plain values, and its plan's kind and end time)."""
     if scenario is None:
-        return None, None, None
+        return None, None, None, None
     try:
         config = controller_config(scenario)
     except ConfigError as error:
         notes.append(f"controller section of the scenario cannot be used: {error}")
-        return None, None, None
+        return None, None, None, None
     adjustments = [item.as_dict() | {"text": item.text()} for item in config.plan_adjustments]
-    return ("estimate" if config.compensation else "none"), config.compensation, adjustments
+    plan = {"kind": config.trajectory_kind, "end_s": config.plan_end_time}
+    return ("estimate" if config.compensation else "none"), config.compensation, adjustments, plan
 
 
 def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:

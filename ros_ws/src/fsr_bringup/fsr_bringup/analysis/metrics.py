@@ -27,6 +27,11 @@ a settling time; the pure external wrench (``wrench_truth``) is reported next to
 ``wrench_shortfall`` (demanded minus commanded body wrench): per axis the steps with ``|shortfall|`` above
 ``SHORTFALL_TOLERANCE`` and the largest ``|shortfall|`` (N or N m) with its time.
 
+The path (``path``): the peak (with its time) and RMS speed and acceleration and the length of the reference
+(``planned``) and of the flight (``flown``: ``odom``'s velocity and its central differences). The plan
+(``plan``): the scenario's ``trajectory.kind`` and when its plan comes to rest; a flight that finished at the
+scenario's duration before that ended mid-path (``ended_mid_path``, with a note).
+
 Every value is JSON-ready (NaN -> None); a metric whose topics or scenario are missing is None and the
 reason is in ``notes``.
 """
@@ -42,9 +47,21 @@ import numpy as np
 
 from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import RecordedFlight, load_flight, zero_order_hold
+from fsr_control.planning.trajectory import mid_path, mid_path_note
 from fsr_estimation.core import metrics as estimator_metrics
 from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
-from fsr_sim.contract import ATTITUDE_CMD, REFERENCE, SIM_STATUS, STOPPED, WRENCH_SHORTFALL, SimStatus
+from fsr_sim.contract import (
+    ATTITUDE_CMD,
+    FINISHED,
+    GOAL,
+    ODOM,
+    REFERENCE,
+    SIM_STATUS,
+    STOPPED,
+    WRENCH_SHORTFALL,
+    SimStatus,
+    resolve,
+)
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
 from fsr_sim.model.environment import contact_mask
 from fsr_sim.model.so3 import relative_rotation_angles
@@ -114,6 +131,48 @@ def error_summary(t: np.ndarray, error: np.ndarray) -> dict[str, float | None]:
         "peak_time_s": float(times[peak]),
         "rms": float(np.sqrt(np.mean(values**2))),
     }
+
+
+def _motion(t: np.ndarray, position: np.ndarray, velocity: np.ndarray,
+            acceleration: np.ndarray) -> dict[str, Any]:
+    """Peak (with its time) and RMS of the speed [m/s] and of the acceleration's norm [m/s^2], and the path length
+    [m] (the polyline through the positions)."""
+    speed = error_summary(t, velocity)
+    accel = error_summary(t, acceleration)
+    return {
+        "speed_m_s": {key: speed[key] for key in ("peak", "peak_time_s", "rms")},
+        "acceleration_m_s2": {key: accel[key] for key in ("peak", "peak_time_s", "rms")},
+        "length_m": float(np.linalg.norm(np.diff(position, axis=0), axis=1).sum()) if len(position) > 1 else 0.0,
+    }
+
+
+def path_motion(flight: RecordedFlight) -> dict[str, Any] | None:
+    """Speed, acceleration and path length (:func:`_motion`) of the reference (``planned``: its own velocity and
+    acceleration) and of the flight (``flown``: ``odom``'s velocity, world, and its central differences); None
+    without odom or reference."""
+    odom, ref = flight.odom, flight.reference
+    if odom is None or ref is None:
+        return None
+    flown_acceleration = (np.gradient(odom.velocity_world, odom.t, axis=0) if len(odom.t) > 1
+                          else np.zeros_like(odom.velocity_world))
+    return {"planned": _motion(ref.t, ref.position, ref.velocity, ref.acceleration),
+            "flown": _motion(odom.t, odom.position, odom.velocity_world, flown_acceleration),
+            "flown_from": ODOM.name}
+
+
+def plan_end(flight: RecordedFlight, end_time: float | None) -> dict[str, Any] | None:
+    """The scenario's plan: its ``kind``, when it comes to rest (``end_s``) and whether the flight ended before
+    (``ended_mid_path``: it finished at the scenario's duration while the plan was still moving; None when a goal
+    received at run time changed the plan, or the flight did not run to its end); None without the scenario."""
+    plan = flight.plan
+    if plan is None:
+        return None
+    status = flight.sim_status[-1] if flight.sim_status else None
+    goals = flight.message_counts.get(resolve(GOAL.name, flight.namespace), 0)
+    ended = None
+    if end_time is not None and not goals:
+        ended = mid_path(FINISHED if status is None else status.state, end_time, plan["end_s"])
+    return {"kind": plan["kind"], "end_s": plan["end_s"], "ended_mid_path": ended}
 
 
 def _limit_hits(values: np.ndarray, t: np.ndarray, hits: np.ndarray) -> dict[str, Any]:
@@ -355,6 +414,10 @@ def flight_metrics(
         metrics["commanded_thrust_N"] = None
     metrics["compensation"] = compensation(flight)
     metrics["plan_adjustments"] = flight.plan_adjustments
+    metrics["plan"] = plan_end(flight, metrics["end_time_s"])
+    if metrics["plan"] is not None and metrics["plan"]["ended_mid_path"]:
+        notes.append(mid_path_note(metrics["end_time_s"], metrics["plan"]["end_s"]))
+    metrics["path"] = path_motion(flight)
     if flight.config is not None and flight.config.actuation == "wrench":  # no rotors: nothing can saturate
         metrics["saturation"] = metrics[WRENCH_SHORTFALL.name] = None
         notes.append("no rotor saturation: wrench actuation applies the commanded wrench as it is")

@@ -81,9 +81,24 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("rotor speed saturation", text))
         if saturation.get("tilt"):
             rows.append(("tilt saturation", f"{saturation['tilt']['steps']} steps"))
+    plan = metrics.get("plan")
+    if plan:
+        text = f"{plan['kind']}, at rest from {_num(plan['end_s'])} s"
+        if plan.get("ended_mid_path"):
+            text += f" - **the flight ended mid-path at {_num(metrics.get('end_time_s'))} s**"
+        rows.append(("plan (trajectory.kind)", text))
     adjustments = metrics.get("plan_adjustments")
     if adjustments:
-        rows.append(("legs beyond the authority", "; ".join(item["text"] for item in adjustments)))
+        rows.append(("legs and paths beyond the authority", "; ".join(item["text"] for item in adjustments)))
+    path = metrics.get("path")
+    if path:
+        flown = f"flown ({path['flown_from']})"
+        for key, label in (("speed_m_s", "speed [m/s]"), ("acceleration_m_s2", "acceleration [m/s^2]")):
+            planned, flight = path["planned"][key], path["flown"][key]
+            rows.append((f"{label} peak / RMS", f"planned {_num(planned['peak'])} / {_num(planned['rms'])}; "
+                                                f"{flown} {_num(flight['peak'])} / {_num(flight['rms'])}"))
+        rows.append(("path length [m]", f"planned {_num(path['planned']['length_m'])}; "
+                                        f"{flown} {_num(path['flown']['length_m'])}"))
     compensation = metrics.get("compensation")
     if compensation:
         text = compensation["mode"]

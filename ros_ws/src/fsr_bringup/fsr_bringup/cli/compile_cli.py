@@ -68,9 +68,19 @@ def tour(folder: Path) -> None:
         simulate(name, duration=0.02, record=path)
         flight_metrics(load_flight(path))
     simulate("ex4_geometric", set={"actuation": "rotors"}, duration=0.02)
+    _paths()
     _sweep_flights()
     _node_calls()
     _python_api()
+
+
+def _paths() -> None:
+    """A path that faces its motion (``trajectory.yaw: velocity``, the only calls the built-in scenarios do not
+    make: the heading of the motion along the path), planned and checked."""
+    from fsr_bringup import simulate
+
+    simulate("ex4_geometric", duration=0.02, set={"actuation": "rotors", "trajectory": {
+        "kind": "circle", "centre": [0.0, 0.0, -2.0], "radius": 1.0, "speed": 0.5, "yaw": "velocity"}})
 
 
 def _sweep_flights() -> None:

@@ -16,6 +16,7 @@ a summary. Exit codes: ``fsr-fly --help``.
 from __future__ import annotations
 
 import argparse
+import math
 import signal
 import sys
 import time
@@ -183,6 +184,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"fsr-fly: {name}: {label}{adjustment.text()}", flush=True)
         for warning in member.checked.warnings:
             print(f"fsr-fly: {name}: {label}warning: {warning}", flush=True)
+        plan_end, flight_end = member.checked.controller.plan_end_time, member.checked.simulation.duration
+        if plan_end > flight_end + 1e-9:  # the flight will end mid-path
+            print(f"fsr-fly: {name}: {label}WARNING: the plan comes to rest at {plan_end:.3f} s, after the flight's "
+                  f"{flight_end:g} s: the flight will end mid-path (raise duration to at least "
+                  f"{math.ceil(plan_end * 100) / 100:g} s)", file=sys.stderr, flush=True)
     duration = max(m.checked.simulation.duration for m in members)
 
     if args.in_process:

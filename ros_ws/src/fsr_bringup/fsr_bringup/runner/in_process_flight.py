@@ -22,6 +22,7 @@ from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
 from fsr_control.core.flatness import ATTITUDE_ERRORS
 from fsr_control.flight_controller import FlightController
+from fsr_control.planning.trajectory import mid_path, mid_path_note
 from fsr_sim.config.scenario import Scenario, plant_from_config, simulation_config
 from fsr_sim.contract import DIVERGED, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK, FINISHED, RUNNING, STOPPED
 from fsr_sim.core.odometry import (
@@ -75,6 +76,11 @@ class FlightRun:
         velocity is :attr:`angular_velocity`); None without an IMU.
     end_reason : str
         ``finished``, ``diverged`` or ``stopped`` (interrupted); ``reason`` says why.
+    plan_kind, plan_end_time : str, float
+        The trajectory's ``kind`` and when its plan (with the goals received) comes to rest [s].
+    notes : list of str
+        What the flight's user should know: a flight that finished before its plan came to rest ended
+        mid-path (``ended_mid_path``).
     compensation : dict
         ``{"mode": "none"}``, or with ``controller.compensation: estimate`` the steps compensated, the steps
         switched off by contact, the late estimates (0: the observer is in the controller) and the gaps
@@ -120,10 +126,18 @@ class FlightRun:
     imu_angular_velocity_measured: np.ndarray | None = None  # (K+1, 3) imu's angular velocity [rad/s], body
     imu_specific_force_measured: np.ndarray | None = None  # (K+1, 3) imu's linear acceleration [m/s^2], body
     imu_specific_force_true: np.ndarray | None = None  # (K+1, 3) R^T (p_ddot - g e3) [m/s^2], body
+    plan_kind: str = "waypoints"  # trajectory.kind
+    plan_end_time: float | None = None  # [s] when the plan comes to rest (None: no plan)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def sim_time(self) -> float:
         return float(self.time[-1])
+
+    @property
+    def ended_mid_path(self) -> bool:
+        """The flight finished (at the scenario's duration) before its plan came to rest."""
+        return mid_path(self.end_reason, self.sim_time, self.plan_end_time)
 
     @property
     def exit_code(self) -> int:
@@ -362,6 +376,9 @@ def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, co
         return own(published[:, at:at + 3]) if setup.imu else None
 
     failures = {DIVERGED: [f"flight diverged: {reason}"], STOPPED: [f"flight interrupted ({reason})"]}
+    plan_end = controller.trajectory.end_time if controller.trajectory is not None else None
+    end_time = (count - 1) * setup.period_ns * 1e-9
+    notes = [mid_path_note(end_time, plan_end)] if count and mid_path(end_reason, end_time, plan_end) else []
     c = control_layout
     return FlightRun(
         time=np.arange(count, dtype=np.int64) * setup.period_ns * 1e-9, state=state,
@@ -388,5 +405,6 @@ def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, co
         wrench_shortfall=columns(c.SHORTFALL, 6), simulation=setup.simulation, estimator=setup.estimation,
         actuator_dynamics=setup.actuator_dynamics, imu_angular_velocity_measured=imu(IMU_ANGULAR_VELOCITY),
         imu_specific_force_measured=imu(IMU_LINEAR_ACCELERATION),
-        imu_specific_force_true=imu(IMU_TRUE_LINEAR_ACCELERATION),
+        imu_specific_force_true=imu(IMU_TRUE_LINEAR_ACCELERATION), plan_kind=controller.config.trajectory_kind,
+        plan_end_time=plan_end, notes=notes,
     )

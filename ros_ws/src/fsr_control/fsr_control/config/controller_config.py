@@ -1,19 +1,7 @@
-"""The ``controller`` and ``trajectory`` sections of a scenario, validated (fsr_control's part of it).
+"""The ``controller`` and ``trajectory`` sections of a scenario, validated (fsr_control's part of it; the
+``trajectory`` section's keys: :mod:`fsr_control.config.trajectory_config`).
 
 ```yaml
-trajectory:
-  waypoints:                        # flown in order, each rest-to-rest from the previous one
-    - position: [1, 1, -4]          # world NED [m]
-      attitude_rpy_deg: [0, 0, 20]  # optional (default: the previous waypoint's / initial attitude);
-                                    # fixed-rotor vehicles take only yaw (roll and pitch must be 0)
-      duration: 20.0                # travel time [s] > 0
-      hold: 0.0                     # optional wait after arrival [s] >= 0
-  goal_duration: 10.0               # travel time [s] of a goal received at run time (`goal` topic)
-  authority_margin: 0.7             # in (0, 1]: the share of the model's authority at hover
-                                    # (fsr_sim.model.authority) that references may use
-  feasibility: stretch              # a leg (or goal) beyond it, with rotor actuation: stretch (its angle
-                                    # shaped or the leg lengthened to the shortest feasible duration) |
-                                    # warn (flown as written) | refuse (exit 2 before take-off)
 controller:
   type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | a law of
                                     # fsr_control.controllers.catalog.LAWS; default by vehicle
@@ -42,26 +30,28 @@ import numpy as np
 
 from fsr_control.allocation import ALLOCATION_STRATEGIES
 from fsr_control.compensation import COMPENSATION_MODES, MAX_C0_PERIOD, CompensationConfig
+from fsr_control.config.trajectory_config import (
+    DEFAULT_AUTHORITY_MARGIN,
+    DEFAULT_GOAL_DURATION,
+    trajectory_config,
+)
 from fsr_control.controllers import voliro
 from fsr_control.controllers.catalog import LAWS
 from fsr_control.planning.feasibility import (
     DEFAULT_FEASIBILITY,
-    FEASIBILITY_MODES,
     InfeasibleReferenceError,
     LegAdjustment,
     reference_limits,
 )
+from fsr_control.planning.paths import PathError, PathSpec
 from fsr_control.planning.trajectory import Trajectory, Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import Section, checked_spd
 from fsr_sim.model.environment import pack_surfaces
-from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
 SECONDARY_TYPES = ("none", "min_peak_speed")
 DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
-DEFAULT_GOAL_DURATION = 10.0  # s
-DEFAULT_AUTHORITY_MARGIN = 0.7  # share of the model's authority at hover (fsr_sim.model.authority)
 
 
 @dataclass(frozen=True)
@@ -89,15 +79,18 @@ class ControllerConfig:
     acceleration_filter_hz: float = 0.0  # controller.acceleration_filter_hz (0: the measured acceleration raw)
     feasibility: str = DEFAULT_FEASIBILITY  # trajectory.feasibility: stretch | warn | refuse
     plan_adjustments: tuple[LegAdjustment, ...] = ()  # the scenario's infeasible legs (from its initial state)
+    path: PathSpec | None = None  # trajectory.kind minsnap, circle or lissajous (None: waypoints)
+    trajectory_kind: str = "waypoints"  # trajectory.kind
+    plan_end_time: float = 0.0  # [s] when the scenario's plan (from its initial state) comes to rest for good
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
-        """The waypoints planned from a start pose for ``vehicle``, each leg checked against its authority
-        with rotor actuation (:mod:`fsr_control.planning.feasibility`; a commanded wrench has no rotor
+        """The waypoints (or the path) planned from a start pose for ``vehicle``, each leg checked against its
+        authority with rotor actuation (:mod:`fsr_control.planning.feasibility`; a commanded wrench has no rotor
         limits, so with ``actuation: wrench`` nothing is checked)."""
         limits = reference_limits(vehicle, self.authority_margin) if actuation == "rotors" else None
         return Trajectory(self.waypoints, position, rotation, full_attitude=vehicle.fully_actuated,
-                          start_time=start_time, limits=limits, feasibility=self.feasibility)
+                          start_time=start_time, limits=limits, feasibility=self.feasibility, path=self.path)
 
 
 def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
@@ -108,31 +101,6 @@ def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
         gains[name] = default.copy() if value is None else checked_spd(value, section.key(name), section.source)
     section.reject_unknown()
     return gains
-
-
-def _waypoints(section: Section, vehicle: Vehicle) -> list[Waypoint]:
-    raw = section.raw("waypoints", [])
-    if not isinstance(raw, list):
-        raise section.error("waypoints", f"must be a list, got {type(raw).__name__}")
-    waypoints = []
-    for index, item in enumerate(raw):
-        entry = Section(item, section.key(f"waypoints.{index}"), section.source)
-        position = entry.vector("position", 3)
-        rotation = None
-        if entry.has("attitude_rpy_deg"):
-            rpy = entry.vector("attitude_rpy_deg", 3)
-            if not vehicle.fully_actuated and np.any(np.abs(rpy[:2]) > 1e-9):
-                raise entry.error(
-                    "attitude_rpy_deg",
-                    f"roll and pitch must be 0 for '{vehicle.name}', which is not fully actuated (only yaw can be "
-                    f"commanded), got {rpy.tolist()}",
-                )
-            rotation = rotation_from_euler_zyx(np.deg2rad(rpy))
-        duration = entry.number("duration", strictly_positive=True)
-        hold = entry.number("hold", 0.0, minimum=0.0)
-        entry.reject_unknown()
-        waypoints.append(Waypoint(position, rotation, duration, hold))
-    return waypoints
 
 
 def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> CompensationConfig | None:
@@ -198,22 +166,20 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     compensation = _compensation(scenario, controller, vehicle)
     controller.reject_unknown()
 
-    trajectory = scenario.section("trajectory")
-    waypoints = _waypoints(trajectory, vehicle)
-    goal_duration = trajectory.number("goal_duration", DEFAULT_GOAL_DURATION, strictly_positive=True)
-    authority_margin = trajectory.number("authority_margin", DEFAULT_AUTHORITY_MARGIN)
-    if not 0.0 < authority_margin <= 1.0:
-        raise trajectory.error("authority_margin", f"must be in (0, 1] (the share of the vehicle's authority at "
-                                                   f"hover that references may use), got {authority_margin}")
-    feasibility = trajectory.string("feasibility", DEFAULT_FEASIBILITY, choices=FEASIBILITY_MODES)
-    trajectory.reject_unknown()
-    config = ControllerConfig(controller_type, gains, waypoints, feedforward, secondary, goal_duration,
-                              scenario.source, allocation, compensation, air_mode, authority_margin,
-                              acceleration_filter_hz=acceleration_filter_hz, feasibility=feasibility)
-    # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
+    section = scenario.section("trajectory")
     sim = simulation_config(scenario)
+    trajectory = trajectory_config(section, vehicle, sim.initial.position)
+    config = ControllerConfig(controller_type, gains, trajectory.waypoints, feedforward, secondary,
+                              trajectory.goal_duration, scenario.source, allocation, compensation, air_mode,
+                              trajectory.authority_margin, acceleration_filter_hz=acceleration_filter_hz,
+                              feasibility=trajectory.feasibility, path=trajectory.path, trajectory_kind=trajectory.kind)
+    # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     try:
         plan = config.trajectory(vehicle, actuation, sim.initial.position, sim.initial.rotation)
     except InfeasibleReferenceError as error:
-        raise trajectory.error(f"waypoints.{error.waypoint}", str(error)) from None
-    return replace(config, plan_adjustments=tuple(plan.adjustments))
+        key = {"approach": "approach_duration", "path": trajectory.timing_key}.get(error.part,
+                                                                                 f"waypoints.{error.waypoint}")
+        raise section.error(key, str(error)) from None
+    except PathError as error:
+        raise section.error(error.key, str(error)) from None
+    return replace(config, plan_adjustments=tuple(plan.adjustments), plan_end_time=plan.end_time)

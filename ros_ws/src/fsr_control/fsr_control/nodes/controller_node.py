@@ -131,7 +131,7 @@ class ControllerNode(Node):
         self.callbacks = 0
         self.get_logger().info(
             f"{config.type} controller for '{sim.vehicle.name}' ({sim.actuation} actuation), "
-            f"{len(config.waypoints)} waypoint(s)"
+            + (f"{len(config.waypoints)} waypoint(s)" if config.path is None else f"a {config.trajectory_kind} path")
         )
 
     def done(self) -> bool:

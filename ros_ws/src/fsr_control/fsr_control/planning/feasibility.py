@@ -52,7 +52,9 @@ from fsr_sim.model.vehicle import Vehicle
 
 FEASIBILITY_MODES = ("stretch", "warn", "refuse")  # trajectory.feasibility
 DEFAULT_FEASIBILITY = "stretch"
-SAMPLES = 257  # per leg (both ends included)
+SAMPLES = 257  # per leg (both ends included), per path segment, per ramp of a periodic path
+CRUISE_SAMPLES = 64  # per period of a periodic path's fastest axis, between its ramps
+CRUISE_SAMPLES_MAX = 4096
 FACTOR_TOLERANCE = 1e-3  # relative, on the shortest duration
 DURATION_STEP = 0.01  # s: shortest durations are rounded up to it
 MAX_FACTOR = 1024.0  # beyond it a leg is called infeasible at any duration
@@ -60,12 +62,14 @@ AXES = ("roll", "pitch", "yaw")
 
 
 class InfeasibleReferenceError(ValueError):
-    """A leg (or a goal) the vehicle cannot fly, refused (``trajectory.feasibility: refuse``); ``waypoint`` is
-    the index of the scenario's waypoint (None for a goal)."""
+    """A leg (or a goal, or a path) the vehicle cannot fly, refused (``trajectory.feasibility: refuse``);
+    ``waypoint`` is the index of the scenario's waypoint (None for a goal or a path), ``part`` ``approach`` or
+    ``path`` for a path's approach leg or the path itself."""
 
-    def __init__(self, message: str, waypoint: int | None = None) -> None:
+    def __init__(self, message: str, waypoint: int | None = None, part: str | None = None) -> None:
         super().__init__(message)
         self.waypoint = waypoint
+        self.part = part
 
 
 @dataclass(frozen=True)
@@ -149,33 +153,76 @@ class LegDemand:
         return out
 
 
+def _leg_times(table: core.TrajectoryTable, segment: int) -> np.ndarray:
+    """:data:`SAMPLES` times [s] over each distinct channel duration of a leg (the position's motion stays densely
+    sampled beside a long angle), from its start to its end."""
+    return table.start_time[segment] + np.unique(np.concatenate(
+        [np.linspace(0.0, duration, SAMPLES) for duration in np.unique(table.duration[segment])]))
+
+
+def path_samples(table: core.TrajectoryTable) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, times [s]) sampling a path's table, every row over its own span: a polynomial row :data:`SAMPLES`
+    times up to the next row's start (its end for the last); a periodic row :data:`SAMPLES` times over each ramp
+    and :data:`CRUISE_SAMPLES` per period of its fastest axis between them (at most :data:`CRUISE_SAMPLES_MAX`)."""
+    rows, times = [], []
+    count = len(table.start_time)
+    for row in range(count):
+        path = table.path[row]
+        if path[core.PATH_KIND] == core.KIND_PERIODIC:
+            start, end, ramp = path[core.PATH_START], path[core.PATH_END], path[core.PATH_RAMP]
+            frequency = table.periodic[row, core.PERIODIC_FREQUENCY].max()
+            cruise = end - start - 2.0 * ramp
+            periods = cruise * frequency / (2.0 * math.pi) if frequency > 0.0 else 1.0
+            middle = min(CRUISE_SAMPLES_MAX, max(2, math.ceil(CRUISE_SAMPLES * periods)))
+            sampled = np.unique(np.concatenate((np.linspace(start, start + ramp, SAMPLES),
+                                                np.linspace(start + ramp, end - ramp, middle),
+                                                np.linspace(end - ramp, end, SAMPLES))))
+        else:
+            duration = table.duration[row, 0]
+            sampled = table.start_time[row] + np.linspace(0.0, duration, SAMPLES)
+            if row < count - 1:
+                sampled = sampled[:-1]  # the next row from its start on
+        rows.append(np.full(len(sampled), row))
+        times.append(sampled)
+    return np.concatenate(rows), np.concatenate(times)
+
+
 def leg_demand(table: core.TrajectoryTable, segment: int, limits: ReferenceLimits) -> LegDemand:
     """The :class:`LegDemand` of row ``segment`` of ``table``, sampled from its start to its end with the
     core's own reference (the samples the control law would get)."""
-    # SAMPLES over each distinct channel duration: the position's motion stays densely sampled beside a long angle
-    times = table.start_time[segment] + np.unique(np.concatenate(
-        [np.linspace(0.0, duration, SAMPLES) for duration in np.unique(table.duration[segment])]))
-    scratch = np.empty((core.DERIVATIVES, core.CHANNELS))
+    times = _leg_times(table, segment)
+    return _demand(table, np.full(len(times), segment), times, limits)
+
+
+def path_demand(table: core.TrajectoryTable, limits: ReferenceLimits) -> LegDemand:
+    """The :class:`LegDemand` of a path's whole table (:func:`path_samples`)."""
+    return _demand(table, *path_samples(table), limits)
+
+
+def _demand(table: core.TrajectoryTable, rows: np.ndarray, times: np.ndarray, limits: ReferenceLimits) -> LegDemand:
+    """The peaks of the reference of row ``rows[i]`` at ``times[i]`` [s] (:class:`LegDemand`), sampled by the core
+    in one call (:func:`fsr_control.core.reference.sample_references`)."""
+    samples = np.empty((len(times), core.SAMPLE_WIDTH))
+    core.sample_references(table, np.ascontiguousarray(rows, dtype=np.int64), np.ascontiguousarray(times, float),
+                           np.empty((core.DERIVATIVES, core.CHANNELS)), samples)
+    acceleration = samples[:, core.SAMPLE_ACCELERATION:core.SAMPLE_ACCELERATION + 3]
+    rotation = samples[:, core.SAMPLE_ROTATION:core.SAMPLE_ROTATION + 9].reshape(-1, 3, 3)
     thrust = np.empty(len(times))
     tilt = np.empty(len(times))
-    omega = np.empty((len(times), 3))
-    omega_dot = np.empty((len(times), 3))
+    omega = samples[:, core.SAMPLE_ANGULAR_VELOCITY:core.SAMPLE_ANGULAR_VELOCITY + 3].copy()
+    omega_dot = samples[:, core.SAMPLE_ANGULAR_ACCELERATION:core.SAMPLE_ANGULAR_ACCELERATION + 3].copy()
     forces = np.zeros((len(times), 3))  # body force (full attitude)
-    for i, t in enumerate(times):
-        core.channel_derivatives(table, segment, t, scratch)
-        sample = core.reference_from_derivatives(table, segment, scratch)
-        acceleration = np.array(sample.acceleration)
+    for i, row in enumerate(samples.tolist()):
         if limits.full_attitude:
-            force_body = forces[i] = limits.mass * np.array(sample.rotation).T @ (acceleration - (0.0, 0.0, GRAVITY))
+            force_body = forces[i] = limits.mass * rotation[i].T @ (acceleration[i] - (0.0, 0.0, GRAVITY))
             thrust[i] = np.linalg.norm(force_body)
             tilt[i] = math.acos(max(-1.0, min(1.0, -force_body[2] / thrust[i]))) if thrust[i] > 0.0 else 0.0
-            omega[i], omega_dot[i] = sample.angular_velocity, sample.angular_acceleration
             continue
-        n = (-acceleration[0], -acceleration[1], GRAVITY - acceleration[2])
-        jerk, snap = sample.jerk, sample.snap
+        a, jerk, snap = row[core.SAMPLE_ACCELERATION:], row[core.SAMPLE_JERK:], row[core.SAMPLE_SNAP:]
+        n = (-a[0], -a[1], GRAVITY - a[2])
         status, _, rate, rate_dot = attitude_from_thrust_vector(
-            n, (-jerk[0], -jerk[1], -jerk[2]), (-snap[0], -snap[1], -snap[2]), sample.yaw, sample.yaw_rate,
-            sample.yaw_acceleration)
+            n, (-jerk[0], -jerk[1], -jerk[2]), (-snap[0], -snap[1], -snap[2]), row[core.SAMPLE_YAW],
+            row[core.SAMPLE_YAW_RATE], row[core.SAMPLE_YAW_ACCELERATION])
         norm = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2)
         thrust[i] = limits.mass * norm
         if status != ATTITUDE_OK:  # free fall or a horizontal thrust axis: no torque is defined there
@@ -251,7 +298,7 @@ class LegAdjustment:
             shortest = f"it needs at least {self.position_duration:.2f} s" + (
                 f" and its angle {self.angle_duration:.2f} s" if self.angle_duration != self.position_duration else "")
         if self.action == "shaped":
-            done = f"angle shaped to {self.angle_duration:.2f} s (the position keeps {self.duration:g} s)"
+            done = f"angle shaped to {self.angle_duration:.2f} s (the position keeps {self.duration:.4g} s)"
         elif self.action == "stretched":
             done = f"stretched to {self.position_duration:.2f} s" + (
                 f", its angle shaped to {self.angle_duration:.2f} s"
@@ -265,7 +312,7 @@ class LegAdjustment:
             reserve = f"no duration keeps the margin {self.margin:g} (what it holds at rest needs more); "
             shortest = reserve + ("it is within the rotors' limits as written" if self.action == "within the limits"
                                   else f"within the rotors' limits {shortest}")
-        return f"{self.label} ({self.duration:g} s) {needs}: {shortest}; {done}"
+        return f"{self.label} ({self.duration:.4g} s) {needs}: {shortest}; {done}"
 
     def as_dict(self) -> dict[str, object]:
         """Plain values (JSON): the label, durations, action and each shortfall."""
@@ -280,13 +327,15 @@ def plan_leg(
     label: str,
     limits: ReferenceLimits | None,
     mode: str,
+    path: bool = False,
 ) -> tuple[object, LegAdjustment | None]:
     """A leg the vehicle can fly, by ``mode`` (:data:`FEASIBILITY_MODES`), and what was done if it was not.
 
     ``build(position_duration, angle_duration)`` makes the leg and a one-row table of it; ``duration`` [s] is
     the written one. A feasible leg (or no ``limits``) is built with ``duration`` exactly, as without a check.
     Otherwise ``stretch`` builds it with the shortest durations (module docstring; the angle shaped alone only if
-    the leg moves it), ``warn`` as written, ``refuse`` raises.
+    the leg moves it), ``warn`` as written, ``refuse`` raises. ``path``: ``build`` makes a whole path (its table
+    checked by :func:`path_demand`, its angle never shaped apart: ``build`` stretches the path in time).
 
     Raises
     ------
@@ -297,20 +346,25 @@ def plan_leg(
     segment, table = build(duration, duration)
     if limits is None:
         return segment, None
-    shortfalls = leg_demand(table, 0, limits).shortfalls(limits)
+
+    def demand(table: core.TrajectoryTable, limits: ReferenceLimits) -> LegDemand:
+        return path_demand(table, limits) if path else leg_demand(table, 0, limits)
+
+    shortfalls = demand(table, limits).shortfalls(limits)
     if not shortfalls:
         return segment, None
-    turns = table.goal[0, core.CHANNELS - 1] != 0.0  # the leg moves its angle: only then can shaping it help
-    position, angle, action = _shortest(build, duration, limits, turns)
+    # the leg moves its angle: only then can shaping it help
+    turns = not path and table.goal[0, core.CHANNELS - 1] != 0.0
+    position, angle, action = _shortest(build, duration, limits, turns, demand)
     without_margin = False
     if position is None and limits.allowed.margin < 1.0:
         # Not even at MAX_FACTOR: what the leg asks for at rest (a tilted pose held) is beyond the margin. Within
         # the rotors' own limits it can still be flown: the shortest durations there.
         model_limits = replace(limits, allowed=limits.model)
-        if not leg_demand(table, 0, model_limits).shortfalls(model_limits):
+        if not demand(table, model_limits).shortfalls(model_limits):
             position, angle, action = duration, duration, "within the limits"
         else:
-            position, angle, action = _shortest(build, duration, model_limits, turns)
+            position, angle, action = _shortest(build, duration, model_limits, turns, demand)
         without_margin = position is not None
     if mode == "warn":
         action = "flown as written"
@@ -326,12 +380,14 @@ def plan_leg(
 
 
 def _shortest(build: Callable[[float, float], tuple[object, core.TrajectoryTable]], duration: float,
-              limits: ReferenceLimits, turns: bool) -> tuple[float | None, float | None, str]:
+              limits: ReferenceLimits, turns: bool,
+              demand: Callable[[core.TrajectoryTable, ReferenceLimits], LegDemand],
+              ) -> tuple[float | None, float | None, str]:
     """(position duration, angle duration, ``shaped`` or ``stretched``) of the shortest feasible leg (module
     docstring); durations None when none up to :data:`MAX_FACTOR` is."""
 
     def feasible(position_duration: float, angle_duration: float) -> bool:
-        return not leg_demand(build(position_duration, angle_duration)[1], 0, limits).shortfalls(limits)
+        return not demand(build(position_duration, angle_duration)[1], limits).shortfalls(limits)
 
     slowest_angle = MAX_FACTOR * duration
     if turns and feasible(duration, slowest_angle):

@@ -1,4 +1,4 @@
-"""7th-order (septic) polynomials in normalised time for rest-to-rest motion (docs/model.md §3.5).
+"""7th-order (septic) polynomials in normalised time: rest-to-rest motion, or given (docs/model.md §3.5).
 
 A channel ``x(t)`` over ``t in [t0, t0 + T]`` is written in ``tau = (t - t0) / T``:
 
@@ -75,8 +75,25 @@ class SepticSegment:
             residual = -coefficients[:, :4] @ _FALLING[:4, :4].T
             residual[:, 0] += goal
             coefficients[:, 4:] = residual @ _END_INVERSE.T
+        self._set(coefficients)
+
+    @classmethod
+    def from_coefficients(cls, start_time: float, duration: float, coefficients: np.ndarray,
+                          goal: np.ndarray) -> SepticSegment:
+        """A segment of given ``coefficients`` (c, 8) in ``tau`` over ``duration`` [s] (a minimum-snap segment,
+        not at rest at its end), holding ``goal`` (c,) after its end."""
+        segment = cls.__new__(cls)
+        segment.start_time = float(start_time)
+        segment.durations = np.full(len(goal), float(duration))
+        segment.duration = float(duration)
+        segment.end_time = segment.start_time + segment.duration
+        segment.goal = np.array(goal, dtype=float)
+        segment._set(np.array(coefficients, dtype=float))
+        return segment
+
+    def _set(self, coefficients: np.ndarray) -> None:
         self.coefficients = coefficients
-        self.table = np.ascontiguousarray(_derivative_coefficients(coefficients, durations))
+        self.table = np.ascontiguousarray(_derivative_coefficients(coefficients, self.durations))
 
     def evaluate(self, t: float) -> np.ndarray:
         """Shape (5, c): value and time derivatives 1..4 at ``t`` [s] (clamped to the segment's start), by the

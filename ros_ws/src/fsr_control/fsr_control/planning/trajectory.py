@@ -45,11 +45,19 @@ from fsr_control.planning.feasibility import (
     InfeasibleReferenceError,
     LegAdjustment,
     ReferenceLimits,
+    path_samples,
     plan_leg,
 )
+from fsr_control.planning.paths import PathError, PathShape, PathSpec
 from fsr_control.planning.polynomial import SepticSegment
+from fsr_sim.contract import FINISHED
 from fsr_sim.model.frames import E3
 from fsr_sim.model.so3 import rotation_exp, rotation_log, skew
+
+APPROACH_TOLERANCE = 1e-9  # m, rad: a path starting this close to the start pose needs no approach leg
+BLEND_TURN_MAX = 0.9 * math.pi  # rad: yaw velocity: the most the motion may turn within a ramp (the blend's wrap)
+HEADING_FLIP = 0.5 * math.pi  # rad: yaw velocity: a turn of the motion between two of its samples beyond this is a
+# vertical passage (the heading flips), not a turn
 
 
 def yaw_rotation(yaw_rad: float) -> np.ndarray:
@@ -106,7 +114,7 @@ class Reference:
 
 
 class _Segment:
-    """Position + angle polynomial and the fixed-axis attitude of one leg."""
+    """Position + angle polynomial and the fixed-axis attitude of one leg (or one row of a path: :meth:`of_path`)."""
 
     def __init__(
         self,
@@ -121,7 +129,12 @@ class _Segment:
     ) -> None:
         start = np.append(position[0], 0.0)
         goal = np.append(position[1], angle)
-        self.poly = SepticSegment(start_time, duration, start, goal, start_rates)
+        self._set(SepticSegment(start_time, duration, start, goal, start_rates), rotation_start, axis, yaw_start)
+
+    def _set(self, poly: SepticSegment, rotation_start: np.ndarray, axis: np.ndarray, yaw_start: float | None,
+             path: np.ndarray | None = None, periodic: np.ndarray | None = None,
+             heading: np.ndarray | None = None) -> None:
+        self.poly = poly
         self.rotation_start = np.array(rotation_start, dtype=float)
         self.axis = np.array(axis, dtype=float)
         # Rodrigues with a fixed unit axis: R_0 exp(theta S(a)) = R_0 + sin(theta) R_0 S + (1 - cos(theta)) R_0 S^2
@@ -129,8 +142,21 @@ class _Segment:
         self._r0_s = self.rotation_start @ s
         self._r0_s2 = self._r0_s @ s
         self.yaw_start = yaw_start  # set for yaw-only (fixed-rotor) references
-        self.start_time = start_time
-        self.end_time = self.poly.end_time
+        self.start_time = poly.start_time
+        self.end_time = poly.end_time
+        self.path = np.zeros(core.PATH_WIDTH) if path is None else path  # a leg: KIND_POLYNOMIAL, YAW_CHANNEL
+        self.periodic = np.zeros((4, 3)) if periodic is None else periodic
+        self.heading = np.zeros((core.HEADING_DERIVATIVES, 2, core.DEGREE + 1)) if heading is None else heading
+
+    @classmethod
+    def of_path(cls, poly: SepticSegment, rotation_start: np.ndarray, axis: np.ndarray, yaw_start: float | None,
+                path: np.ndarray, periodic: np.ndarray, heading: np.ndarray, end_time: float) -> _Segment:
+        """A path's row (:mod:`fsr_control.core.reference`): its position polynomial ``poly`` (zero for a periodic
+        row), ``path`` columns, sinusoids and direction of motion, ending at ``end_time`` [s]."""
+        segment = cls.__new__(cls)
+        segment._set(poly, rotation_start, axis, yaw_start, path, periodic, heading)
+        segment.end_time = end_time
+        return segment
 
 
 def _pack(segments: list[_Segment]) -> core.TrajectoryTable:
@@ -145,10 +171,31 @@ def _pack(segments: list[_Segment]) -> core.TrajectoryTable:
         r0_s2=np.ascontiguousarray([s._r0_s2 for s in segments]),
         axis=np.ascontiguousarray([s.axis for s in segments]),
         yaw_start=np.array([np.nan if s.yaw_start is None else s.yaw_start for s in segments]),
+        path=np.ascontiguousarray([s.path for s in segments]),
+        periodic=np.ascontiguousarray([s.periodic for s in segments]),
+        heading=np.ascontiguousarray([s.heading for s in segments]),
     )
 
+
+def mid_path(end_reason: str, end_time: float, plan_end_time: float | None) -> bool:
+    """A flight that ``finished`` (``end_reason``, :data:`fsr_sim.contract.FINISHED`) at ``end_time`` [s] before its
+    plan came to rest at ``plan_end_time`` [s]: it ended mid-path."""
+    return end_reason == FINISHED and plan_end_time is not None and end_time < plan_end_time - 1e-9
+
+
+def mid_path_note(end_time: float, plan_end_time: float) -> str:
+    """The line that tells a flight ended mid-path (:func:`mid_path`)."""
+    return (f"the flight ended mid-path: it finished at {end_time:.3f} s (the scenario's duration) and its plan comes "
+            f"to rest at {plan_end_time:.3f} s; raise duration to at least {math.ceil(plan_end_time * 100) / 100:g} s")
+
+
+def heading_of(rotation: np.ndarray) -> float:
+    """The heading [rad] of a rotation's x axis (body FRD -> world NED)."""
+    return math.atan2(rotation[1][0], rotation[0][0])
+
+
 class Trajectory:
-    """Waypoints flown from a start pose; ``evaluate(t)`` gives the :class:`Reference` at ``t`` [s]."""
+    """Waypoints (or a path) flown from a start pose; ``evaluate(t)`` gives the :class:`Reference` at ``t`` [s]."""
 
     def __init__(
         self,
@@ -159,7 +206,10 @@ class Trajectory:
         start_time: float = 0.0,
         limits: ReferenceLimits | None = None,
         feasibility: str = DEFAULT_FEASIBILITY,
+        path: PathSpec | None = None,
     ) -> None:
+        if path is not None and waypoints:
+            raise ValueError("a trajectory flies either waypoints or a path, not both")
         self.full_attitude = full_attitude
         self.limits = limits
         self.feasibility = feasibility
@@ -169,7 +219,7 @@ class Trajectory:
             rotation = np.array(start_rotation, dtype=float)
             yaw = None
         else:
-            yaw = math.atan2(start_rotation[1][0], start_rotation[0][0])
+            yaw = heading_of(start_rotation)
             rotation = yaw_rotation(yaw)
         self._segments: list[_Segment] = []
         self._starts: list[float] = []
@@ -188,6 +238,8 @@ class Trajectory:
             position = np.array(waypoint.position, dtype=float)
             rotation, yaw = self._end_attitude(segment)
             t += segment.poly.duration + waypoint.hold
+        if path is not None:
+            self._plan_path(path, t, position, rotation, yaw)
         self._table: core.TrajectoryTable | None = None
 
     @property
@@ -246,6 +298,116 @@ class Trajectory:
         if adjustment is not None:
             self.adjustments.append(adjustment)
         return segment
+
+    def _plan_path(self, path: PathSpec, t: float, position: np.ndarray, rotation: np.ndarray,
+                   yaw: float | None) -> None:
+        """The approach leg to the path's start pose (if it is not the current one), then the path's rows, each
+        through the feasibility check (:func:`~fsr_control.planning.feasibility.plan_leg`; the path as a whole,
+        stretched in time)."""
+        heading = yaw if yaw is not None else heading_of(rotation)
+        start_point = path.start_point(position)
+        shape = path.shape(start_point)
+        probe = _pack(self._path_segments(shape, t, rotation, yaw, np.zeros(core.PATH_WIDTH), 0.0))
+        target = {"fixed": heading if path.yaw.yaw is None else path.yaw.yaw, "rate": heading,
+                  "velocity": core.direction_heading(probe, 0, t)[0]}[path.yaw.mode]
+        target = heading + wrap_angle(target - heading)  # the shorter turn
+        distance = float(np.linalg.norm(start_point - position))
+        if distance > APPROACH_TOLERANCE or abs(target - heading) > APPROACH_TOLERANCE:
+            goal = yaw_rotation(target) if yaw is not None else yaw_rotation(target - heading) @ rotation
+            try:
+                segment = self._checked_leg("approach", path.approach_time(distance, position), t, position,
+                                            rotation, yaw, start_point, goal)
+            except InfeasibleReferenceError as error:
+                raise InfeasibleReferenceError(str(error), part="approach") from None
+            self._append(segment)
+            rotation, yaw = self._end_attitude(segment)
+            t = segment.end_time
+        columns = self._yaw_columns(path, probe, shape, t, rotation, yaw)
+        final_angle = {"fixed": 0.0, "rate": path.yaw.rate * (shape.duration - shape.ramp),
+                       "velocity": columns[core.PATH_HEADING_END] - columns[core.PATH_YAW_ORIGIN]}[path.yaw.mode]
+
+        def build(duration: float, _angle_duration: float) -> tuple[list[_Segment], core.TrajectoryTable]:
+            factor = duration / shape.duration
+            scaled = path.shape(start_point, factor)
+            stretched = columns.copy()
+            stretched[core.PATH_YAW_RATE] /= factor  # the same turn, as much slower as the path
+            segments = self._path_segments(scaled, t, rotation, yaw, stretched, final_angle)
+            return segments, _pack(segments)
+
+        try:
+            segments, adjustment = plan_leg(build, shape.duration, f"{path.kind} path", self.limits,
+                                            self.feasibility, path=True)
+        except InfeasibleReferenceError as error:
+            raise InfeasibleReferenceError(str(error), part="path") from None
+        if adjustment is not None:
+            self.adjustments.append(adjustment)
+        for segment in segments:
+            self._append(segment)
+
+    def _yaw_columns(self, path: PathSpec, probe: core.TrajectoryTable, shape: PathShape, t: float,
+                     rotation: np.ndarray, yaw: float | None) -> np.ndarray:
+        """The path columns of the yaw (``core.PATH_YAW*``, ``PATH_HEADING_*``) for a path starting at ``t`` [s]
+        with the attitude ``rotation`` / ``yaw`` (after the approach). ``velocity``: the heading of the motion is
+        checked along the path (defined everywhere, turning less than :data:`BLEND_TURN_MAX` within a ramp, so that
+        the blend of module :mod:`fsr_control.core.reference` is continuous); :class:`PathError` otherwise."""
+        columns = np.zeros(core.PATH_WIDTH)
+        heading = yaw if yaw is not None else heading_of(rotation)
+        columns[core.PATH_YAW_ORIGIN] = heading
+        columns[core.PATH_HEADING_START] = heading
+        if path.yaw.mode == "fixed":
+            return columns
+        if path.yaw.mode == "rate":
+            columns[core.PATH_YAW], columns[core.PATH_YAW_RATE] = core.YAW_RATE, path.yaw.rate
+            return columns
+        columns[core.PATH_YAW] = core.YAW_VELOCITY
+        origin = probe.start_time[0]  # the probe's rows start where the path would without an approach
+        rows, times = path_samples(probe)
+        headings = np.array([core.direction_heading(probe, row, time) for row, time in zip(rows, times, strict=True)])
+        # Undefined, or flipping between two samples: the motion is vertical there (or turns back on itself)
+        flips = np.abs([wrap_angle(float(step)) for step in np.diff(headings[:, 0])]) > HEADING_FLIP
+        undefined = ~np.all(np.isfinite(headings), axis=1) | np.append(flips, False)
+        if undefined.any():
+            when = times[int(np.argmax(undefined))] - origin
+            raise PathError("yaw", f"mode velocity: the path has no horizontal direction of motion {when:.3g} s "
+                                   "into it (it moves vertically there, or turns back on itself): use mode fixed "
+                                   "or rate")
+        arrival = heading + wrap_angle(float(headings[-1, 0]) - heading)
+        columns[core.PATH_HEADING_END] = arrival
+        for anchor, inside, where in ((heading, times - origin <= shape.ramp, "first"),
+                                      (arrival, times - origin >= shape.duration - shape.ramp, "last")):
+            turn = np.abs([wrap_angle(float(h) - anchor) for h in headings[inside, 0]])
+            if turn.size and turn.max() > BLEND_TURN_MAX:
+                raise PathError("ramp", f"yaw mode velocity: the direction of motion turns by "
+                                        f"{math.degrees(turn.max()):.0f} deg within the {where} ramp "
+                                        f"({shape.ramp:g} s; the yaw blends into it there, at most "
+                                        f"{math.degrees(BLEND_TURN_MAX):.0f} deg): shorten trajectory.ramp")
+        return columns
+
+    def _path_segments(self, shape: PathShape, t0: float, rotation: np.ndarray, yaw: float | None,
+                       columns: np.ndarray, final_angle: float) -> list[_Segment]:
+        """The rows of ``shape`` from ``t0`` [s] with the yaw ``columns`` (their kind and clock set here) and the
+        angle ``final_angle`` [rad] at the end; the attitude turns about the world's vertical from ``rotation``
+        (``R_0 exp(theta S(R_0^T e3)) = Rz(theta) R_0``), or is ``Rz(yaw + theta)``."""
+        if yaw is not None:
+            rotation_start, axis = yaw_rotation(yaw), E3
+        else:
+            rotation_start, axis = np.asarray(rotation, dtype=float), np.asarray(rotation, dtype=float)[2]
+        columns = columns.copy()
+        columns[core.PATH_KIND] = shape.kind
+        columns[core.PATH_START], columns[core.PATH_END] = t0, t0 + shape.duration
+        columns[core.PATH_RAMP] = shape.ramp
+        segments = []
+        start = t0
+        rows = len(shape.row_durations)
+        for row, duration in enumerate(shape.row_durations):
+            coefficients = np.vstack((shape.coefficients[row], np.zeros(core.DEGREE + 1)))  # theta: the columns'
+            end = shape.end if row == rows - 1 else coefficients[:3].sum(axis=1)
+            poly = SepticSegment.from_coefficients(start, duration, coefficients, np.append(end, final_angle))
+            segments.append(_Segment.of_path(poly, rotation_start, axis, yaw, columns, shape.periodic.copy(),
+                                             shape.heading[row], start + duration))
+            start += duration
+        segments[-1].end_time = t0 + shape.duration
+        return segments
 
     def table(self) -> core.TrajectoryTable:
         """The segments as the core's :class:`~fsr_control.core.reference.TrajectoryTable` (packed once per plan)."""
