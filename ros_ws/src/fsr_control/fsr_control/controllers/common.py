@@ -91,31 +91,36 @@ def compensation_of(compensation: Compensation | None) -> laws.Compensation:
     return laws.Compensation(True, force, torque, rate, acceleration)
 
 
-def pack_law(vehicle: Vehicle, gains: dict[str, np.ndarray], kind: int, gain_names: tuple[str, str, str, str],
-             angular_feedforward: str = "consistent", horizon_steps: int = 0,
-             horizon_dt: float = 0.0, acceleration_cutoff: float = 0.0) -> laws.LawParams:
-    """The core's :class:`~fsr_control.core.laws.LawParams` for the law ``kind``: ``gains[name]`` (3, 3) for
-    each of ``gain_names`` in the core's slot order (``k_p``, ``k_v``, ``k_r``, ``k_w``; Voliro's ``k_d`` is its
-    ``k_v``), the reference horizon the law reads (``horizon_steps`` samples ``horizon_dt`` [s] apart) and the
-    cutoff [Hz] of the low-pass on the measured acceleration (0: none)."""
-    k_p, k_v, k_r, k_w = (np.ascontiguousarray(np.asarray(gains[name], dtype=float).reshape(3, 3))
-                          for name in gain_names)
-    return laws.LawParams(kind, float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float), k_p, k_v,
-                          k_r, k_w, angular_feedforward == "report", int(horizon_steps), float(horizon_dt),
-                          float(acceleration_cutoff))
+def gain_matrices(gains: dict[str, np.ndarray], names: tuple[str, ...], optional: tuple[str, ...] = ()
+                  ) -> tuple[np.ndarray, ...]:
+    """``gains[name]`` as contiguous (3, 3) float arrays, in the order of ``names`` (an ``optional`` name that
+    is missing: zeros). Raises ValueError naming a missing gain."""
+    missing = [name for name in names if name not in gains and name not in optional]
+    if missing:
+        raise ValueError(f"gains {missing} missing (got {sorted(gains)})")
+    return tuple(np.ascontiguousarray(np.asarray(gains.get(name, np.zeros((3, 3))), dtype=float).reshape(3, 3))
+                 for name in names)
+
+
+def nominal_model(vehicle: Vehicle) -> tuple[float, np.ndarray]:
+    """The nominal mass [kg] and inertia (3, 3) [kg m^2] a law is packed with."""
+    return float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float)
 
 
 class CompiledLaw:
-    """A law of the compiled core on a nominal vehicle: its packed parameters (:attr:`params`) and memory."""
+    """A law of the compiled core on a nominal vehicle: its packed parameters (:attr:`params`, the law's own in
+    its field of :class:`~fsr_control.core.laws.LawParams`) and its own memory (``memory_size`` entries)."""
 
-    def __init__(self, params: laws.LawParams) -> None:
+    def __init__(self, params: laws.LawParams, memory_size: int) -> None:
         self.params = params
-        self.memory = np.zeros(laws.MEMORY_SIZE)
-        self.mass = params.mass
-        self.inertia = params.inertia
+        self.memory = np.zeros(memory_size)
+        own = getattr(params, laws.LAW_FIELDS[params.kind])  # the law's own parameters
+        self.mass = own.mass
+        self.inertia = own.inertia
 
     def reset(self) -> None:
-        """Forget the previous sample (the geometric law's measured acceleration restarts from the model's)."""
+        """Forget the previous sample (the geometric law's measured acceleration restarts from the model's, its
+        integral from zero)."""
         self.memory[:] = 0.0
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
