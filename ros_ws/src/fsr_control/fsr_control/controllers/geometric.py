@@ -41,7 +41,7 @@ before ``u_T`` and ``z_bd`` (and its rates in ``a_dot``, ``a_ddot``, either feed
 (body); see :mod:`fsr_control.compensation`.
 Report gains: ``K_p = K_v = diag(20, 20, 100)``, ``K_R = K_w = diag(10, 10, 100)``.
 
-The law is written once, in the compiled core (:func:`fsr_control.core.laws.geometric_law`).
+The law is written once, in the compiled core (:func:`fsr_control.core.geometric_law.geometric_law`).
 """
 
 from __future__ import annotations

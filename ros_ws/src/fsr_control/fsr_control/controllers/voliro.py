@@ -21,7 +21,7 @@ this wrench, all six axes (:mod:`fsr_control.compensation`).
 Report gains: ``K_p = diag(50, 50, 100)``, ``K_d = diag(10, 10, 50)``, ``K_R = diag(100, 100, 100)``,
 ``K_w = diag(10, 10, 50)``.
 
-The law is written once, in the compiled core (:func:`fsr_control.core.laws.voliro_law`).
+The law is written once, in the compiled core (:func:`fsr_control.core.voliro_law.voliro_law`).
 """
 
 from __future__ import annotations
