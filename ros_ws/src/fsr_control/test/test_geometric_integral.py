@@ -44,7 +44,7 @@ def test_the_integral_sums_the_position_error_and_is_clamped_to_its_force_bound(
     integral = hold_state(controller, (0.1, 0.0, 0.0), 1001)  # 1 s, 0.1 m off: 0.1 m s (well within the bound)
     np.testing.assert_allclose(integral, (0.1, 0.0, 0.0), rtol=1e-9, atol=1e-15)
     integral = hold_state(controller, (0.1, 0.0, 0.0), 30000, first=1001)  # 30 s more: K_i x 3.1 m s > the bound
-    force = params.k_i @ integral
+    force = params.matrices[geometric_law.K_I] @ integral
     assert np.linalg.norm(force) == pytest.approx(params.integral_limit, rel=1e-12)  # 0.25 m g = 2.94 N
     assert force[0] > 0.0 and abs(force[1]) < 1e-12
 
@@ -63,7 +63,7 @@ def test_the_integral_holds_while_the_rotors_cannot_give_the_thrust():
 def test_the_report_profile_has_no_integral_and_the_measured_feedforward():
     params = hovering_controller("controller.profile=report").law.params.geometric
     assert not params.integral and not params.reference_feedforward
-    np.testing.assert_array_equal(params.k_i, np.zeros((3, 3)))
+    np.testing.assert_array_equal(params.matrices[geometric_law.K_I], np.zeros((3, 3)))
 
 
 def test_a_law_packed_under_another_kind_is_refused():

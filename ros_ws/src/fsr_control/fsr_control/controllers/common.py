@@ -16,6 +16,7 @@ import numpy as np
 
 from fsr_control.core import laws
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
+from fsr_control.core.law_terms import INERTIA
 from fsr_control.core.reference import HORIZON_WIDTH, ReferenceSample
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.core.so3 import Vec3, matrix_rows
@@ -91,20 +92,16 @@ def compensation_of(compensation: Compensation | None) -> laws.Compensation:
     return laws.Compensation(True, force, torque, rate, acceleration)
 
 
-def gain_matrices(gains: dict[str, np.ndarray], names: tuple[str, ...], optional: tuple[str, ...] = ()
-                  ) -> tuple[np.ndarray, ...]:
-    """``gains[name]`` as contiguous (3, 3) float arrays, in the order of ``names`` (an ``optional`` name that
-    is missing: zeros). Raises ValueError naming a missing gain."""
+def law_matrices(vehicle: Vehicle, gains: dict[str, np.ndarray], names: tuple[str, ...],
+                 optional: tuple[str, ...] = ()) -> np.ndarray:
+    """A law's matrices (:mod:`fsr_control.core.law_terms`): the nominal inertia [kg m^2], then ``gains[name]``
+    for each of ``names`` (an ``optional`` name that is missing: zeros), one contiguous (1 + len(names), 3, 3)
+    float array. Raises ValueError naming a missing gain."""
     missing = [name for name in names if name not in gains and name not in optional]
     if missing:
         raise ValueError(f"gains {missing} missing (got {sorted(gains)})")
-    return tuple(np.ascontiguousarray(np.asarray(gains.get(name, np.zeros((3, 3))), dtype=float).reshape(3, 3))
-                 for name in names)
-
-
-def nominal_model(vehicle: Vehicle) -> tuple[float, np.ndarray]:
-    """The nominal mass [kg] and inertia (3, 3) [kg m^2] a law is packed with."""
-    return float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float)
+    matrices = [vehicle.inertia, *(gains.get(name, np.zeros((3, 3))) for name in names)]
+    return np.ascontiguousarray([np.asarray(matrix, dtype=float).reshape(3, 3) for matrix in matrices])
 
 
 class CompiledLaw:
@@ -116,7 +113,7 @@ class CompiledLaw:
         self.memory = np.zeros(memory_size)
         own = getattr(params, laws.LAW_FIELDS[params.kind])  # the law's own parameters
         self.mass = own.mass
-        self.inertia = own.inertia
+        self.inertia = own.matrices[INERTIA]
 
     def reset(self) -> None:
         """Forget the previous sample (the geometric law's measured acceleration restarts from the model's, its

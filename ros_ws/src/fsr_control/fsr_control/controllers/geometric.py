@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, gain_matrices, nominal_model
+from fsr_control.controllers.common import CompiledLaw, law_matrices
 from fsr_control.core import geometric_law, laws
 from fsr_sim.model.vehicle import Vehicle
 
@@ -70,13 +70,12 @@ def pack_geometric(vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: 
     the measured acceleration (0: none) and the bound [N] on the integral's force."""
     if feedforward not in FEEDFORWARDS:
         raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
-    k_p, k_v, k_i, k_r, k_w = gain_matrices(gains, ("k_p", "k_v", "k_i", "k_r", "k_w"), OPTIONAL_GAINS)
-    integral = bool(np.any(k_i != 0.0))
+    matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
+    integral = bool(np.any(matrices[geometric_law.K_I] != 0.0))
     if integral and not integral_limit > 0.0:
         raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
-    return geometric_law.GeometricParams(*nominal_model(vehicle), k_p, k_v, k_i, k_r, k_w, integral,
-                                         float(integral_limit), feedforward == REFERENCE_FEEDFORWARD,
-                                         float(acceleration_filter_hz))
+    return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
+                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz))
 
 
 class GeometricController(CompiledLaw):

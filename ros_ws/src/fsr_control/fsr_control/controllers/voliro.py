@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, gain_matrices, nominal_model
+from fsr_control.controllers.common import CompiledLaw, law_matrices
 from fsr_control.core import laws, voliro_law
 from fsr_sim.model.vehicle import Vehicle
 
@@ -47,7 +47,7 @@ def pack_voliro(vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforw
     ``angular_feedforward`` (module docstring)."""
     if angular_feedforward not in ANGULAR_FEEDFORWARDS:
         raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
-    return voliro_law.VoliroParams(*nominal_model(vehicle), *gain_matrices(gains, tuple(DEFAULT_GAINS)),
+    return voliro_law.VoliroParams(float(vehicle.mass), law_matrices(vehicle, gains, voliro_law.MATRICES[1:]),
                                    angular_feedforward == "report")
 
 

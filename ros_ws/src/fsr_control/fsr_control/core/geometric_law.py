@@ -13,22 +13,22 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_control.core.flatness import attitude_from_thrust_vector
-from fsr_control.core.law_terms import Compensation, linear_feedback
+from fsr_control.core.law_terms import INERTIA, Compensation, linear_feedback, matrix_at
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.core.rotors import SHORTFALL_TOLERANCE
-from fsr_sim.core.so3 import Mat3, Vec3, attitude_error3, cross3, dot3, mat_t_mat3, mat_vec3, matrix_rows
+from fsr_sim.core.so3 import Mat3, Vec3, attitude_error3, cross3, dot3, mat_t_mat3, mat_vec3
+
+# GeometricParams.matrices: the nominal inertia [kg m^2], K_p [N/m], K_v [N s/m], K_i [N/(m s)] on the
+# integral of the position error, K_R [N m/rad], K_w [N m s/rad]
+MATRICES = ("inertia", "k_p", "k_v", "k_i", "k_r", "k_w")
+K_P, K_V, K_I, K_R, K_W = range(1, len(MATRICES))
 
 
 class GeometricParams(NamedTuple):
     mass: float  # nominal mass [kg]
-    inertia: np.ndarray  # (3, 3) nominal inertia [kg m^2]
-    k_p: np.ndarray  # (3, 3) [N/m]
-    k_v: np.ndarray  # (3, 3) [N s/m]
-    k_i: np.ndarray  # (3, 3) [N/(m s)] on the integral of the position error
-    k_r: np.ndarray  # (3, 3) [N m/rad]
-    k_w: np.ndarray  # (3, 3) [N m s/rad]
+    matrices: np.ndarray  # (6, 3, 3): MATRICES, matrices[INERTIA] the inertia
     integral: bool  # the integral term is on (k_i != 0)
     integral_limit: float  # [N] bound on |K_i int e_p| (anti-windup)
     reference_feedforward: bool  # w_d, w_dot_d from the reference (True) or the measured acceleration (False)
@@ -38,8 +38,7 @@ class GeometricParams(NamedTuple):
     @classmethod
     def unused(cls) -> GeometricParams:
         """Placeholder parameters, for a controller that flies another law."""
-        zero = np.zeros((3, 3))
-        return cls(0.0, zero, zero, zero, zero, zero, zero, False, 0.0, False, 0.0)
+        return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False, 0.0, False, 0.0)
 
 
 # memory entries: the previous sample, its filtered measured acceleration and the filtered rates of the
@@ -116,7 +115,7 @@ def _integral_force(params: GeometricParams, memory, t: float, e_p: Vec3) -> Vec
         memory[INTEGRAL] += e_p[0] * dt
         memory[INTEGRAL + 1] += e_p[1] * dt
         memory[INTEGRAL + 2] += e_p[2] * dt
-    force = mat_vec3(matrix_rows(params.k_i), (memory[INTEGRAL], memory[INTEGRAL + 1], memory[INTEGRAL + 2]))
+    force = mat_vec3(matrix_at(params.matrices, K_I), (memory[INTEGRAL], memory[INTEGRAL + 1], memory[INTEGRAL + 2]))
     size = math.sqrt(dot3(force, force))
     if size > params.integral_limit:
         scale = params.integral_limit / size
@@ -132,8 +131,8 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
                   rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
     """``(status, [0, 0, -u_T], tau_b, R_d)`` of the geometric law (:mod:`fsr_control.controllers.geometric`)."""
     m = params.mass
-    k_p, k_v = matrix_rows(params.k_p), matrix_rows(params.k_v)
-    inertia = matrix_rows(params.inertia)
+    k_p, k_v = matrix_at(params.matrices, K_P), matrix_at(params.matrices, K_V)
+    inertia = matrix_at(params.matrices, INERTIA)
     e_p = (position[0] - reference.position[0], position[1] - reference.position[1],
            position[2] - reference.position[2])
     e_v = (velocity_world[0] - reference.velocity[0], velocity_world[1] - reference.velocity[1],
@@ -166,7 +165,7 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
         e_a = (acceleration[0] - acc_d[0], acceleration[1] - acc_d[1], acceleration[2] - acc_d[2])
         a_dot = linear_feedback(k_p, e_v, k_v, e_a, m, jerk_d)
         if params.integral:  # d/dt of -K_i int e_p
-            k_i_e = mat_vec3(matrix_rows(params.k_i), e_p)
+            k_i_e = mat_vec3(matrix_at(params.matrices, K_I), e_p)
             a_dot = (a_dot[0] - k_i_e[0], a_dot[1] - k_i_e[1], a_dot[2] - k_i_e[2])
         if compensation.active:  # the estimate changes too: R_d turns with it (w_d, w_dot_d)
             a_dot = (a_dot[0] - f_dot[0], a_dot[1] - f_dot[1], a_dot[2] - f_dot[2])
@@ -176,7 +175,7 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
                -(thrust_dot * z_b[2] + thrust * z_b_dot[2]) / m - jerk_d[2])
         a_ddot = linear_feedback(k_p, e_a, k_v, e_j, m, reference.snap)
         if params.integral:
-            k_i_e = mat_vec3(matrix_rows(params.k_i), e_v)
+            k_i_e = mat_vec3(matrix_at(params.matrices, K_I), e_v)
             a_ddot = (a_ddot[0] - k_i_e[0], a_ddot[1] - k_i_e[1], a_ddot[2] - k_i_e[2])
         if compensation.active:
             a_ddot = (a_ddot[0] - f_ddot[0], a_ddot[1] - f_ddot[1], a_ddot[2] - f_ddot[2])
@@ -192,7 +191,8 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
     turn_d = mat_vec3(relative, omega_dot_d)
     feedforward = mat_vec3(inertia, (turn[0] - turn_d[0], turn[1] - turn_d[1], turn[2] - turn_d[2]))
     e_r = attitude_error3(r, rotation_desired)
-    feedback = linear_feedback(matrix_rows(params.k_r), e_r, matrix_rows(params.k_w), e_w, 0.0, (0.0, 0.0, 0.0))
+    k_r, k_w = matrix_at(params.matrices, K_R), matrix_at(params.matrices, K_W)
+    feedback = linear_feedback(k_r, e_r, k_w, e_w, 0.0, (0.0, 0.0, 0.0))
     torque = (feedback[0] + gyro[0] - feedforward[0], feedback[1] + gyro[1] - feedforward[1],
               feedback[2] + gyro[2] - feedforward[2])
     if compensation.active:

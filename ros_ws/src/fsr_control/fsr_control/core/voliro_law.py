@@ -11,27 +11,26 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_control.core.law_terms import Compensation, linear_feedback
+from fsr_control.core.law_terms import INERTIA, Compensation, linear_feedback, matrix_at
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.core.so3 import Mat3, Vec3, attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3, matrix_rows
+from fsr_sim.core.so3 import Mat3, Vec3, attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3
+
+# VoliroParams.matrices: the nominal inertia [kg m^2], K_p [1/s^2], K_d [1/s], K_R [1/s^2], K_w [1/s]
+MATRICES = ("inertia", "k_p", "k_d", "k_r", "k_w")
+K_P, K_D, K_R, K_W = range(1, len(MATRICES))
 
 
 class VoliroParams(NamedTuple):
     mass: float  # nominal mass [kg]
-    inertia: np.ndarray  # (3, 3) nominal inertia [kg m^2]
-    k_p: np.ndarray  # (3, 3) [1/s^2]
-    k_d: np.ndarray  # (3, 3) [1/s]
-    k_r: np.ndarray  # (3, 3) [1/s^2]
-    k_w: np.ndarray  # (3, 3) [1/s]
+    matrices: np.ndarray  # (5, 3, 3): MATRICES, matrices[INERTIA] the inertia
     report_feedforward: bool  # the report's angular feed-forward (controller.angular_feedforward: report)
 
     @classmethod
     def unused(cls) -> VoliroParams:
         """Placeholder parameters, for a controller that flies another law."""
-        zero = np.zeros((3, 3))
-        return cls(0.0, zero, zero, zero, zero, zero, False)
+        return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False)
 
 
 MEMORY_SIZE = 0
@@ -46,7 +45,8 @@ def voliro_law(params: VoliroParams, reference: ReferenceSample, position: Vec3,
            position[2] - reference.position[2])
     e_v = (velocity_world[0] - reference.velocity[0], velocity_world[1] - reference.velocity[1],
            velocity_world[2] - reference.velocity[2])
-    v = linear_feedback(matrix_rows(params.k_p), e_p, matrix_rows(params.k_d), e_v, 1.0, reference.acceleration)
+    k_p, k_d = matrix_at(params.matrices, K_P), matrix_at(params.matrices, K_D)
+    v = linear_feedback(k_p, e_p, k_d, e_v, 1.0, reference.acceleration)
     r = rotation
     rotation_desired = reference.rotation
     relative = mat_t_mat3(r, rotation_desired)  # R_b^T R_d
@@ -55,9 +55,10 @@ def voliro_law(params: VoliroParams, reference: ReferenceSample, position: Vec3,
     omega_dot_d_body = mat_vec3(relative, reference.angular_acceleration)
     e_r = attitude_error3(r, rotation_desired)
     e_w = (w_b[0] - omega_d_body[0], w_b[1] - omega_d_body[1], w_b[2] - omega_d_body[2])
-    feedback = linear_feedback(matrix_rows(params.k_r), e_r, matrix_rows(params.k_w), e_w, 0.0, (0.0, 0.0, 0.0))
+    k_r, k_w = matrix_at(params.matrices, K_R), matrix_at(params.matrices, K_W)
+    feedback = linear_feedback(k_r, e_r, k_w, e_w, 0.0, (0.0, 0.0, 0.0))
     turn = cross3(w_b, omega_d_body)
-    inertia = matrix_rows(params.inertia)
+    inertia = matrix_at(params.matrices, INERTIA)
     if params.report_feedforward:
         ff = mat_vec3(inertia, (turn[0] + omega_dot_d_body[0], turn[1] + omega_dot_d_body[1],
                                 turn[2] + omega_dot_d_body[2]))
