@@ -27,7 +27,11 @@ SHORT = {"duration": 6.0}  # the transients, the estimator's settling and the oc
 FLIGHTS = (("ex3_estimation", SHORT), ("ex4_geometric", {**SHORT, "actuation": "rotors"}), ("ex5_voliro", SHORT),
            ("octo_ground_effect", SHORT), ("wind_rejection_turbulent", REALISM),  # gusts, rotor lag, sensor stage
            ("ex5_voliro", {"duration": 2.0, "plant.tilt_time_constant": 0.03, "plant.tilt_rate_max_deg_s": 120}),
-           ("ex4_geometric", AGILE))  # the Hummingbird: motor lag and every aerodynamic term in a gusty wind
+           ("ex4_geometric", AGILE),  # the Hummingbird: motor lag and every aerodynamic term in a gusty wind
+           # the flight profile: reference feed-forward, the integral held by the allocation's shortfall, the
+           # compensated estimate's filtered rates; and the report's measured feed-forward with an integral
+           ("step_disturbance", {**REALISM, "disturbances.0.start": 0.5, "controller.compensation": "estimate"}),
+           ("ex4_geometric", {"duration": 2.0, "actuation": "rotors", "controller.gains.k_i": [1.0, 1.0, 2.0]}))
 
 FINAL_STATES = """
 import json, sys

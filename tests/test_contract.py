@@ -88,9 +88,16 @@ def _exit_code(node: ast.AST) -> bool:
     return isinstance(node, ast.Constant) and type(node.value) is int and node.value != 0
 
 
+NOT_A_TOPIC = "# not a topic name"  # a line's marker: a word that is also a topic's name (a config value)
+
+
 def test_no_contract_literal_outside_the_contract():
-    offences = [f"{path.relative_to(ROOT)}:{line}: {what}" for path in source_files()
-                for line, what in contract_literals(ast.parse(path.read_text(), str(path)))]
+    offences = []
+    for path in source_files():
+        text = path.read_text()
+        lines = text.splitlines()
+        offences += [f"{path.relative_to(ROOT)}:{line}: {what}" for line, what in contract_literals(ast.parse(text))
+                     if not (what.startswith("topic name") and NOT_A_TOPIC in lines[line - 1])]
     assert not offences, "use fsr_sim.contract instead of:\n" + "\n".join(offences)
 
 

@@ -132,7 +132,8 @@ def test_the_noise_is_the_same_in_the_node_graph(tmp_path):
 
 def package_with_the_law(folder: Path, files: dict[str, Path]) -> Path:
     """A copy of ``fsr_control`` with the control-law recipe applied as docs/extending.md says (a new file, an
-    import and a branch in ``core/laws.py``, an entry in ``controllers/catalog.py``); the folder holding it."""
+    import, a field and a branch in ``core/laws.py``, an entry in ``controllers/catalog.py``); the folder
+    holding it."""
     import fsr_control
 
     site = folder / "site"
@@ -142,10 +143,11 @@ def package_with_the_law(folder: Path, files: dict[str, Path]) -> Path:
     laws = package / "core" / "laws.py"
     text = laws.read_text()
     first_import = "from fsr_control.core.reference import"  # the import goes in alphabetical order
-    anchor = "    # a new law: its branch here"
-    assert text.count(first_import) == 1 and text.count(anchor) == 1, "the recipe's places in laws.py moved"
+    field, branch = "    # a new law: its parameters here", "    # a new law: its branch here"
+    assert all(text.count(place) == 1 for place in (first_import, field, branch)), "the recipe's places moved"
     text = text.replace(first_import, files["preview_import.py"].read_text() + first_import)
-    laws.write_text(text.replace(anchor, files["preview_branch.py"].read_text() + anchor))
+    text = text.replace(field, files["preview_field.py"].read_text() + field)
+    laws.write_text(text.replace(branch, files["preview_branch.py"].read_text() + branch))
     catalog = package / "controllers" / "catalog.py"
     catalog.write_text(catalog.read_text() + "\n" + files["preview_entry.py"].read_text())
     return site

@@ -27,7 +27,7 @@ pytestmark = pytest.mark.slow
 DASK = str(Path(sys.executable).with_name("dask"))
 DEADLINE_S = 60.0
 GRID = {"plant.mass": [1.1, 1.15, 1.2, 1.25, 1.3, 1.35], "estimator.c0": [5.0, 20.0]}
-SAMPLE = {"controller.gains.k_v.2": "uniform:8:14"}
+SAMPLE = {"trajectory.waypoints.0.position.2": "uniform:-4.5:-3.5"}
 
 
 def wait_for(condition, what: str, processes: list[subprocess.Popen], deadline_s: float = DEADLINE_S) -> None:  # noqa: ANN001
@@ -124,7 +124,7 @@ def test_a_sweep_across_two_network_namespaces_gives_the_local_table(tmp_path):
             client = lab.command("b", [sys.executable, "-m", "fsr_bringup.cli.sweep_cli", "ex4_geometric",
                                        "--grid", "plant.mass=1.1,1.15,1.2,1.25,1.3,1.35",
                                        "--grid", "estimator.c0=5.0,20.0", "--sample",
-                                       "controller.gains.k_v.2=uniform:8:14", "--n", "2", "--seed", "3",
+                                       "trajectory.waypoints.0.position.2=uniform:-4.5:-3.5", "--n", "2", "--seed", "3",
                                        "--duration", "0.5", "--cluster", address, "--out", str(out)])
             check = [sys.executable, "-c", f"from fsr_bringup.sweeps.run import cluster_workers; import sys; "
                                            f"sys.exit(0 if cluster_workers({address!r}) == 2 else 1)"]

@@ -120,7 +120,7 @@ def test_effective_truth_holds_through_a_landing(tmp_path: Path) -> None:
         "initial_state: {position: [0.0, 0.0, -0.4]}\nplant: {mass: 1.3}\n"
         "environment: {ground: {enabled: true, height: 0.0, effect: true, model: single}}\n"
         "trajectory: {waypoints: [{position: [0.0, 0.0, 0.05], duration: 2.0}]}\n"
-        "controller: {type: geometric}\nestimator: {enabled: true, mass: 1.2, c0: 10.0, r: 1}\n",
+        "controller: {type: geometric, profile: report}\nestimator: {enabled: true, mass: 1.2, c0: 10.0, r: 1}\n",
         encoding="utf-8",
     )
     path = _fly(str(scenario), tmp_path / "landing.mcap")

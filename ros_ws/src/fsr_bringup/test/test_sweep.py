@@ -83,7 +83,7 @@ def test_sampled_integer_keys_are_rounded():
 
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"grid": {"controller.type": [1, 2]}}, "controller.type: not a numeric leaf"),
-    ({"sample": {"controller.gains.k_p": "uniform:1:2"}, "n": 2}, "a list of 3"),
+    ({"sample": {"trajectory.waypoints.0.position": "uniform:1:2"}, "n": 2}, "a list of 3"),
     ({"grid": {"plant.mas": [1.0]}}, "did you mean 'mass'"),
     ({"grid": {"trajectory.waypoints.7.duration": [1.0]}}, "out of range"),
     ({"sample": {"plant.mass": "uniform:2:1"}, "n": 2}, "LO > HI"),

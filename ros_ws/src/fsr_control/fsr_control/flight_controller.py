@@ -25,8 +25,9 @@ from fsr_control.allocation import make_actuation
 from fsr_control.compensation import WrenchCompensator, pack_compensation
 from fsr_control.config.controller_config import ControllerConfig
 from fsr_control.controllers.catalog import LAWS
-from fsr_control.controllers.common import CompiledLaw, WrenchCommand, pack_law
+from fsr_control.controllers.common import CompiledLaw, WrenchCommand
 from fsr_control.core import controller as core
+from fsr_control.core import laws
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
 from fsr_control.core.reference import CHANNELS, DERIVATIVES, HORIZON_WIDTH
 from fsr_control.planning.feasibility import LegAdjustment
@@ -41,8 +42,8 @@ ROLL_PITCH_TOLERANCE = 1e-4  # rad: a goal for a fixed-rotor vehicle must be lev
 def make_control_law(config: ControllerConfig, vehicle: Vehicle) -> CompiledLaw:
     """The law ``config.type`` names (:data:`fsr_control.controllers.catalog.LAWS`) on the nominal ``vehicle``."""
     law = LAWS[config.type]
-    return CompiledLaw(pack_law(vehicle, config.gains, law.kind, tuple(law.default_gains), config.angular_feedforward,
-                                law.horizon_steps, law.horizon_dt, config.acceleration_filter_hz))
+    params = laws.law_params(law.kind, law.pack(vehicle, config), law.horizon_steps, law.horizon_dt)
+    return CompiledLaw(params, law.memory_size)
 
 
 def seconds_from_ns(stamp_ns: int) -> float:

@@ -34,12 +34,38 @@ def test_test_scenarios_are_valid():
     np.testing.assert_array_equal(ex5.gains["k_w"], np.diag((10.0, 10.0, 50.0)))
 
 
-def test_type_defaults_by_vehicle_and_gains_default_to_the_report(tmp_path):
+def test_type_defaults_by_vehicle_and_gains_default_to_the_profile(tmp_path):
+    """No profile: ``flight``, the gains designed for the vehicle and the reference's feed-forward; ``report``:
+    the report's gains (no integral) and the measured acceleration's."""
+    from fsr_sim.model.gain_design import design_gains
+    from fsr_sim.model.vehicle import load_vehicle
+
     config = controller_config(scenario_with(tmp_path, controller={}))
-    assert config.type == "geometric"
+    assert config.type == "geometric" and config.profile == "flight" and config.feedforward == "reference"
+    designed = design_gains(load_vehicle("quadrotor_ex4")).wrench_gains()
+    for name, gain in designed.items():
+        np.testing.assert_array_equal(config.gains[name], gain)
+    config = controller_config(scenario_with(tmp_path, controller={"profile": "report"}))
+    assert config.feedforward == "measured"
     np.testing.assert_array_equal(config.gains["k_w"], np.diag((10.0, 10.0, 100.0)))
+    np.testing.assert_array_equal(config.gains["k_i"], np.zeros((3, 3)))
     config = controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller=None))
-    assert config.type == "voliro"
+    assert config.type == "voliro" and config.profile == "flight"
+    np.testing.assert_array_equal(config.gains["k_d"],
+                                  design_gains(load_vehicle("tilting_quadrotor_ex5")).acceleration_gains()["k_d"])
+
+
+def test_explicit_gains_and_feedforward_override_either_profile(tmp_path):
+    config = controller_config(scenario_with(tmp_path, controller={"profile": "report", "feedforward": "reference",
+                                                                   "gains": {"k_i": [1, 1, 2]}}))
+    assert config.feedforward == "reference"
+    np.testing.assert_array_equal(config.gains["k_i"], np.diag((1.0, 1.0, 2.0)))
+    np.testing.assert_array_equal(config.gains["k_p"], np.diag((20.0, 20.0, 100.0)))  # the rest: the report's
+    config = controller_config(scenario_with(tmp_path, controller={"feedforward": "measured", "integral_limit": 1.5,
+                                                                   "gains": {"k_p": [5, 5, 20], "k_i": [0, 0, 0]}}))
+    assert config.feedforward == "measured" and config.integral_limit == 1.5
+    np.testing.assert_array_equal(config.gains["k_p"], np.diag((5.0, 5.0, 20.0)))
+    np.testing.assert_array_equal(config.gains["k_i"], np.zeros((3, 3)))
 
 
 def test_full_matrix_gain_accepted(tmp_path):
@@ -56,6 +82,11 @@ def test_full_matrix_gain_accepted(tmp_path):
         ({"gains": {"k_p": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]}}, "controller.gains.k_p", "symmetric"),
         ({"gains": {"k_P": [1, 1, 1]}}, "controller.gains.k_P", "did you mean 'k_p'"),
         ({"gains": {"k_d": [1, 1, 1]}}, "controller.gains.k_d", "unknown key"),  # voliro's name
+        ({"gains": {"k_i": [1, -1, 1]}}, "controller.gains.k_i", "positive semi-definite"),
+        ({"gains": {"k_r": [0, 1, 1]}}, "controller.gains.k_r", "positive definite"),  # only k_i may be 0
+        ({"profile": "fast"}, "controller.profile", "must be one of flight, report"),
+        ({"feedforward": "model"}, "controller.feedforward", "must be one of measured, reference"),
+        ({"integral_limit": 0}, "controller.integral_limit", "must be > 0"),
         ({"type": "voliro"}, "controller.type", "needs a fully actuated vehicle"),
         ({"type": "pid"}, "controller.type", "must be one of"),
         ({"angular_feedforward": "report"}, "controller.angular_feedforward", "unknown key"),
@@ -68,6 +99,12 @@ def test_invalid_controller_sections_are_refused(tmp_path, controller, key, reas
     assert error.value.key == key
     assert reason in str(error.value)
     assert "scenario.yaml" in str(error.value)
+
+
+@pytest.mark.parametrize("key", ["feedforward", "integral_limit"])
+def test_the_geometric_laws_keys_are_refused_for_voliro(tmp_path, key):
+    with pytest.raises(ConfigError, match=f"controller.{key}: only the geometric law has it, not voliro"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={key: "reference"}))
 
 
 def test_geometric_refused_for_tilting_vehicle_and_voliro_for_wrench_actuation(tmp_path):

@@ -34,8 +34,10 @@ class CheckedScenario:
     def summary_line(self) -> str:
         sim = self.simulation
         kind = getattr(self.controller, "type", None) or getattr(self.controller, "controller_type", "?")
+        profile = getattr(self.controller, "profile", None)
+        kind += f" controller ({profile} profile)" if profile else " controller"
         return (
-            f"{sim.vehicle.name}, {kind} controller, {sim.actuation} actuation, {sim.duration:g} s at "
+            f"{sim.vehicle.name}, {kind}, {sim.actuation} actuation, {sim.duration:g} s at "
             f"{1.0 / sim.control_period:g} Hz, estimator {'on' if self.estimator_enabled else 'off'}"
         )
 

@@ -5,7 +5,15 @@
 controller:
   type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | a law of
                                     # fsr_control.controllers.catalog.LAWS; default by vehicle
+  profile: flight                   # flight (default): gains designed from the vehicle
+                                    # (fsr_sim.model.gain_design), geometric feedforward: reference |
+                                    # report: the report's gains, geometric feedforward: measured
   gains: {k_p: [20, 20, 100], k_v: [20, 20, 100], k_r: [10, 10, 100], k_w: [10, 10, 100]}
+                                    # any given here replaces the profile's; geometric also k_i [N/(m s)]
+                                    # (>= 0: 3 numbers or a symmetric positive semi-definite 3x3; 0: none)
+  feedforward: reference            # geometric: where R_d's rates come from: reference (jerk, snap) |
+                                    # measured (the measured acceleration: the report's); default by profile
+  integral_limit: 2.94              # geometric, with k_i: bound [N] on |K_i int e_p| (default: 0.25 m g)
   angular_feedforward: consistent   # voliro only: consistent | report
   secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
   allocation: priority              # beyond the rotor limits: priority (yaw gives way first) | clamp
@@ -18,8 +26,9 @@ controller:
                                     # observer estimates (needs estimator.enabled; fsr_control.compensation)
 ```
 
-Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix; gains not given
-take the report's values for the controller type. Unknown keys are refused with a typo hint.
+Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix (``k_i`` may be
+zero); gains not given take the profile's: ``report`` the report's values for the controller type,
+``flight`` those designed from the vehicle. Unknown keys are refused with a typo hint.
 """
 
 from __future__ import annotations
@@ -35,7 +44,7 @@ from fsr_control.config.trajectory_config import (
     DEFAULT_GOAL_DURATION,
     trajectory_config,
 )
-from fsr_control.controllers import voliro
+from fsr_control.controllers import geometric, voliro
 from fsr_control.controllers.catalog import LAWS
 from fsr_control.planning.feasibility import (
     DEFAULT_FEASIBILITY,
@@ -46,12 +55,15 @@ from fsr_control.planning.feasibility import (
 from fsr_control.planning.paths import PathError, PathSpec
 from fsr_control.planning.trajectory import Trajectory, Waypoint
 from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
-from fsr_sim.config.validation import Section, checked_spd
+from fsr_sim.config.validation import ConfigError, Section, checked_spd
 from fsr_sim.model.environment import pack_surfaces
+from fsr_sim.model.gain_design import INTEGRAL_LIMIT_SHARE
 from fsr_sim.model.vehicle import Vehicle
 
 SECONDARY_TYPES = ("none", "min_peak_speed")
 DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
+PROFILES = ("flight", "report")  # controller.profile: the first is the default
+PROFILE_FEEDFORWARD = {"flight": geometric.REFERENCE_FEEDFORWARD, "report": geometric.MEASURED_FEEDFORWARD}
 
 
 @dataclass(frozen=True)
@@ -68,7 +80,10 @@ class ControllerConfig:
     type: str
     gains: dict[str, np.ndarray]
     waypoints: list[Waypoint]
-    angular_feedforward: str = "consistent"
+    angular_feedforward: str = "consistent"  # voliro
+    profile: str = PROFILES[0]  # controller.profile: flight | report
+    feedforward: str = geometric.REFERENCE_FEEDFORWARD  # geometric: reference | measured
+    integral_limit: float = 0.0  # geometric: [N] bound on the integral's force
     secondary_objective: SecondaryObjectiveConfig = field(default_factory=SecondaryObjectiveConfig)
     goal_duration: float = DEFAULT_GOAL_DURATION
     source: str = ""
@@ -93,13 +108,28 @@ class ControllerConfig:
                           start_time=start_time, limits=limits, feasibility=self.feasibility, path=self.path)
 
 
-def _gains(section: Section, controller_type: str) -> dict[str, np.ndarray]:
-    defaults = LAWS[controller_type].default_gains
-    gains = {}
-    for name, default in defaults.items():
-        value = section.raw(name)
-        gains[name] = default.copy() if value is None else checked_spd(value, section.key(name), section.source)
+def _gains(section: Section, controller_type: str, profile: str, vehicle: Vehicle) -> dict[str, np.ndarray]:
+    """``controller.gains``: each given gain checked, the others the profile's (the report's, or designed from
+    ``vehicle``; an optional gain the report's profile lacks is zero)."""
+    law = LAWS[controller_type]
+    names = (*law.default_gains, *law.optional_gains)
+    given = {name: section.raw(name) for name in names if section.raw(name) is not None}
     section.reject_unknown()
+    if profile == "report" or given.keys() == set(names):
+        defaults = {name: law.default_gains.get(name, np.zeros((3, 3))) for name in names}
+    else:
+        try:
+            defaults = law.designed_gains(vehicle)
+        except ValueError as error:  # a vehicle that cannot hover
+            raise ConfigError(section.prefix, f"the flight profile's gains cannot be designed: {error}",
+                              section.source) from None
+    gains = {}
+    for name in names:
+        if name not in given:
+            gains[name] = np.array(defaults[name], dtype=float)
+        else:
+            gains[name] = checked_spd(given[name], section.key(name), section.source,
+                                      semidefinite=name in law.optional_gains)
     return gains
 
 
@@ -141,7 +171,8 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     if law.fully_actuated and actuation == "wrench":
         raise controller.error("type", f"{controller_type} allocates its 6-D wrench to the rotors: it needs "
                                        "'actuation: rotors'")
-    gains = _gains(controller.section("gains"), controller_type)
+    profile = controller.string("profile", PROFILES[0], choices=PROFILES)
+    gains = _gains(controller.section("gains"), controller_type, profile, vehicle)
     canted = vehicle.fully_actuated and not vehicle.has_servos  # fixed rotors: clamped rotor by rotor
     allocation = controller.string("allocation", "clamp" if canted else DEFAULT_ALLOCATION,
                                    choices=ALLOCATION_STRATEGIES)
@@ -150,10 +181,20 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
                                              "(the priority rules are for thrust-and-torque vehicles)")
     air_mode = controller.boolean("air_mode", True)
     acceleration_filter_hz = controller.number("acceleration_filter_hz", 0.0, minimum=0.0)
-    feedforward = "consistent"
+    feedforward, integral_limit = PROFILE_FEEDFORWARD[profile], 0.0
+    if controller_type == "geometric":
+        feedforward = controller.string("feedforward", feedforward, choices=geometric.FEEDFORWARDS)
+        integral_limit = controller.number("integral_limit", INTEGRAL_LIMIT_SHARE * vehicle.weight,
+                                           strictly_positive=True)
+    else:
+        for name in ("feedforward", "integral_limit"):
+            if controller.has(name):
+                raise controller.error(name, f"only the geometric law has it, not {controller_type}")
+    angular_feedforward = "consistent"
     secondary = SecondaryObjectiveConfig()
     if controller_type == "voliro":
-        feedforward = controller.string("angular_feedforward", "consistent", choices=voliro.ANGULAR_FEEDFORWARDS)
+        angular_feedforward = controller.string("angular_feedforward", "consistent",
+                                                choices=voliro.ANGULAR_FEEDFORWARDS)
         objective = controller.section("secondary_objective")
         secondary = SecondaryObjectiveConfig(
             type=objective.string("type", "none", choices=SECONDARY_TYPES),
@@ -169,10 +210,11 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     section = scenario.section("trajectory")
     sim = simulation_config(scenario)
     trajectory = trajectory_config(section, vehicle, sim.initial.position)
-    config = ControllerConfig(controller_type, gains, trajectory.waypoints, feedforward, secondary,
-                              trajectory.goal_duration, scenario.source, allocation, compensation, air_mode,
-                              trajectory.authority_margin, acceleration_filter_hz=acceleration_filter_hz,
-                              feasibility=trajectory.feasibility, path=trajectory.path, trajectory_kind=trajectory.kind)
+    config = ControllerConfig(controller_type, gains, trajectory.waypoints, angular_feedforward, profile, feedforward,
+                              integral_limit, secondary, trajectory.goal_duration, scenario.source, allocation,
+                              compensation, air_mode, trajectory.authority_margin,
+                              acceleration_filter_hz=acceleration_filter_hz, feasibility=trajectory.feasibility,
+                              path=trajectory.path, trajectory_kind=trajectory.kind)
     # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     try:
         plan = config.trajectory(vehicle, actuation, sim.initial.position, sim.initial.rotation)

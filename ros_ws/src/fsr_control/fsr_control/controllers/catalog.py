@@ -1,4 +1,4 @@
-"""The control laws a scenario can name (``controller.type``): what each needs and its default gains.
+"""The control laws a scenario can name (``controller.type``): what each needs, its gains and how it is packed.
 
 A law's per-step function lives in the compiled core (:mod:`fsr_control.core.laws`, selected by its kind);
 this table is everything else the configuration and the controller need to know of it. A new law adds one
@@ -7,12 +7,19 @@ entry (``docs/extending.md``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from fsr_control.controllers import geometric, voliro
-from fsr_control.core import laws
+from fsr_control.core import geometric_law, laws, voliro_law
+from fsr_sim.model.gain_design import design_gains
+from fsr_sim.model.vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from fsr_control.config.controller_config import ControllerConfig
 
 
 @dataclass(frozen=True)
@@ -22,25 +29,52 @@ class LawType:
     Attributes
     ----------
     kind : int
-        Its kind in :func:`fsr_control.core.laws.control_law`.
+        Its kind in :func:`fsr_control.core.laws.control_law` (the index of its field of
+        :class:`~fsr_control.core.laws.LawParams`).
     default_gains : dict
-        Gain name -> (3, 3) array, in the order of the core's four gain slots (``k_p``, ``k_v``, ``k_r``,
-        ``k_w`` of :class:`~fsr_control.core.laws.LawParams`); a scenario's ``controller.gains`` takes these names.
+        Gain name -> (3, 3) array: the report's gains (``controller.profile: report``); a scenario's
+        ``controller.gains`` takes these names (and ``optional_gains``).
+    designed_gains : callable
+        ``designed_gains(vehicle) -> dict`` of the same names: the gains of ``controller.profile: flight``,
+        designed from the nominal vehicle (:mod:`fsr_sim.model.gain_design`).
+    pack : callable
+        ``pack(vehicle, config) -> params``: the law's own parameters (its field of ``LawParams``) from the
+        validated configuration (:class:`~fsr_control.config.controller_config.ControllerConfig`).
+    memory_size : int
+        The length of the law's own memory.
     fully_actuated : bool
         The law commands a whole body wrench (a vehicle whose rotors produce any wrench, allocated to rotors);
         False: thrust along ``-z_b`` and a torque (a vehicle that is not fully actuated).
+    optional_gains : tuple of str
+        Gains a scenario may give beyond ``default_gains`` (zero in the report's profile).
     horizon_steps, horizon_dt : int, float
         The reference ahead the law reads: ``horizon_steps`` samples ``horizon_dt`` [s] apart (0: none).
     """
 
     kind: int
     default_gains: dict[str, np.ndarray]
+    designed_gains: Callable[[Vehicle], dict[str, np.ndarray]]
+    pack: Callable[[Vehicle, ControllerConfig], NamedTuple]
+    memory_size: int
     fully_actuated: bool
+    optional_gains: tuple[str, ...] = ()
     horizon_steps: int = 0
     horizon_dt: float = 0.0
 
 
+def _pack_geometric(vehicle: Vehicle, config: ControllerConfig) -> geometric_law.GeometricParams:
+    return geometric.pack_geometric(vehicle, config.gains, config.feedforward, config.acceleration_filter_hz,
+                                    config.integral_limit)
+
+
+def _pack_voliro(vehicle: Vehicle, config: ControllerConfig) -> voliro_law.VoliroParams:
+    return voliro.pack_voliro(vehicle, config.gains, config.angular_feedforward)
+
+
 LAWS: dict[str, LawType] = {
-    "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS, fully_actuated=False),
-    "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS, fully_actuated=True),
+    "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS, lambda vehicle: design_gains(vehicle).wrench_gains(),
+                         _pack_geometric, geometric_law.MEMORY_SIZE, fully_actuated=False,
+                         optional_gains=geometric.OPTIONAL_GAINS),
+    "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS, lambda vehicle: design_gains(vehicle).acceleration_gains(),
+                      _pack_voliro, voliro_law.MEMORY_SIZE, fully_actuated=True),
 }

@@ -16,6 +16,7 @@ import numpy as np
 
 from fsr_control.core import laws
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
+from fsr_control.core.law_terms import INERTIA
 from fsr_control.core.reference import HORIZON_WIDTH, ReferenceSample
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.core.so3 import Vec3, matrix_rows
@@ -91,31 +92,32 @@ def compensation_of(compensation: Compensation | None) -> laws.Compensation:
     return laws.Compensation(True, force, torque, rate, acceleration)
 
 
-def pack_law(vehicle: Vehicle, gains: dict[str, np.ndarray], kind: int, gain_names: tuple[str, str, str, str],
-             angular_feedforward: str = "consistent", horizon_steps: int = 0,
-             horizon_dt: float = 0.0, acceleration_cutoff: float = 0.0) -> laws.LawParams:
-    """The core's :class:`~fsr_control.core.laws.LawParams` for the law ``kind``: ``gains[name]`` (3, 3) for
-    each of ``gain_names`` in the core's slot order (``k_p``, ``k_v``, ``k_r``, ``k_w``; Voliro's ``k_d`` is its
-    ``k_v``), the reference horizon the law reads (``horizon_steps`` samples ``horizon_dt`` [s] apart) and the
-    cutoff [Hz] of the low-pass on the measured acceleration (0: none)."""
-    k_p, k_v, k_r, k_w = (np.ascontiguousarray(np.asarray(gains[name], dtype=float).reshape(3, 3))
-                          for name in gain_names)
-    return laws.LawParams(kind, float(vehicle.mass), np.ascontiguousarray(vehicle.inertia, dtype=float), k_p, k_v,
-                          k_r, k_w, angular_feedforward == "report", int(horizon_steps), float(horizon_dt),
-                          float(acceleration_cutoff))
+def law_matrices(vehicle: Vehicle, gains: dict[str, np.ndarray], names: tuple[str, ...],
+                 optional: tuple[str, ...] = ()) -> np.ndarray:
+    """A law's matrices (:mod:`fsr_control.core.law_terms`): the nominal inertia [kg m^2], then ``gains[name]``
+    for each of ``names`` (an ``optional`` name that is missing: zeros), one contiguous (1 + len(names), 3, 3)
+    float array. Raises ValueError naming a missing gain."""
+    missing = [name for name in names if name not in gains and name not in optional]
+    if missing:
+        raise ValueError(f"gains {missing} missing (got {sorted(gains)})")
+    matrices = [vehicle.inertia, *(gains.get(name, np.zeros((3, 3))) for name in names)]
+    return np.ascontiguousarray([np.asarray(matrix, dtype=float).reshape(3, 3) for matrix in matrices])
 
 
 class CompiledLaw:
-    """A law of the compiled core on a nominal vehicle: its packed parameters (:attr:`params`) and memory."""
+    """A law of the compiled core on a nominal vehicle: its packed parameters (:attr:`params`, the law's own in
+    its field of :class:`~fsr_control.core.laws.LawParams`) and its own memory (``memory_size`` entries)."""
 
-    def __init__(self, params: laws.LawParams) -> None:
+    def __init__(self, params: laws.LawParams, memory_size: int) -> None:
         self.params = params
-        self.memory = np.zeros(laws.MEMORY_SIZE)
-        self.mass = params.mass
-        self.inertia = params.inertia
+        self.memory = np.zeros(memory_size)
+        own = getattr(params, laws.LAW_FIELDS[params.kind])  # the law's own parameters
+        self.mass = own.mass
+        self.inertia = own.matrices[INERTIA]
 
     def reset(self) -> None:
-        """Forget the previous sample (the geometric law's measured acceleration restarts from the model's)."""
+        """Forget the previous sample (the geometric law's measured acceleration restarts from the model's, its
+        integral from zero)."""
         self.memory[:] = 0.0
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,

@@ -9,32 +9,47 @@ World NED, body FRD, ``e3 = [0, 0, 1]`` (down), ``g = 9.81``:
     e_R = vee(R_d^T R_b - R_b^T R_d) / 2,   e_w = w_b - R_b^T R_d w_d
     tau_b = -K_R e_R - K_w e_w + S(w_b) I_b w_b - I_b (S(w_b) R_b^T R_d w_d - R_b^T R_d w_dot_d)   [N m]
 
-``w_d`` and ``w_dot_d`` are the exact rates of this ``R_d`` (:mod:`fsr_control.planning.flatness`): with
-``a_dot = -K_p e_v - K_v e_a + m p_dddot_d`` and ``a_ddot = -K_p e_a - K_v e_j + m p_ddddot_d``, where the
-acceleration error ``e_a`` uses the *measured* acceleration, from differencing consecutive velocities (the
-model's ``g e3 - u_T R_b e3 / m`` would miss unmodelled forces: with a constant disturbance it predicts
-an acceleration that never comes and keeps ``R_d`` turning; the model's value is used only at the first
-step), and the jerk error ``e_j`` the model's ``p_dddot = -(u_T_dot R_b e3 + u_T R_b S(w_b) e3) / m``
-(zero at any equilibrium); ``controller.acceleration_filter_hz`` low-passes that measured acceleration (first
-order; the default 0 keeps it raw: noisy velocities make it noisy a thousandfold at 1 kHz), and the
-compensated estimate's rates with it. Without the
-feedback part of these rates (only the reference's) the attitude loop lags the outer loop and, with the
-report's gains and the exercise-4 inertia (1.24 kg m^2), the lateral loop is unstable:
-``1.49 s^4 + 12 s^3 + 12 s^2 + 200 s + 200`` fails Routh's test. The controller uses the nominal model (mass, inertia).
+``w_d`` and ``w_dot_d`` are the rates of ``R_d`` through the flatness map (:mod:`fsr_control.core.flatness`),
+from ``a_dot`` and ``a_ddot``; ``controller.feedforward`` says where those come from:
+
+* ``reference`` (the flight stacks' law: Lee, Leok & McClamroch 2010; Mellinger & Kumar 2011; Faessler et al.
+  2018; the default of ``controller.profile: flight``): from the reference alone, ``a_dot = m p_dddot_d``,
+  ``a_ddot = m p_ddddot_d`` (and the yaw's rate and acceleration). No measured acceleration enters the torque,
+  so sensor noise, a motor lag or a force step reach it only through the PD terms. The attitude loop must then
+  be faster than the position loop (several times: :mod:`fsr_sim.model.gain_design` designs such gains from
+  the vehicle), since ``R_d`` turning with the feedback is left to the attitude feedback.
+* ``measured`` (the report's law, ``controller.profile: report``): the exact rates of this ``R_d``, with
+  ``a_dot = -K_p e_v - K_v e_a + m p_dddot_d`` and ``a_ddot = -K_p e_a - K_v e_j + m p_ddddot_d``, where the
+  acceleration error ``e_a`` uses the *measured* acceleration, from differencing consecutive velocities (the
+  model's ``g e3 - u_T R_b e3 / m`` would miss unmodelled forces: with a constant disturbance it predicts an
+  acceleration that never comes and keeps ``R_d`` turning; the model's value is used only at the first step),
+  and the jerk error ``e_j`` the model's ``p_dddot = -(u_T_dot R_b e3 + u_T R_b S(w_b) e3) / m`` (zero at any
+  equilibrium); ``controller.acceleration_filter_hz`` low-passes that measured acceleration (first order; the
+  default 0 keeps it raw: noisy velocities make it noisy a thousandfold at 1 kHz). Without the feedback part
+  of these rates (only the reference's) the attitude loop lags the outer loop and, with the report's gains and
+  the exercise-4 inertia (1.24 kg m^2), whose attitude loop is slower than its position loop, the lateral loop
+  is unstable: ``1.49 s^4 + 12 s^3 + 12 s^2 + 200 s + 200`` fails Routh's test.
+
+The controller uses the nominal model (mass, inertia). An integral of the position error (``gains.k_i``, zero
+by default in ``report``, designed in ``flight``) adds ``-K_i int e_p dt`` to ``a`` (and, ``measured``, its
+rates ``-K_i e_p``, ``-K_i e_v`` to ``a_dot``, ``a_ddot``), with two anti-windup rules: the integral is scaled
+back so that ``|K_i int e_p| <= controller.integral_limit`` [N] (a clamp on its force), and it is not integrated
+at a step after the allocation fell short of the commanded thrust or roll/pitch torque (conditional
+integration: the rotors at a limit; yaw giving way does not count).
 With ``controller.compensation: estimate`` the estimated external wrench is cancelled: ``a -= f_hat`` (world)
-before ``u_T`` and ``z_bd`` (and its rates in ``a_dot``, ``a_ddot``), ``tau_b -= tau_hat`` (body); see
-:mod:`fsr_control.compensation`.
+before ``u_T`` and ``z_bd`` (and its rates in ``a_dot``, ``a_ddot``, either feed-forward), ``tau_b -= tau_hat``
+(body); see :mod:`fsr_control.compensation`.
 Report gains: ``K_p = K_v = diag(20, 20, 100)``, ``K_R = K_w = diag(10, 10, 100)``.
 
-The law is written once, in the compiled core (:func:`fsr_control.core.laws.geometric_law`).
+The law is written once, in the compiled core (:func:`fsr_control.core.geometric_law.geometric_law`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, pack_law
-from fsr_control.core import laws
+from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.core import geometric_law, laws
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_GAINS = {  # the report's exercise-4 gains (docs/model.md §3.6), used when a scenario gives none
@@ -43,6 +58,24 @@ DEFAULT_GAINS = {  # the report's exercise-4 gains (docs/model.md §3.6), used w
     "k_r": np.diag((10.0, 10.0, 100.0)),
     "k_w": np.diag((10.0, 10.0, 100.0)),
 }
+OPTIONAL_GAINS = ("k_i",)  # zero unless given (the report's law has no integral)
+FEEDFORWARDS = ("measured", "reference")  # not a topic name: controller.feedforward's values
+MEASURED_FEEDFORWARD, REFERENCE_FEEDFORWARD = FEEDFORWARDS
+
+
+def pack_geometric(vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: str = MEASURED_FEEDFORWARD,
+                   acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0) -> geometric_law.GeometricParams:
+    """The core's parameters of the geometric law (module docstring): ``gains`` ``k_p``, ``k_v``, ``k_r``,
+    ``k_w`` and optionally ``k_i`` (3, 3), the ``feedforward`` of its rates, the cutoff [Hz] of the low-pass on
+    the measured acceleration (0: none) and the bound [N] on the integral's force."""
+    if feedforward not in FEEDFORWARDS:
+        raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
+    matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
+    integral = bool(np.any(matrices[geometric_law.K_I] != 0.0))
+    if integral and not integral_limit > 0.0:
+        raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
+    return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
+                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz))
 
 
 class GeometricController(CompiledLaw):
@@ -53,8 +86,15 @@ class GeometricController(CompiledLaw):
     vehicle : Vehicle
         Nominal model: mass [kg] and inertia [kg m^2] (must have fixed rotors).
     gains : dict
-        ``k_p``, ``k_v`` [N/m, N s/m], ``k_r``, ``k_w`` [N m/rad, N m s/rad]: (3, 3) arrays (or anything
-        ``np.asarray`` makes one of).
+        ``k_p``, ``k_v`` [N/m, N s/m], ``k_r``, ``k_w`` [N m/rad, N m s/rad] and optionally ``k_i`` [N/(m s)]:
+        (3, 3) arrays (or anything ``np.asarray`` makes one of).
+    feedforward : {"measured", "reference"}
+        Where the rates of ``R_d`` come from (module docstring); ``measured``: the report's law.
+    acceleration_filter_hz : float
+        ``measured``: the cutoff [Hz] of the low-pass on the measured acceleration (and, either, on the
+        compensated estimate's rates); 0: none.
+    integral_limit : float
+        Bound [N] on the integral's force (needed with a non-zero ``k_i``).
 
     ``compute(reference, position, rotation, velocity_world, angular_velocity_body, compensation=None)``
     returns the body wrench ``[0, 0, -u_T]`` [N], ``tau_b`` [N m] and ``rotation_commanded = R_d``. With a
@@ -62,11 +102,14 @@ class GeometricController(CompiledLaw):
     in world NED enters the desired force before the thrust direction is taken, ``a -= f_hat`` (a side wind is
     met by tilting), and its rates the rates of ``R_d`` (``a_dot -= f_hat_dot``, ``a_ddot -= f_hat_ddot``: without
     them ``R_d`` turns with the estimate unannounced and the attitude lags); ``tau_hat`` [N m] in body FRD the
-    torque, ``tau_b -= tau_hat``. None: the law as written (bit for bit).
+    torque, ``tau_b -= tau_hat``. None: the law as written (bit for bit). Outside the controller's tick nothing
+    tells it of the allocation, so its integral is never held (only clamped).
     """
 
-    def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray]) -> None:
+    def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: str = MEASURED_FEEDFORWARD,
+                 acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0) -> None:
         if vehicle.fully_actuated:
             raise ValueError(f"the geometric controller is for vehicles that produce thrust along -z_b and a torque; "
                              f"'{vehicle.name}' is fully actuated (use voliro)")
-        super().__init__(pack_law(vehicle, gains, laws.GEOMETRIC, tuple(DEFAULT_GAINS)))
+        own = pack_geometric(vehicle, gains, feedforward, acceleration_filter_hz, integral_limit)
+        super().__init__(laws.law_params(laws.GEOMETRIC, own), geometric_law.MEMORY_SIZE)

@@ -21,15 +21,15 @@ this wrench, all six axes (:mod:`fsr_control.compensation`).
 Report gains: ``K_p = diag(50, 50, 100)``, ``K_d = diag(10, 10, 50)``, ``K_R = diag(100, 100, 100)``,
 ``K_w = diag(10, 10, 50)``.
 
-The law is written once, in the compiled core (:func:`fsr_control.core.laws.voliro_law`).
+The law is written once, in the compiled core (:func:`fsr_control.core.voliro_law.voliro_law`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, pack_law
-from fsr_control.core import laws
+from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.core import laws, voliro_law
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_GAINS = {  # the report's exercise-5 gains (docs/model.md §3.7), used when a scenario gives none
@@ -39,6 +39,16 @@ DEFAULT_GAINS = {  # the report's exercise-5 gains (docs/model.md §3.7), used w
     "k_w": np.diag((10.0, 10.0, 50.0)),
 }
 ANGULAR_FEEDFORWARDS = ("consistent", "report")
+
+
+def pack_voliro(vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforward: str = "consistent"
+                ) -> voliro_law.VoliroParams:
+    """The core's parameters of the Voliro law: ``gains`` ``k_p``, ``k_d``, ``k_r``, ``k_w`` (3, 3) and the
+    ``angular_feedforward`` (module docstring)."""
+    if angular_feedforward not in ANGULAR_FEEDFORWARDS:
+        raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
+    return voliro_law.VoliroParams(float(vehicle.mass), law_matrices(vehicle, gains, voliro_law.MATRICES[1:]),
+                                   angular_feedforward == "report")
 
 
 class VoliroController(CompiledLaw):
@@ -62,7 +72,6 @@ class VoliroController(CompiledLaw):
         if not vehicle.fully_actuated:
             raise ValueError(f"the voliro controller needs a fully actuated vehicle (rotors on servos or canted); "
                              f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
-        if angular_feedforward not in ANGULAR_FEEDFORWARDS:
-            raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
-        super().__init__(pack_law(vehicle, gains, laws.VOLIRO, tuple(DEFAULT_GAINS), angular_feedforward))
+        own = pack_voliro(vehicle, gains, angular_feedforward)
+        super().__init__(laws.law_params(laws.VOLIRO, own), voliro_law.MEMORY_SIZE)
         self.report_feedforward = angular_feedforward == "report"

@@ -2,7 +2,7 @@
 and the estimate's rates. Timing, model and contact rule are explained in :mod:`fsr_control.compensation`.
 
 Per step: :func:`compensation_estimate` before the law (the estimate of the previous stamp, or an inactive
-:class:`~fsr_control.core.laws.Compensation` when gated), :func:`compensation_record` after the allocation
+:class:`~fsr_control.core.law_terms.Compensation` when gated), :func:`compensation_record` after the allocation
 (state and commanded wrench of this stamp).
 """
 
@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_control.core.laws import NO_COMPENSATION, Compensation
+from fsr_control.core.law_terms import NO_COMPENSATION, Compensation
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, observer_update, reset_observer
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.so3 import (

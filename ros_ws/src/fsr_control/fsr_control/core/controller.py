@@ -25,7 +25,7 @@ from fsr_control.core.compensation import (
     compensation_record,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_control.core.laws import NO_COMPENSATION, LawParams, control_law
+from fsr_control.core.laws import NO_COMPENSATION, LawParams, control_law, law_allocated
 from fsr_control.core.reference import TrajectoryTable, sample_horizon, sample_reference
 from fsr_sim.core.jit import jit
 from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, quaternion_from_rotation_rows
@@ -62,7 +62,7 @@ class ControllerParams(NamedTuple):
 
 
 class ControllerState(NamedTuple):
-    law: np.ndarray  # the law's memory (fsr_control.core.laws)
+    law: np.ndarray  # the law's own memory (fsr_control.core.laws)
     allocation: AllocationState
     compensation: CompensationState
     reference: np.ndarray  # (5, 4) scratch: the active segment's channel derivatives
@@ -124,6 +124,7 @@ def controller_tick(params: ControllerParams, state: ControllerState, t: float, 
     _put3(out, FORCE, actuated.force)
     _put3(out, TORQUE, actuated.torque)
     out[SATURATED] = 1.0 if actuated.saturated else 0.0
+    law_allocated(params.law, state.law, out[SHORTFALL:SHORTFALL + 6])
     if params.compensation.enabled:
         compensation_record(params.compensation, state.compensation, rotation, velocity_world, angular_velocity,
                             actuated.force, actuated.torque)

@@ -10,7 +10,10 @@ also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a
 (the model's limits, :mod:`fsr_sim.model.authority`): ``thrust_min``, ``thrust_max`` [N], ``roll_torque``,
 ``pitch_torque``, ``yaw_torque`` [N m], ``roll_acceleration``, ``pitch_acceleration``, ``yaw_acceleration``
 [rad/s^2] and ``tilt_max`` [rad] (null unless fully actuated); null, with the reason in ``authority_error``, for a
-vehicle that cannot hover.
+vehicle that cannot hover. ``designed_gains`` are the loop bandwidths [rad/s] and gains of ``controller.profile:
+flight`` (:mod:`fsr_sim.model.gain_design`): ``attitude``, ``yaw``, ``horizontal``, ``vertical``, what set each
+(``limits``), the lag designed for (``lag_s``), ``wrench_gains`` (the geometric law's, N/m ... N m s/rad) and
+``acceleration_gains`` (the Voliro law's, 1/s^2 and 1/s); null when the authority is.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from fsr_sim.model.allocation import (
     wrench_from_rotor_speed_sq,
 )
 from fsr_sim.model.authority import Authority, authority
+from fsr_sim.model.gain_design import CASCADE_RATIO, GainDesign, design_gains
 from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle, load_vehicle
 
 WRENCH_ROWS = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
@@ -69,9 +73,12 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
         "allocation": wrench_from_rotor_speed_sq(vehicle).tolist(),
     }
     try:
-        summary["authority"] = authority(vehicle, margin=1.0).as_dict()
+        model_authority = authority(vehicle, margin=1.0)
     except ValueError as error:  # a vehicle that cannot hover: the rest still printed
-        summary["authority"], summary["authority_error"] = None, str(error)
+        summary["authority"], summary["authority_error"], summary["designed_gains"] = None, str(error), None
+    else:
+        summary["authority"] = model_authority.as_dict()
+        summary["designed_gains"] = design_gains(vehicle, model_authority).as_dict()
     if vehicle.has_servos:
         summary["tilt_angle_max"] = vehicle.tilt_angle_max
         summary["allocation_static"] = static_tilting_allocation(vehicle).tolist()
@@ -102,6 +109,37 @@ def _authority_markdown(values: Authority) -> list[str]:
         f"| yaw torque (+-) | {values.yaw_torque:.4g} N m ({values.yaw_acceleration:.4g} rad/s^2) |",
         f"| hover tilt (roll or pitch) | {tilt} |",
     ]
+
+
+def _gain_text(gain: np.ndarray) -> str:
+    """A gain's diagonal (or the whole matrix when it is not diagonal), 4 digits."""
+    gain = np.asarray(gain)
+    values = np.diag(gain) if np.count_nonzero(gain - np.diag(np.diag(gain))) == 0 else gain
+    return str(np.vectorize(lambda v: float(f"{v:.4g}"))(values).tolist())
+
+
+def _design_markdown(design: GainDesign, fully_actuated: bool) -> list[str]:
+    settings = {"lag": "the lag", "authority": "the authority", "cascade": f"attitude / {CASCADE_RATIO:g}"}
+    lines = [
+        f"Gains designed from the vehicle (`controller.profile: flight`, docs/control.md) for "
+        f"{design.lag * 1e3:.0f} ms of lag (motor, onboard odometry's delay and rate; every loop below "
+        f"{design.lag_bandwidth:.3g} rad/s), damping {design.damping:g}:",
+        "",
+        "| loop | bandwidth | set by |",
+        "|---|---|---|",
+    ]
+    for name, label in (("attitude", "roll / pitch"), ("yaw", "yaw"), ("horizontal", "position x / y"),
+                        ("vertical", "position z")):
+        lines.append(f"| {label} | {getattr(design, name):.3g} rad/s | {settings[design.limits[name]]} |")
+    if fully_actuated:
+        law, gains = "voliro (1/s^2, 1/s)", design.acceleration_gains()
+    else:
+        law, gains = "geometric (N/m, N s/m, N/(m s), N m/rad, N m s/rad)", design.wrench_gains()
+    lines += ["", f"| gain, {law} | value |", "|---|---|"]
+    lines += [f"| {name} | {_gain_text(value)} |" for name, value in gains.items()]
+    if not fully_actuated:
+        lines.append(f"| integral_limit | {design.integral_limit:.4g} N |")
+    return lines
 
 
 def vehicle_markdown(vehicle: Vehicle) -> str:
@@ -153,6 +191,7 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
         out += ["", f"Authority at hover: none ({s['authority_error']})."]
     else:
         out += ["", *_authority_markdown(Authority(**s["authority"]))]
+        out += ["", *_design_markdown(design_gains(vehicle, Authority(**s["authority"])), vehicle.fully_actuated)]
     return "\n".join(out) + "\n"
 
 

@@ -232,14 +232,15 @@ def checked_array(value: Any, shape: tuple[int, ...], key: str, source: str = ""
         raise ConfigError(key, error.reason, source) from None
 
 
-def checked_spd(value: Any, key: str, source: str = "") -> np.ndarray:
-    """3 numbers (the diagonal) or a 3x3 matrix, symmetric positive definite (an inertia, a gain) -> (3, 3).
+def checked_spd(value: Any, key: str, source: str = "", semidefinite: bool = False) -> np.ndarray:
+    """3 numbers (the diagonal) or a 3x3 matrix, symmetric positive definite (an inertia, a gain; with
+    ``semidefinite``, zero eigenvalues are allowed: an optional gain) -> (3, 3).
 
     The check is :func:`fsr_sim.model.checks.symmetric_positive_definite`; this adds the file and the key.
     """
     if value is None:
         raise ConfigError(key, "is required", source)
     try:
-        return symmetric_positive_definite(value, key)
+        return symmetric_positive_definite(value, key, semidefinite)
     except InvalidValueError as error:
         raise ConfigError(key, error.reason, source) from None

@@ -34,8 +34,9 @@ def finite_array(value: ArrayLike, shape: tuple[int, ...], name: str) -> np.ndar
     return array
 
 
-def symmetric_positive_definite(value: ArrayLike, name: str) -> np.ndarray:
-    """A 3x3 symmetric positive-definite matrix (an inertia [kg m^2] or a gain) from 3 numbers or a 3x3.
+def symmetric_positive_definite(value: ArrayLike, name: str, semidefinite: bool = False) -> np.ndarray:
+    """A 3x3 symmetric positive-definite matrix (an inertia [kg m^2] or a gain) from 3 numbers or a 3x3
+    (``semidefinite``: positive semi-definite, zero eigenvalues allowed).
 
     Parameters
     ----------
@@ -61,7 +62,9 @@ def symmetric_positive_definite(value: ArrayLike, name: str) -> np.ndarray:
     if not np.allclose(matrix, matrix.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(matrix).max()))):
         raise InvalidValueError(name, f"must be symmetric, got {matrix.tolist()}")
     eigenvalues = np.linalg.eigvalsh(matrix)
-    if eigenvalues.min() <= 0.0:
+    if semidefinite and eigenvalues.min() < -1e-12 * max(1.0, float(np.abs(matrix).max())):
+        raise InvalidValueError(name, f"must be positive semi-definite (>= 0), got eigenvalues {eigenvalues.tolist()}")
+    if not semidefinite and eigenvalues.min() <= 0.0:
         raise InvalidValueError(name, f"must be positive definite, got eigenvalues {eigenvalues.tolist()}")
     return matrix
 
