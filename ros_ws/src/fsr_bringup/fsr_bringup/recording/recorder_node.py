@@ -24,7 +24,8 @@ the file and exits 0 by itself (:mod:`fsr_sim.ros.flight_end`); ``--keep-running
 
 Derived topics (:mod:`fsr_bringup.recording.derived`): ``/tf_static`` and ``/tf`` (from every ``odom``) and
 ``markers`` (the vehicle for a viewer, with ``--scenario``) are written as the messages they come from arrive;
-``markers`` is also published over DDS. The recorder draws them, not the simulator, because it holds every
+``markers`` is also published over DDS, and so are ``/tf`` and ``/tf_static`` where ``tf2_msgs`` is installed
+(:mod:`fsr_bringup.recording.tf_publishers`). The recorder draws them, not the simulator, because it holds every
 topic of a step (the simulator has neither the estimate nor the reference of the state it publishes) and
 because the simulator's per-step loop then pays nothing for them.
 
@@ -65,6 +66,7 @@ import numpy as np
 from fsr_bringup.live.endpoint import add_live_arguments, endpoint_of, reserve
 from fsr_bringup.recording.derived import DERIVED_SOURCES, DerivedTopics
 from fsr_bringup.recording.metadata import scenario_from_text
+from fsr_bringup.recording.tf_publishers import TfPublishers
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.contract import (
     BY_NAME,
@@ -265,6 +267,7 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
             self.derived: dict[str, tuple[DerivedTopics, object]] = {}  # namespace -> (its topics, markers publisher)
             self.derive_failed: set[str] = set()
             self.derived_topics: dict[str, DerivedTopics] = {}  # namespace -> its derived topics (built once)
+            self.frames = TfPublishers.create(self)  # /tf and /tf_static over DDS (None: no tf2_msgs here)
             if live is not None:  # every topic a client may see, before the server takes its first client
                 for namespace in sorted({topic.rpartition("/")[0] for _sub, topic, *_ in self.entries
                                          if topic.rsplit("/", 1)[-1] in DERIVED_SOURCES}):
@@ -301,7 +304,7 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
 
         def write_derived(self, messages: list[tuple[str, object, object]], publisher: object) -> None:
             """Write derived ``(topic, stamps, payload rows)`` (log time = publish time = stamp); publish the
-            markers."""
+            markers, and the frames where tf2_msgs is installed."""
             records = []
             for topic, stamps, rows in messages:
                 for stamp, row in zip(stamps.tolist(), rows, strict=True):
@@ -309,6 +312,8 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
                     records.append((topic, data, stamp, stamp))
                     if publisher is not None and topic.endswith("/" + MARKERS.name):
                         publisher.publish(data)
+                    elif self.frames is not None:
+                        self.frames.publish(topic, data)
             self.writer.write_records(records)
 
         def done(self) -> bool:
