@@ -253,9 +253,10 @@ class _ClientEvents(logging.Handler):
     """Turns the SDK's log records (it logs through Python's ``logging``, logger ``foxglove``) into one line per
     event for the user: a client connected, left, or cannot keep up (said once per client: the SDK drops the
     oldest of its queued messages). The SDK's other records at WARNING and above are passed on as they are,
-    except a client closing without the WebSocket closing handshake (a closed browser tab: a client leaving)."""
+    except the errors of a connection that a client dropped (a closed browser tab: a client leaving)."""
 
     LOGGER = "foxglove"
+    CLIENT_GONE = ("Error receiving from client ", "Error sending message to client ")
 
     def __init__(self, say: Callable[[str], None]) -> None:
         super().__init__(logging.INFO)
@@ -290,7 +291,7 @@ class _ClientEvents(logging.Handler):
                 self.slow.add(client)
                 self.say(f"live: client {client} cannot keep up: dropping its oldest messages (the flight and "
                          "the recording go on unchanged)")
-        elif record.levelno >= logging.WARNING and "without closing handshake" not in text:
+        elif record.levelno >= logging.WARNING and not text.startswith(self.CLIENT_GONE):
             self.say(f"live: {record.levelname.lower()}: {text}")
 
 
