@@ -174,12 +174,13 @@ def main(argv: list[str] | None = None) -> int:
               "--in-process", file=sys.stderr)
         return EXIT_CONFIG_ERROR
     live = endpoint_of(args)
-    if live is not None:
+    if live is not None:  # checked before anything is flown; the graph's recorder is given the port found for 0
         try:
-            live = reserve(live)
+            reserved = reserve(live)
         except ValueError as error:
             print(f"fsr-fly: {error}", file=sys.stderr)
             return EXIT_CONFIG_ERROR
+        live = live if args.in_process else reserved
     run_dir = recording.with_suffix("")
     try:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -267,7 +268,8 @@ def main(argv: list[str] | None = None) -> int:
         f"in {result.wall_time:.2f} s wall (real-time factor {result.real_time_factor:.2f})",
         flush=True,
     )
-    speed = flight_speed(result)
+    speed = flight_speed(result) if live is None or not args.in_process else \
+        f"paced for watching live at lockstep.real_time_factor {members[0].checked.simulation.real_time_factor:g}"
     if speed:
         print(f"fsr-fly: {speed}", flush=True)
     for failure in result.failures:

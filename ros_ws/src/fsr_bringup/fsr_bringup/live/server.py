@@ -34,7 +34,7 @@ from fsr_sim.contract import MARKERS, topic_named
 
 BACKLOG = 4096  # messages queued per client before its oldest are dropped (~0.3 s of every topic at 1 kHz)
 LATCHED_DEPTH = 64  # messages of a latched topic kept for late subscribers (/tf_static: one per vehicle)
-_HELD_LAST = 1  # markers: the last one (the vehicle as last drawn)
+MARKERS_HELD = 1  # markers kept for late subscribers: the last one (the vehicle as last drawn)
 STOP_WAIT_S = 1.0  # s the server's stop may take before the flight's command goes on without it
 
 
@@ -49,7 +49,7 @@ def _held_depth(topic: str) -> int:
         return 0
     if contract.qos == "LATCHED":
         return LATCHED_DEPTH
-    return _HELD_LAST if contract.name == MARKERS.name else 0
+    return MARKERS_HELD if contract.name == MARKERS.name else 0
 
 
 class LiveServer:

@@ -550,10 +550,11 @@ def main(argv: list[str] | None = None) -> int:
         from fsr_bringup.live.server import LiveServer
 
         try:
-            live = LiveServer(reserve(endpoint_of(args)), "fsr-record")
+            reserve(endpoint_of(args))  # a bad or busy port fails now, before anything is subscribed or written
         except ValueError as error:
             print(f"fsr-record: error: {error}", file=sys.stderr)
             return EXIT_CONFIG_ERROR
+        live = LiveServer(endpoint_of(args), "fsr-record")
     try:
         writer = open_writer(args.out, args.scenario)
     except ValueError as error:
