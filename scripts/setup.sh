@@ -20,6 +20,9 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
     -e "$root/ros_ws/src/fsr_estimation" -e "$root/ros_ws/src/fsr_bringup"
   echo "$want" > "$stamp"
 fi
+# tf2_msgs/msg/TFMessage (the type of /tf and /tf_static) built with the ROS build tools from the wheels (about 25 s,
+# once), so the recorder publishes them over DDS; without cmake or a C compiler it says so and goes on.
+bash "$root/scripts/build_tf2_msgs.sh" "$venv"
 # Byte-compile fsr's sources: every node and fsr-fly starts faster (an environment with
 # PYTHONDONTWRITEBYTECODE=1 would otherwise compile them at each start; a stale .pyc is simply recompiled).
 "$venv/bin/python" -m compileall -q "$root/ros_ws/src" >/dev/null || true

@@ -1,12 +1,11 @@
 """Foxglove's own decoders (@mcap/core, @foxglove/rosmsg2-serialization, pinned in package-lock.json, installed
-into a temporary folder with npm) read /tf, /tf_static and markers of a graph and an in-process recording: what
-the Foxglove app shows is what fsr wrote. Needs node and npm (and the package registry) on the machine."""
+into a temporary folder with npm: conftest.py) read /tf, /tf_static and markers of a graph and an in-process
+recording: what the Foxglove app shows is what fsr wrote. Needs node and npm (and the package registry)."""
 
 from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -18,23 +17,8 @@ from fsr_bringup.analysis.load import load_flight
 from fsr_bringup.visualization.frames import WORLD_IN_MAP
 from fsr_sim.contract import BODY_FRAME, MAP_FRAME, MARKERS, TF, TF_STATIC, WORLD_FRAME
 
-HERE = Path(__file__).resolve().parent
 BIN = Path(sys.executable).parent
 pytestmark = pytest.mark.graph  # starts fsr-fly's node graph (its own ROS domain); graph tests are slow
-
-
-@pytest.fixture(scope="module")
-def decoders(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A folder with the pinned decoders installed (``npm ci``) and the reading script."""
-    npm = shutil.which("npm")
-    assert npm and shutil.which("node"), "node and npm are needed to run Foxglove's decoders"
-    folder = tmp_path_factory.mktemp("foxglove")
-    for name in ("package.json", "package-lock.json", "read_mcap.cjs"):
-        shutil.copy(HERE / name, folder / name)
-    run = subprocess.run([npm, "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=folder, capture_output=True,
-                         text=True, timeout=300)
-    assert run.returncode == 0, run.stderr
-    return folder
 
 
 def read_with_foxglove(decoders: Path, recording: Path) -> dict:

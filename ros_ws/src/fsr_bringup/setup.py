@@ -14,6 +14,7 @@ setup(
     install_requires=[
         "setuptools", "numpy", "matplotlib", "PyYAML", "mcap", "mcap-ros2-support", "ros-rosidl-parser",
         "pandas", "dask[distributed]", "pillow", "imageio-ffmpeg", "optuna", "cmaes",
+        "foxglove-sdk~=0.30.3",  # --live; its server's logs and its stop are what fsr_bringup.live.server expects
         "fsr_sim", "fsr_control", "fsr_estimation",
     ],
     extras_require={"test": ["pytest"]},  # fsr_bringup.testing (the graph-test pytest plugin)

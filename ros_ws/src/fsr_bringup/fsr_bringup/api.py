@@ -13,12 +13,15 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fsr_bringup.runner.in_process_flight import FlightRun, fly_in_process
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_sim.config.scenario import Scenario, load_scenario, scenario_from_mapping
 from fsr_sim.contract import recording_selection
+
+if TYPE_CHECKING:
+    from fsr_bringup.live.server import LiveServer
 
 
 def simulate(
@@ -29,6 +32,7 @@ def simulate(
     stop: Callable[[], str | None] | None = None,
     progress: Callable[[float, float], None] | None = None,
     record_topics: str | None = None,
+    live: LiveServer | None = None,
 ) -> FlightRun:
     """Fly a scenario in one process (the node graph's modules and lockstep, without DDS).
 
@@ -51,6 +55,10 @@ def simulate(
     record_topics : str, optional
         With ``record``: record only these topics, comma-separated (``"odom,reference"``; ``sim_status`` is
         always kept), as ``fsr-fly --record-topics``.
+    live : LiveServer, optional
+        Serve the flight live as it flies, paced at the scenario's ``lockstep.real_time_factor`` (as ``fsr-fly
+        --live``): ``with fsr_bringup.live.serve(8765) as live: simulate("ex4_geometric", live=live)``, then connect
+        Foxglove to ``ws://localhost:8765``.
 
     Returns
     -------
@@ -78,4 +86,4 @@ def simulate(
         Path(record).parent.mkdir(parents=True, exist_ok=True)
     topics = None if record_topics is None else recording_selection(record_topics)
     return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop, progress=progress,
-                          record_topics=topics)
+                          record_topics=topics, live=live)

@@ -135,10 +135,10 @@ MASS_ESTIMATE = Topic("mass_estimate", "std_msgs/msg/Float64", "STREAM", ESTIMAT
                       stamped_like="wrench_estimate")
 TF = Topic("/tf", "tf2_msgs/msg/TFMessage", "STREAM", RECORDER, True, False,
            notes="`world_ned` -> `base_link_frd` of every `odom` (same stamp and pose); the frames of tilting rotors "
-                 "with the markers. Written into the recording (no tf2_msgs in the pip wheels: not over DDS)")
+                 "with the markers. Over DDS while subscribed, where tf2_msgs is built (scripts/build_tf2_msgs.sh)")
 TF_STATIC = Topic("/tf_static", "tf2_msgs/msg/TFMessage", "LATCHED", RECORDER, True, False,
                   notes="`map` (ENU) -> `world_ned`, `base_link_frd` -> `base_link` (FLU) and the fixed rotors' "
-                        "frames, once at the start of the recording")
+                        "frames, once at the start of the recording; over DDS every vehicle's in one message")
 MARKERS = Topic("markers", "visualization_msgs/msg/MarkerArray", "STREAM", RECORDER, True, False, WORLD_FRAME,
                 notes="the vehicle in `world_ned` at `visualization.marker_rate` [Hz] of simulated time: arms, "
                       "rotors (colour: speed between its limits), thrust arrows, true and estimated external force, "

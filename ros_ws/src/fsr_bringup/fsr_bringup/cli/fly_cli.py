@@ -3,6 +3,7 @@
     fsr-fly ex3_estimation                          # built-in scenario, recording under runs/
     fsr-fly my_flight.yaml --out runs/a.mcap --set disturbances.0.force=[0.5,0,0] --duration 10
     fsr-fly ex4_geometric --in-process              # same modules, no DDS: fastest
+    fsr-fly ex4_geometric --in-process --live       # watch it in Foxglove (ws://localhost:8765), at real time
     fsr-fly three_vehicles                          # a fleet: /uav1../uav3 in one domain (runner/fleet.py)
     fsr-fly ex4_geometric --network --domain-id 42 --nodes simulator,recorder    # host A of a flight over
     fsr-fly ex4_geometric --network --domain-id 42 --nodes controller,estimator  # two hosts (runner/remote.py)
@@ -21,12 +22,13 @@ import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import yaml
 
 from fsr_bringup.cli.analyze_cli import add_figure_arguments, figure_options
+from fsr_bringup.live.endpoint import add_live_arguments, endpoint_of, reserve
 from fsr_bringup.runner.domains import acquire_domain, fixed_domain
 from fsr_bringup.runner.fleet import FleetMember, builtin_fleet_names, fleet_path, load_fleet
 from fsr_bringup.runner.flight import Console, VehicleLaunch, fly_graph, node_commands
@@ -82,6 +84,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                              "in a smaller file); sim_status is always recorded; the analysis skips what is "
                              "missing, with a note (default: every topic)")
     parser.add_argument("--quiet", action="store_true", help="do not stream node logs (the progress is still shown)")
+    add_live_arguments(parser, "every recorded topic (the graph as it runs; --in-process paced at the scenario's "
+                               "lockstep.real_time_factor, 1 by default)")
     add_figure_arguments(parser)
     return parser.parse_args(argv)
 
@@ -170,6 +174,14 @@ def main(argv: list[str] | None = None) -> int:
         print("fsr-fly: --nodes runs part of a graph: it needs --domain-id (the same on every host) and no "
               "--in-process", file=sys.stderr)
         return EXIT_CONFIG_ERROR
+    live = endpoint_of(args)
+    if live is not None:  # checked before anything is flown; the graph's recorder is given the port found for 0
+        try:
+            reserved = reserve(live)
+        except ValueError as error:
+            print(f"fsr-fly: {error}", file=sys.stderr)
+            return EXIT_CONFIG_ERROR
+        live = live if args.in_process else reserved
     run_dir = recording.with_suffix("")
     try:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -195,12 +207,18 @@ def main(argv: list[str] | None = None) -> int:
         from fsr_bringup.api import simulate
 
         console = Console(quiet=args.quiet)
-        with interrupts_end_the_flight() as stop:
+        from fsr_bringup.live.server import LiveServer, LiveServerError
+
+        with interrupts_end_the_flight() as stop, ExitStack() as serving:
+            server = None if live is None else serving.enter_context(LiveServer(live, name, say=console.notice))
             try:
                 result = simulate(members[0].checked.scenario, record=recording, stop=stop,
                                   progress=lambda t, wall: console.flight_progress(t, duration, wall),
                                   record_topics=None if args.record_topics is None else ",".join(
-                                      sorted(args.record_topics)))
+                                      sorted(args.record_topics)), live=server)
+            except LiveServerError as error:  # the port was taken since it was checked
+                print(f"fsr-fly: {error}", file=sys.stderr)
+                return EXIT_CONFIG_ERROR
             finally:
                 console.end_progress()
     else:
@@ -214,16 +232,23 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as error:
             print(f"fsr-fly: {error}", file=sys.stderr)
             return EXIT_CONFIG_ERROR
+        if live is not None and nodes is not None and "recorder" not in nodes:
+            print("fsr-fly: --live: the recorder serves the flight and it runs on another host: give --live there",
+                  file=sys.stderr)
+            return EXIT_CONFIG_ERROR
         startup_timeout = args.startup_timeout
         if startup_timeout is None and nodes is not None:
             startup_timeout = REMOTE_STARTUP_TIMEOUT
         with domain:
             here = "" if nodes is None else f", nodes here: {', '.join(sorted(nodes))}"
             print(f"fsr-fly: ROS domain {domain.domain_id}{here}, logs in {run_dir / 'logs'}", flush=True)
+            if live is not None:
+                print(f"fsr-fly: live: the recorder serves on {live.url} (Foxglove: Open connection -> Foxglove "
+                      "WebSocket; layout docs/foxglove/fsr.json)", flush=True)
             result = fly_graph(
                 launches, recording, scenario_path, run_dir / "logs", domain, duration,
                 Console(quiet=args.quiet), localhost_only=not args.network, nodes=nodes,
-                startup_timeout=startup_timeout, record_topics=args.record_topics,
+                startup_timeout=startup_timeout, record_topics=args.record_topics, live=live,
             )
         for note in result.notes:
             print(f"fsr-fly: WARNING: {note}", file=sys.stderr, flush=True)
@@ -249,7 +274,8 @@ def main(argv: list[str] | None = None) -> int:
         f"in {result.wall_time:.2f} s wall (real-time factor {result.real_time_factor:.2f})",
         flush=True,
     )
-    speed = flight_speed(result)
+    speed = flight_speed(result) if live is None or not args.in_process else \
+        f"paced for watching live at lockstep.real_time_factor {members[0].checked.simulation.real_time_factor:g}"
     if speed:
         print(f"fsr-fly: {speed}", flush=True)
     for failure in result.failures:

@@ -38,6 +38,7 @@ from fsr_sim.contract import (
 )
 
 if TYPE_CHECKING:
+    from fsr_bringup.live.server import LiveServer
     from fsr_sim.core.sensors import ImuParams
 
 TOPIC_TYPES = {"/" + name: type_name for name, type_name in recorded_topics().items()}
@@ -45,14 +46,16 @@ BLOCK_STEPS = 1000  # steps packed and written at once
 
 
 class InProcessRecorder:
-    """Streams one in-process flight into a standard ROS 2 MCAP file (``close()`` finishes the file)."""
+    """Streams one in-process flight into a standard ROS 2 MCAP file and/or a live server (``close()`` finishes
+    the file)."""
 
-    def __init__(self, path: Path, scenario_yaml: str, rotors: bool, rotor_count: int = 0,
+    def __init__(self, path: Path | None, scenario_yaml: str, rotors: bool, rotor_count: int = 0,
                  tilting: bool = False, topics: frozenset[str] | None = None, rotor_state: bool = False,
-                 imu: ImuParams | None = None) -> None:
+                 imu: ImuParams | None = None, live: LiveServer | None = None) -> None:
         """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all);
         ``rotor_state``: the plant has actuator dynamics (the simulator then publishes ``rotor_state``);
-        ``imu``: the plant's IMU stage (enabled: the simulator publishes ``imu``)."""
+        ``imu``: the plant's IMU stage (enabled: the simulator publishes ``imu``); ``live``: also serve everything
+        written there (without ``path``: only serve it)."""
         from fsr_bringup.recording.derived import DerivedTopics
         from fsr_bringup.recording.metadata import scenario_from_text
         from fsr_control.nodes.packets import ControllerPackets
@@ -61,9 +64,13 @@ class InProcessRecorder:
         from fsr_sim.recording.reader import SCENARIO_METADATA
         from fsr_sim.recording.writer import RecordingWriter
 
-        path = Path(path)
-        self.writer = RecordingWriter(path, metadata={SCENARIO_METADATA: {"yaml": scenario_yaml}})
-        scenario, _ = scenario_from_text(scenario_yaml, "/", f"{path} ({SCENARIO_METADATA} metadata)", path.parent)
+        self.writer = live
+        if path is not None:
+            path = Path(path)
+            self.writer = RecordingWriter(path, metadata={SCENARIO_METADATA: {"yaml": scenario_yaml}})
+            self.writer = self.writer if live is None else live.tee(self.writer)
+        scenario, _ = scenario_from_text(scenario_yaml, "/", f"{path or 'the flight'} ({SCENARIO_METADATA} metadata)",
+                                         Path.cwd() if path is None else path.parent)
         self.derived = DerivedTopics(scenario, "/", topics)
         for topic, type_name in self.derived.topics().items():
             self.writer.add_topic(topic, type_name)

@@ -2,6 +2,7 @@
 
     fsr-record --out run.mcap --scenario ex4_geometric      # or --scenario my_flight.yaml
     fsr-record --out fleet.mcap --namespace /uav1 --namespace /uav2 --topic /status:std_msgs/msg/String
+    fsr-record --out run.mcap --scenario ex4_geometric --live    # and watch it in Foxglove (ws://localhost:8765)
 
 Subscribes up front (so nothing published after the simulator's handshake is missed), without
 deserialising (``raw=True``), to ``/clock`` and, under each namespace (default: the node's own, so
@@ -23,9 +24,14 @@ the file and exits 0 by itself (:mod:`fsr_sim.ros.flight_end`); ``--keep-running
 
 Derived topics (:mod:`fsr_bringup.recording.derived`): ``/tf_static`` and ``/tf`` (from every ``odom``) and
 ``markers`` (the vehicle for a viewer, with ``--scenario``) are written as the messages they come from arrive;
-``markers`` is also published over DDS. The recorder draws them, not the simulator, because it holds every
+``markers`` is also published over DDS, and so are ``/tf`` and ``/tf_static`` where ``tf2_msgs`` is installed
+(:mod:`fsr_bringup.recording.tf_publishers`). The recorder draws them, not the simulator, because it holds every
 topic of a step (the simulator has neither the estimate nor the reference of the state it publishes) and
 because the simulator's per-step loop then pays nothing for them.
+
+Live (``--live [PORT]``, ``--live-host``): everything written to the file is also served over the Foxglove
+WebSocket protocol as it is written (:mod:`fsr_bringup.live.server`); a port that cannot be bound is one line and
+exit 2 before anything is subscribed or written.
 
 Files survive crashes: chunks are small and flushed every ``FLUSH_PERIOD`` s, so a SIGKILLed file is
 readable up to its last complete chunk. SIGINT/SIGTERM: take what is still queued, write the summary,
@@ -53,11 +59,14 @@ import sys
 import time
 from collections import deque
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from fsr_bringup.live.endpoint import add_live_arguments, endpoint_of, reserve
 from fsr_bringup.recording.derived import DERIVED_SOURCES, DerivedTopics
 from fsr_bringup.recording.metadata import scenario_from_text
+from fsr_bringup.recording.tf_publishers import TfPublishers
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.contract import (
     BY_NAME,
@@ -96,6 +105,9 @@ DRAINED_TOPICS = stamped_streams()
 SIGNAL_DRAIN_S = 0.8  # s after SIGINT/SIGTERM: stop taking then, whatever is still arriving
 _STAMP = struct.Struct("<iI")
 
+if TYPE_CHECKING:
+    from fsr_bringup.live.server import LiveServer
+
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
     parser = ArgumentParser(prog="fsr-record", doc=__doc__, exit_codes={
@@ -122,6 +134,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         "--topic", action="append", default=[], metavar="NAME:TYPE",
         help="also record NAME (relative names go under each namespace) of TYPE pkg/msg/Type (repeatable)",
     )
+    add_live_arguments(parser, "everything recorded")
     return parser.parse_args(argv)
 
 
@@ -188,10 +201,12 @@ def final_status_ns(data: bytes) -> int | None:
 
 
 def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_running: bool = False,
-                  scenario_yaml: str | None = None, only: frozenset[str] | None = None) -> type:
+                  scenario_yaml: str | None = None, only: frozenset[str] | None = None, live: LiveServer | None = None
+                  ) -> type:
     """Build the node class lazily (rclpy is imported only after the environment is configured).
     ``scenario_yaml``: the recorded scenario (what the derived topics are drawn from, :mod:`fsr_bringup.recording.
-    derived`); ``only``: the ``--only`` selection."""
+    derived`); ``only``: the ``--only`` selection; ``live``: the server ``writer`` also writes to (a
+    :class:`fsr_bringup.live.server.Tee`), told every topic before it is started."""
     from rclpy.node import Node
     from rclpy.qos import QoSProfile
 
@@ -251,15 +266,32 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
             self.stop_flag: object = None  # set by run_node
             self.derived: dict[str, tuple[DerivedTopics, object]] = {}  # namespace -> (its topics, markers publisher)
             self.derive_failed: set[str] = set()
+            self.derived_topics: dict[str, DerivedTopics] = {}  # namespace -> its derived topics (built once)
+            self.frames = TfPublishers.create(self)  # /tf and /tf_static over DDS (None: no tf2_msgs here)
+            if live is not None:  # every topic a client may see, before the server takes its first client
+                for namespace in sorted({topic.rpartition("/")[0] for _sub, topic, *_ in self.entries
+                                         if topic.rsplit("/", 1)[-1] in DERIVED_SOURCES}):
+                    try:
+                        for topic, type_name in self.derived_topics_of(namespace).topics().items():
+                            live.add_topic(topic, type_name)
+                    except Exception:  # noqa: BLE001 - said at the namespace's first message (derive)
+                        continue
             self.get_logger().info(f"recording {len(self.entries)} topics to {writer.path}")
+
+        def derived_topics_of(self, namespace: str) -> DerivedTopics:
+            """The derived topics of a vehicle namespace (nothing written yet)."""
+            found = self.derived_topics.get(namespace)
+            if found is None:
+                scenario, _ = scenario_from_text(scenario_yaml, namespace or "/", f"{writer.path} (--scenario)",
+                                                 writer.path.parent)
+                found = self.derived_topics[namespace] = DerivedTopics(scenario, namespace or "/", only)
+            return found
 
         def derived_of(self, namespace: str) -> tuple[DerivedTopics, object]:
             """The derived topics of a vehicle namespace, set up (``/tf_static`` written) at its first message."""
             found = self.derived.get(namespace)
             if found is None:
-                scenario, _ = scenario_from_text(scenario_yaml, namespace or "/", f"{writer.path} (--scenario)",
-                                                 writer.path.parent)
-                derived = DerivedTopics(scenario, namespace or "/", only)
+                derived = self.derived_topics_of(namespace)
                 for topic, type_name in derived.topics().items():
                     writer.add_topic(topic, type_name)
                 publisher = None
@@ -272,7 +304,7 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
 
         def write_derived(self, messages: list[tuple[str, object, object]], publisher: object) -> None:
             """Write derived ``(topic, stamps, payload rows)`` (log time = publish time = stamp); publish the
-            markers."""
+            markers, and the frames where tf2_msgs is installed."""
             records = []
             for topic, stamps, rows in messages:
                 for stamp, row in zip(stamps.tolist(), rows, strict=True):
@@ -280,6 +312,8 @@ def make_recorder(writer: RecordingWriter, topics: list[tuple[str, str]], keep_r
                     records.append((topic, data, stamp, stamp))
                     if publisher is not None and topic.endswith("/" + MARKERS.name):
                         publisher.publish(data)
+                    elif self.frames is not None:
+                        self.frames.publish(topic, data)
             self.writer.write_records(records)
 
         def done(self) -> bool:
@@ -511,6 +545,16 @@ def main(argv: list[str] | None = None) -> int:
         except (ValueError, ImportError, AttributeError) as error:
             print(f"fsr-record: error: --topic {name}: unknown message type '{type_name}' ({error})", file=sys.stderr)
             return EXIT_CONFIG_ERROR
+    live = None
+    if endpoint_of(args) is not None:
+        from fsr_bringup.live.server import LiveServer
+
+        try:
+            reserve(endpoint_of(args))  # a bad or busy port fails now, before anything is subscribed or written
+        except ValueError as error:
+            print(f"fsr-record: error: {error}", file=sys.stderr)
+            return EXIT_CONFIG_ERROR
+        live = LiveServer(endpoint_of(args), "fsr-record")
     try:
         writer = open_writer(args.out, args.scenario)
     except ValueError as error:
@@ -524,7 +568,15 @@ def main(argv: list[str] | None = None) -> int:
     nodes: list[object] = []
 
     def make_node(_args: list[str]) -> object:
-        node = make_recorder(writer, topics, args.keep_running, writer.scenario_yaml, args.only)()
+        node = make_recorder(writer if live is None else live.tee(writer), topics, args.keep_running,
+                             writer.scenario_yaml, args.only, live)()
+        if live is not None:
+            from fsr_bringup.live.server import LiveServerError
+
+            try:
+                live.start()
+            except LiveServerError as error:  # the port was taken since it was checked: exit 2
+                raise ValueError(str(error)) from None
         nodes.append(node)
         return node
 

@@ -28,6 +28,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fsr_bringup.live.endpoint import LiveEndpoint
 from fsr_bringup.runner.domains import DomainLease
 from fsr_bringup.runner.processes import NodeProcess, ProcessGroup, describe_exit, executable
 from fsr_sim.contract import (
@@ -162,14 +163,17 @@ class VehicleLaunch:
 
 def node_commands(
     members: list[VehicleLaunch], recording: Path, scenario_path: Path, startup_timeout: float | None = None,
-    record_topics: frozenset[str] | None = None,
+    record_topics: frozenset[str] | None = None, live: LiveEndpoint | None = None,
 ) -> list[tuple[str, list[str]]]:
     """(name, argv) of each node of the graph, in start order: recorder, then per vehicle the estimator,
     the controller and the simulator (whose lockstep handshake waits for the others, local or remote).
-    ``record_topics``: the recorder keeps only these (:func:`fsr_sim.contract.recording_selection`)."""
+    ``record_topics``: the recorder keeps only these (:func:`fsr_sim.contract.recording_selection`); ``live``:
+    the recorder serves what it records there."""
     recorder = [executable("fsr-record"), "--out", str(recording), "--scenario", str(scenario_path)]
     if record_topics is not None:
         recorder += ["--only", ",".join(sorted(record_topics))]
+    if live is not None:
+        recorder += ["--live", str(live.port), "--live-host", live.host]
     for member in members:
         if member.namespace:
             recorder += ["--namespace", member.namespace]
@@ -221,6 +225,7 @@ def fly_graph(
     nodes: set[str] | None = None,
     startup_timeout: float | None = None,
     record_topics: frozenset[str] | None = None,
+    live: LiveEndpoint | None = None,
 ) -> FlightResult:
     """Run the graph until every simulator has ended; stop everything; report failures by node name.
 
@@ -240,7 +245,7 @@ def fly_graph(
         interrupted.append(signal.Signals(signum).name)
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    commands = node_commands(members, recording, scenario_path, startup_timeout, record_topics)
+    commands = node_commands(members, recording, scenario_path, startup_timeout, record_topics, live)
     all_names = [name for name, _command in commands]
     local = set(all_names) if nodes is None else set(nodes)
     simulators = {m.process_name("simulator"): m.namespace for m in members if m.process_name("simulator") in local}

@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -36,6 +36,9 @@ from fsr_sim.core.odometry import (
 from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import process_age
+
+if TYPE_CHECKING:
+    from fsr_bringup.live.server import LiveServer
 
 CHUNK_STEPS = 1000  # steps per call of the compiled loop (signals and the recording are handled in between)
 
@@ -298,7 +301,7 @@ def prepare_flight(scenario: Any, max_steps: int | None = None, arrays: FlightAr
 def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int | None = None,
                    stop: Callable[[], str | None] | None = None,
                    progress: Callable[[float, float], None] | None = None,
-                   record_topics: frozenset[str] | None = None) -> FlightRun:
+                   record_topics: frozenset[str] | None = None, live: LiveServer | None = None) -> FlightRun:
     """Fly ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) in one process.
 
     ``recording``: write the MCAP file there. ``max_steps``: stop after that many steps (default: the
@@ -306,23 +309,31 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
     flight there (``end_reason`` ``stopped``, ``interrupted``). A KeyboardInterrupt (Ctrl-C in a notebook)
     ends it too, at the end of the chunk being flown. ``progress``: called after each chunk with the
     simulated time [s] of the last state flown and the wall time [s] the loop has taken. ``record_topics``:
-    record only these (:func:`fsr_sim.contract.recording_selection`; None: all).
+    record only these (:func:`fsr_sim.contract.recording_selection`; None: all). ``live``: serve what is
+    recorded there as it is flown (:class:`fsr_bringup.live.server.LiveServer`), paced at the scenario's
+    ``lockstep.real_time_factor`` (:mod:`fsr_bringup.live.pacing`).
     """
     setup = prepare_flight(scenario, max_steps)
     sim, steps, period_ns, a = setup.simulation, setup.steps, setup.period_ns, setup.arrays
     n = sim.vehicle.rotor_count
-    recorder = None
-    if recording is not None:
+    recorder = pace = None
+    if recording is not None or live is not None:
         from fsr_bringup.recording.flight_recording import InProcessRecorder
 
-        recorder = InProcessRecorder(Path(recording), setup.scenario.dump(), setup.rotors, n, sim.vehicle.has_servos,
-                                     record_topics, setup.actuator_dynamics, setup.plant.params.sensors.imu)
+        recorder = InProcessRecorder(None if recording is None else Path(recording), setup.scenario.dump(),
+                                     setup.rotors, n, sim.vehicle.has_servos, record_topics, setup.actuator_dynamics,
+                                     setup.plant.params.sensors.imu, live)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
     startup = process_age()
     start = time.perf_counter()
     count = 0  # steps flown and recorded (rows 0..count-1)
+    if live is not None:
+        from fsr_bringup.live.pacing import LivePace
+
+        pace = LivePace(sim.control_period, sim.real_time_factor)
+    chunk = CHUNK_STEPS if pace is None else pace.chunk_steps
     try:
         if recorder is not None:
             recorder.status(0, RUNNING, "", 0)
@@ -331,17 +342,21 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
             signal_name = stop() if stop is not None else None
             if signal_name:
                 raise _Stopped(signal_name)
-            outcome, k, detail = setup.fly(count, min(count + CHUNK_STEPS - 1, steps))
+            outcome, k, detail = setup.fly(count, min(count + chunk - 1, steps))
             flown = setup.flown(outcome, k)
             if recorder is not None and flown > count:
                 recorder.write_steps(np.arange(count, flown, dtype=np.int64) * period_ns, a.published[count:flown],
                                      a.control[count:flown],
                                      a.estimates[count:flown] if setup.estimation.enabled else None,
                                      a.actuators[count:flown])
+                if live is not None:
+                    live.start()  # every topic of the flight is known now (the server's clients see them all)
             count = flown
             if progress is not None and count:
                 progress((count - 1) * period_ns * 1e-9, time.perf_counter() - start)
             end_reason, reason = setup.end(outcome, k, detail) or (end_reason, reason)
+            if pace is not None and count:
+                pace.wait_for(count - 1)
     except KeyboardInterrupt as stopped:  # Ctrl-C (fsr-fly also turns SIGTERM into one)
         end_reason, reason, interrupted = STOPPED, f"received {getattr(stopped, 'signal_name', 'SIGINT')}", True
     finally:
