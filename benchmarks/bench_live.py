@@ -48,11 +48,9 @@ def per_step_us(fly, repeat: int, steps: int) -> tuple[float, float]:  # noqa: A
     return 1e6 * min(times) / steps, 1e6 * statistics.median(times) / steps
 
 
-def client(folder: Path, url: str) -> subprocess.Popen:
-    """Foxglove's client subscribed to every topic the server offers."""
-    topics = ",".join(["/tf_static", "/tf", "/markers", "/odom", "/wrench_truth", "/sim_status", "/wrench_cmd",
-                       "/wrench_shortfall", "/reference", "/attitude_cmd", "/wrench_desired", "/wrench_estimate",
-                       "/mass_estimate"])
+def client(folder: Path, url: str, topics: list[str]) -> subprocess.Popen:
+    """Foxglove's client subscribed to ``topics`` (every topic the server offers)."""
+    topics = ",".join(topics)
     return subprocess.Popen(["node", str(folder / "live_client.cjs"), url, "--subscribe", topics, "--timeout", "600"],
                             stdout=subprocess.DEVNULL)
 
@@ -78,10 +76,11 @@ def main() -> None:
                 shutil.copy(path, folder / path.name)
             subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=folder, check=True,
                            timeout=300)
-            watcher = client(folder, live.endpoint.url)
+            watcher = client(folder, live.endpoint.url, sorted(live.channels))
             try:
                 deadline = time.monotonic() + 30
-                while not live.channels["/mass_estimate"].has_sinks() and time.monotonic() < deadline:
+                channels = list(live.channels.values())
+                while not all(channel.has_sinks() for channel in channels) and time.monotonic() < deadline:
                     time.sleep(0.05)
                 rows["--live, a client on every topic"] = per_step_us(
                     lambda: fly_in_process(live_scenario, out, live=live), args.repeat, steps)

@@ -65,3 +65,14 @@ def test_built_in_scenarios_ship_and_validate():
         config = simulation_config(load_scenario(name))
         assert config.step_count * config.control_period == pytest.approx(config.duration)
         assert config.plant_vehicle.mass > 0.0
+
+
+def test_numbers_in_exponent_form_are_numbers_in_files_and_overrides(tmp_path):
+    """YAML 1.1 (PyYAML's) reads ``2e-2`` as text; fsr reads it as YAML 1.2 does, a float."""
+    from fsr_sim.config.scenario import load_scenario, simulation_config
+
+    path = tmp_path / "lag.yaml"
+    path.write_text("vehicle: quadrotor_ex4\nduration: 1.0\nplant: {rotor_time_constant: 2e-2}\n")
+    assert simulation_config(load_scenario(path)).plant_vehicle.rotor_time_constant == 0.02
+    config = simulation_config(load_scenario("step_disturbance", ["plant.rotor_time_constant=3E-2"]))
+    assert config.plant_vehicle.rotor_time_constant == 0.03

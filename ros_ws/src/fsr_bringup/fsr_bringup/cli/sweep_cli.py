@@ -81,13 +81,15 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 def _overrides(items: list[str]) -> dict[str, object]:
     import yaml
 
+    from fsr_sim.config.validation import yaml_value
+
     values = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             raise SweepError(f"--set: expected KEY=VALUE, got '{item}'")
         try:
-            values[key.strip()] = yaml.safe_load(value)
+            values[key.strip()] = yaml_value(value)
         except yaml.YAMLError:
             raise SweepError(f"--set {key.strip()}: '{value}' is not a YAML value") from None
     return values

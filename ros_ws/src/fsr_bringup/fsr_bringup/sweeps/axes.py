@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from fsr_sim.config.scenario import Scenario, scenario_from_mapping
+from fsr_sim.config.validation import yaml_value
 
 DISTRIBUTIONS = ("uniform", "normal", "loguniform")
 
@@ -73,7 +74,7 @@ def parse_grid(text: str) -> GridAxis:
     if not sep or not key or not values.strip():
         raise SweepError(f"--grid: expected KEY=V1,V2,..., got '{text}'")
     try:
-        parsed = yaml.safe_load(f"[{values}]")
+        parsed = yaml_value(f"[{values}]")
     except yaml.YAMLError:
         raise SweepError(f"--grid {key}: the values '{values}' are not YAML flow values (numbers or [lists])") from None
     return grid_axis(key, parsed)

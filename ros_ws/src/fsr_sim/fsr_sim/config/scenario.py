@@ -31,6 +31,7 @@ from fsr_sim.config.validation import (
     resolve_config_path,
     yaml_error_text,
 )
+from fsr_sim.config.validation import yaml_value as parse_yaml_value
 from fsr_sim.config.vehicle_file import dynamics_and_drag, load_vehicle_file
 from fsr_sim.core.aerodynamics import has_aerodynamics
 from fsr_sim.model.disturbances import DisturbanceProfile
@@ -137,7 +138,7 @@ def scenario_from_mapping(data: dict[str, Any], source: str = "<python>", base_d
 def apply_override(data: dict[str, Any], dotted_key: str, yaml_value: str, source: str = "") -> None:
     """Set ``data[a][b][0]...`` from ``a.b.0`` to the YAML-parsed ``yaml_value`` (in place)."""
     try:
-        value = yaml.safe_load(yaml_value)
+        value = parse_yaml_value(yaml_value)
     except yaml.YAMLError as error:
         reason = f"--set value {yaml_value!r} is not valid YAML{yaml_error_text(error, single_line=True)}"
         raise ConfigError(dotted_key, reason, source) from None

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import difflib
 import math
+import re
 from collections.abc import Iterable, Mapping
 from importlib import resources
 from pathlib import Path
@@ -29,6 +30,23 @@ class ConfigError(ValueError):
         self.source = source
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{key}: {reason}" if key else f"{where}{reason}")
+
+
+class YamlLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, with YAML 1.2's numbers: ``1e-4`` and ``2E5`` are floats (YAML 1.1, PyYAML's, reads a
+    float only with a dot, ``1.0e-4``, and ``1e-4`` as text)."""
+
+
+YamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def yaml_value(text: str) -> Any:
+    """The YAML value of ``text`` (a file's or a ``--set``'s) with :class:`YamlLoader`."""
+    return yaml.load(text, Loader=YamlLoader)  # noqa: S506 - a SafeLoader
 
 
 def load_yaml_file(path: str | Path) -> dict[str, Any]:
@@ -57,7 +75,7 @@ _PARSED: dict[str, dict[str, Any]] = {}
 
 def _parse_yaml_mapping(text: str, source: str) -> dict[str, Any]:
     try:
-        data = yaml.safe_load(text)
+        data = yaml_value(text)
     except yaml.YAMLError as error:
         raise ConfigError("", f"YAML syntax error{yaml_error_text(error)}", source) from None
     if data is None:
