@@ -42,7 +42,7 @@ def write_vehicle(tmp_path, **changes):
         ({"drag_coefficients": [0.01, -0.01, 0.02]}, "drag_coefficients: must be >= 0"),
         ({"drag_coefficients": [0.01, 0.02]}, "drag_coefficients: expected shape"),
         ({"rotor_drag_coefficient": -1e-4}, "rotor_drag_coefficient: must be >= 0"),
-        ({"induced_inflow_coefficient": "2e-4"}, "induced_inflow_coefficient: must be a number"),
+        ({"induced_inflow_coefficient": "small"}, "induced_inflow_coefficient: must be a number"),
         ({"translational_lift_coefficient": float("inf")}, "translational_lift_coefficient: must be finite"),
         ({"flapping_coefficient": -1e-6}, "flapping_coefficient: must be >= 0"),
         ({"rotor_drag_coeficient": 1e-4}, "rotor_drag_coeficient: unknown key .*rotor_drag_coefficient"),
@@ -84,3 +84,13 @@ def test_the_rotorpy_vehicles_are_rotorpys_parameters_in_fsrs_frames():
     for name in ("octocopter", "quadrotor_ex4", "tilting_quadrotor_ex5"):  # the report's: no lag, no aerodynamics
         vehicle = load_vehicle(name)
         assert vehicle.rotor_time_constant == 0.0 and not vehicle.has_aerodynamics
+
+
+def test_a_folder_named_like_a_builtin_does_not_shadow_it(tmp_path, monkeypatch):
+    # a sweep's --out folder named after its scenario, then the same command again from that folder's parent
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "quadrotor_ex4").mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    assert load_vehicle("quadrotor_ex4").name == "quadrotor_ex4"
+    with pytest.raises(ConfigError, match="elsewhere: is a folder, not a vehicle file"):
+        load_vehicle("elsewhere")

@@ -110,13 +110,17 @@ def builtin_names(kind: str) -> list[str]:
 
 
 def resolve_config_path(name_or_path: str, kind: str) -> Path:
-    """A built-in name (``quadrotor_ex4``) or a path to a YAML file -> the file's path."""
+    """A built-in name (``quadrotor_ex4``) or a path to a YAML file -> the file's path.
+
+    A file of that name wins over the built-in one; a folder of that name (a sweep's ``--out``) does not."""
     candidate = Path(name_or_path)
-    if candidate.suffix in (".yaml", ".yml") or candidate.exists():
+    builtin = builtin_config_dir(kind) / f"{name_or_path}.yaml"
+    if candidate.suffix in (".yaml", ".yml") or candidate.is_file():
         if not candidate.is_file():
             raise ConfigError("", f"no such {kind[:-1]} file", str(candidate))
         return candidate
-    builtin = builtin_config_dir(kind) / f"{name_or_path}.yaml"
+    if candidate.exists() and not builtin.is_file():  # a folder named like the file, e.g. a sweep's --out
+        raise ConfigError("", f"is a folder, not a {kind[:-1]} file", str(candidate))
     if not builtin.is_file():
         names = builtin_names(kind)
         raise ConfigError("", f"unknown {kind[:-1]} '{name_or_path}' {did_you_mean(name_or_path, names)}"
