@@ -5,6 +5,7 @@ and bad ranges, keys and metrics are refused with one line naming them."""
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 
@@ -162,5 +163,8 @@ def test_the_cli_writes_the_best_the_trials_the_summary_and_the_figures(tmp_path
     assert len(gains) == 3 and gains[0] == gains[1] and gains[2] == 100.0
     summary = (out / "summary.md").read_text()
     assert "## Against the scenario's own parameters" in summary and "held out (2)" in summary
+    # flown again in the conditions it was tuned for
+    fly = re.search(r"Fly it: `(fsr-fly [^`]*)`", summary).group(1)
+    assert "--set estimator.enabled=false" in fly and "--set duration=3" in fly and "controller.gains.k_p=[" in fly
     for name in ("trials.csv", "objective.png", "parameters.png", "study.db"):
         assert (out / name).stat().st_size > 0, name

@@ -28,12 +28,14 @@ from fsr_control.controllers.catalog import LAWS
 from fsr_control.controllers.common import CompiledLaw, WrenchCommand
 from fsr_control.core import controller as core
 from fsr_control.core import laws
+from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, memory_size
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
 from fsr_control.core.reference import CHANNELS, DERIVATIVES, HORIZON_WIDTH
 from fsr_control.planning.feasibility import LegAdjustment
 from fsr_control.planning.trajectory import Reference, Trajectory
 from fsr_sim.core.so3 import Mat3, Vec3, matrix_rows
-from fsr_sim.model.allocation import SaturationReport
+from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns
+from fsr_sim.model.plant import pack_aerodynamics
 from fsr_sim.model.vehicle import Vehicle
 
 ROLL_PITCH_TOLERANCE = 1e-4  # rad: a goal for a fixed-rotor vehicle must be level (yaw only)
@@ -106,6 +108,16 @@ class ControlOutput:
         return self.desired.torque_body
 
 
+def pack_aerodynamic_feedforward(vehicle: Vehicle, actuation: str, mode: str) -> AeroFeedforward:
+    """The core's :class:`~fsr_control.core.aerodynamic_feedforward.AeroFeedforward` for
+    ``controller.aerodynamics`` ``mode`` (``model`` | ``none``): the nominal vehicle's aerodynamics as the plant
+    packs them (:func:`fsr_sim.model.plant.pack_aerodynamics`); off for ``none`` or a model without any."""
+    aerodynamics = pack_aerodynamics(vehicle, actuation)
+    enabled = mode == "model" and (aerodynamics.parasitic or aerodynamics.rotor)
+    return AeroFeedforward(enabled, aerodynamics, rotor_columns(vehicle, rotor_axes(vehicle)), float(vehicle.mass),
+                           vehicle.rotor_count * float(vehicle.c_f))
+
+
 class FlightController:
     """Planner + control law + allocation for one vehicle (nominal model ``vehicle``).
 
@@ -142,8 +154,10 @@ class FlightController:
         self.output = np.zeros(core.output_size(vehicle.rotor_count))  # the last tick's output row
         self.state = core.ControllerState(self.law.memory, self.actuator.state, compensation[1],
                                           np.zeros((DERIVATIVES, CHANNELS)),
-                                          np.zeros((self.law.params.horizon_steps, HORIZON_WIDTH)))
-        self._law_and_allocation = (self.law.params, self.actuator.params, compensation[0])
+                                          np.zeros((self.law.params.horizon_steps, HORIZON_WIDTH)),
+                                          np.zeros(memory_size(vehicle.rotor_count)))
+        self._law_and_allocation = (self.law.params, self.actuator.params, compensation[0],
+                                    pack_aerodynamic_feedforward(vehicle, actuation, config.aerodynamics))
         self.params: core.ControllerParams | None = None  # packed with the trajectory's table
         self.trajectory: Trajectory | None = None
         self._pending_goal: tuple[np.ndarray, np.ndarray, float] | None = None

@@ -87,6 +87,7 @@ def test_full_matrix_gain_accepted(tmp_path):
         ({"profile": "fast"}, "controller.profile", "must be one of flight, report"),
         ({"feedforward": "model"}, "controller.feedforward", "must be one of measured, reference"),
         ({"integral_limit": 0}, "controller.integral_limit", "must be > 0"),
+        ({"aerodynamics": "measured"}, "controller.aerodynamics", "must be one of model, none"),
         ({"type": "voliro"}, "controller.type", "needs a fully actuated vehicle"),
         ({"type": "pid"}, "controller.type", "must be one of"),
         ({"angular_feedforward": "report"}, "controller.angular_feedforward", "unknown key"),
@@ -105,6 +106,17 @@ def test_invalid_controller_sections_are_refused(tmp_path, controller, key, reas
 def test_the_geometric_laws_keys_are_refused_for_voliro(tmp_path, key):
     with pytest.raises(ConfigError, match=f"controller.{key}: only the geometric law has it, not voliro"):
         controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={key: "reference"}))
+
+
+def test_the_aerodynamic_model_defaults_by_profile_and_is_for_fixed_rotors(tmp_path):
+    assert controller_config(scenario_with(tmp_path, controller={})).aerodynamics == "model"
+    assert controller_config(scenario_with(tmp_path, controller={"profile": "report"})).aerodynamics == "none"
+    assert controller_config(scenario_with(tmp_path, controller={"profile": "report", "aerodynamics": "model"})
+                             ).aerodynamics == "model"
+    assert controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller=None)).aerodynamics == "none"
+    with pytest.raises(ConfigError, match="controller.aerodynamics: 'model' is for fixed rotors; "
+                                          "'tilting_quadrotor_ex5' tilts its rotors"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={"aerodynamics": "model"}))
 
 
 def test_geometric_refused_for_tilting_vehicle_and_voliro_for_wrench_actuation(tmp_path):

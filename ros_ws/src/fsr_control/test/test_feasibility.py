@@ -97,7 +97,7 @@ def test_built_in_legs_are_within_the_authority_and_planned_exactly_as_without_a
     sim = simulation_config(scenario)
     checked = config.trajectory(sim.vehicle, sim.actuation, sim.initial.position, sim.initial.rotation)
     unchecked = Trajectory(config.waypoints, sim.initial.position, sim.initial.rotation,
-                           full_attitude=sim.vehicle.fully_actuated)
+                           full_attitude=sim.vehicle.fully_actuated, path=config.path)
     for field, value in checked.table()._asdict().items():
         assert np.array_equal(value, getattr(unchecked.table(), field), equal_nan=True), field
 

@@ -46,15 +46,25 @@ def nested(values: dict[str, Any]) -> dict[str, Any]:
 def set_arguments(values: dict[str, Any]) -> str:
     """The ``--set KEY=VALUE`` arguments of ``values`` (shell-quoted)."""
     def text(value: Any) -> str:
-        return "[" + ",".join(f"{v:.6g}" for v in value) + "]" if isinstance(value, list) else f"{value:.6g}"
+        if isinstance(value, list):
+            return "[" + ",".join(text(v) for v in value) + "]"
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        return f"{value:.6g}" if isinstance(value, float | int) else str(value)
 
     return " ".join(f"--set {shlex.quote(f'{key}={text(value)}')}" for key, value in values.items())
+
+
+def fly_command(result: TuneResult) -> str:
+    """``fsr-fly SCENARIO --set ...``: the best parameters in the conditions they were tuned for (the study's
+    fixed values; a sampled key or a seed takes the scenario's own value)."""
+    return f"fsr-fly {result.plan.scenario.name} {set_arguments({**result.plan.fixed, **result.best_values})}"
 
 
 def write_best(result: TuneResult, path: Path) -> Path:
     header = (f"# fsr-tune: the best of {len(result.trials)} trials ({result.method}) of {result.plan.scenario.name}, "
               f"{result.plan.objective.label} = {result.best_objective:.6g} over {result.plan.seeds} seeds\n"
-              f"# fly it: fsr-fly {result.plan.scenario.name} {set_arguments(result.best_values)}\n")
+              f"# fly it: {fly_command(result)}\n")
     path.write_text(header + yaml.safe_dump(nested(result.best_values), sort_keys=False), encoding="utf-8")
     return path
 
@@ -80,8 +90,8 @@ def summary_markdown(result: TuneResult, command: str | None = None) -> str:
         "## Best", "",
         "| key | value |", "|---|---|",
         *(f"| {key} | {_plain(value)} |" for key, value in result.best_values.items()), "",
-        f"Fly it: `fsr-fly {plan.scenario.name} {set_arguments(result.best_values)}` (or paste `best.yaml` into the "
-        "scenario).", "",
+        f"Fly it: `{fly_command(result)}` (or paste `best.yaml` into the scenario, with the conditions it was tuned "
+        "for).", "",
         "## Against the scenario's own parameters", "",
         f"| parameters | conditions | {objective.label} | lost flights | mean position_error_rms_m |",
         "|---|---|---|---|---|",

@@ -64,6 +64,7 @@ class TunePlan:
     seed_keys: list[str]
     sample: list[SampledKey]
     band: float = DEFAULT_BAND_M
+    fixed: dict[str, Any] = field(default_factory=dict)  # the --set values (and the duration) every flight has
 
     @property
     def ranges(self) -> list[Range]:
@@ -177,7 +178,7 @@ def plan_tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str
             raise TuneError(f"--sample {item.key}: also tuned (--param)")
     goal = objective if isinstance(objective, Objective) else parse_objective(objective, penalty)
     plan = TunePlan(base, keys, goal, int(seeds), int(holdout), int(seed),
-                    seed_keys(base.data, lambda key: _valid(base, key)), drawn, band)
+                    seed_keys(base.data, lambda key: _valid(base, key)), drawn, band, values)
     middle = plan.values({r.name: _middle(r) for r in plan.ranges})
     try:
         check_scenario(flight_scenario(base, {**middle, **condition_values(seed, 0, plan.seed_keys, drawn)}))

@@ -24,6 +24,9 @@ controller:
                                     # law); for noisy odom and sharp disturbances
   compensation: none                # none | estimate: cancel the external wrench the controller's own
                                     # observer estimates (needs estimator.enabled; fsr_control.compensation)
+  aerodynamics: model               # model: cancel the vehicle file's aerodynamics (drag, rotor drag,
+                                    # inflow, lift, flapping) at the measured velocity, in still air, when
+                                    # there is no compensation | none; default by profile (flight: model)
 ```
 
 Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix (``k_i`` may be
@@ -64,6 +67,8 @@ SECONDARY_TYPES = ("none", "min_peak_speed")
 DEFAULT_ALLOCATION = "priority"  # fsr_control.allocation.ALLOCATION_STRATEGIES: clamp | priority
 PROFILES = ("flight", "report")  # controller.profile: the first is the default
 PROFILE_FEEDFORWARD = {"flight": geometric.REFERENCE_FEEDFORWARD, "report": geometric.MEASURED_FEEDFORWARD}
+AERODYNAMICS_MODES = ("model", "none")  # controller.aerodynamics
+PROFILE_AERODYNAMICS = {"flight": "model", "report": "none"}
 
 
 @dataclass(frozen=True)
@@ -97,6 +102,7 @@ class ControllerConfig:
     path: PathSpec | None = None  # trajectory.kind minsnap, circle or lissajous (None: waypoints)
     trajectory_kind: str = "waypoints"  # trajectory.kind
     plan_end_time: float = 0.0  # [s] when the scenario's plan (from its initial state) comes to rest for good
+    aerodynamics: str = "none"  # controller.aerodynamics: model | none
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
@@ -205,6 +211,10 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
             raise objective.error("exponent", f"must be an even integer >= 4, got {secondary.exponent}")
         objective.reject_unknown()
     compensation = _compensation(scenario, controller, vehicle)
+    aerodynamics = controller.string("aerodynamics", "none" if vehicle.has_servos else PROFILE_AERODYNAMICS[profile],
+                                     choices=AERODYNAMICS_MODES)
+    if aerodynamics == "model" and vehicle.has_servos:
+        raise controller.error("aerodynamics", f"'model' is for fixed rotors; '{vehicle.name}' tilts its rotors")
     controller.reject_unknown()
 
     section = scenario.section("trajectory")
@@ -214,7 +224,7 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
                               integral_limit, secondary, trajectory.goal_duration, scenario.source, allocation,
                               compensation, air_mode, trajectory.authority_margin,
                               acceleration_filter_hz=acceleration_filter_hz, feasibility=trajectory.feasibility,
-                              path=trajectory.path, trajectory_kind=trajectory.kind)
+                              path=trajectory.path, trajectory_kind=trajectory.kind, aerodynamics=aerodynamics)
     # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     try:
         plan = config.trajectory(vehicle, actuation, sim.initial.position, sim.initial.rotation)

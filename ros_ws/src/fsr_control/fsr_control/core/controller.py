@@ -1,5 +1,5 @@
-"""The controller's per-step tick (compiled core): reference (and its horizon) -> (compensation) -> law ->
-allocation.
+"""The controller's per-step tick (compiled core): reference (and its horizon) -> (compensation, or the model's
+aerodynamics along the reference) -> law -> allocation.
 
 :func:`controller_tick` is what the controller node, :class:`fsr_control.flight_controller.FlightController`
 and the in-process loop run for the state stamped ``t``. It writes one output row (:func:`output_size`
@@ -17,6 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, aerodynamic_feedforward
 from fsr_control.core.allocation import AllocationParams, AllocationState, allocate
 from fsr_control.core.compensation import (
     CompensationParams,
@@ -59,6 +60,7 @@ class ControllerParams(NamedTuple):
     law: LawParams
     allocation: AllocationParams
     compensation: CompensationParams
+    aerodynamics: AeroFeedforward  # controller.aerodynamics: model (fsr_control.core.aerodynamic_feedforward)
 
 
 class ControllerState(NamedTuple):
@@ -67,6 +69,7 @@ class ControllerState(NamedTuple):
     compensation: CompensationState
     reference: np.ndarray  # (5, 4) scratch: the active segment's channel derivatives
     horizon: np.ndarray  # (law.horizon_steps, HORIZON_WIDTH): the reference ahead (fsr_control.core.reference)
+    aerodynamics: np.ndarray  # the aerodynamic feed-forward's memory (fsr_control.core.aerodynamic_feedforward)
 
 
 @jit
@@ -108,6 +111,8 @@ def controller_tick(params: ControllerParams, state: ControllerState, t: float, 
     compensation = NO_COMPENSATION
     if params.compensation.enabled:  # cancel the estimate of t_(k-1), then feed the observer this step
         compensation = compensation_estimate(params.compensation, state.compensation, t, position[2])
+    elif params.aerodynamics.enabled:  # the estimate holds the aerodynamics too: one or the other
+        compensation = aerodynamic_feedforward(params.aerodynamics, state.aerodynamics, t, reference)
     if params.law.horizon_steps > 0:
         sample_horizon(params.trajectory, t, params.law.horizon_dt, state.reference, state.horizon)
     status, force_d, torque_d, rotation_c = control_law(params.law, state.law, state.horizon, t, reference, position,
