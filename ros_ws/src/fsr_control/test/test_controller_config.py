@@ -101,9 +101,10 @@ def test_invalid_controller_sections_are_refused(tmp_path, controller, key, reas
     assert "scenario.yaml" in str(error.value)
 
 
-@pytest.mark.parametrize("key", ["feedforward", "integral_limit"])
-def test_the_geometric_laws_keys_are_refused_for_voliro(tmp_path, key):
-    with pytest.raises(ConfigError, match=f"controller.{key}: only the geometric law has it, not voliro"):
+@pytest.mark.parametrize(("key", "laws"), [("feedforward", "geometric law"),
+                                           ("integral_limit", "geometric and indi laws"), ("filter_hz", "indi law")])
+def test_the_geometric_laws_keys_are_refused_for_voliro(tmp_path, key, laws):
+    with pytest.raises(ConfigError, match=f"controller.{key}: only the {laws} ha(s|ve) it, not voliro"):
         controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={key: "reference"}))
 
 
