@@ -97,20 +97,26 @@ def indi_law(params: IndiParams, memory, t: float, reference: ReferenceSample, p
         force_r = (m * specific_force[0], m * specific_force[1], m * specific_force[2])
         torque_r = cross3(gyro, mat_vec3(inertia, gyro))
     omega_f, omega_dot_f = _filtered(params, memory, ANGULAR_VELOCITY, gyro, first)
-    force_f = _filtered(params, memory, SPECIFIC_FORCE, specific_force, first)[0]
-    rotor_force_f = _filtered(params, memory, ROTOR_FORCE, force_r, first)[0]
+    force_f, force_rate_f = _filtered(params, memory, SPECIFIC_FORCE, specific_force, first)
+    rotor_force_f, rotor_force_rate_f = _filtered(params, memory, ROTOR_FORCE, force_r, first)
     rotor_torque_f = _filtered(params, memory, ROTOR_TORQUE, torque_r, first)[0]
     memory[HAS_FILTER] = 1.0
     # m s = f_rotors + f_ext (body) and I w_dot + w x I w = tau_rotors + tau_ext, on the filtered signals
     external_body = (m * force_f[0] - rotor_force_f[0], m * force_f[1] - rotor_force_f[1],
                      m * force_f[2] - rotor_force_f[2])
+    # its rate in the world frame, d/dt (R x) = R (w x x + x_dot): R_d turns with it (the feed-forward's rates)
+    external_rate = (m * force_rate_f[0] - rotor_force_rate_f[0], m * force_rate_f[1] - rotor_force_rate_f[1],
+                     m * force_rate_f[2] - rotor_force_rate_f[2])
+    turning = cross3(omega_f, external_body)
+    rate_world = mat_vec3(rotation, (turning[0] + external_rate[0], turning[1] + external_rate[1],
+                                     turning[2] + external_rate[2]))
     inertia_rate = mat_vec3(inertia, omega_dot_f)
     gyroscopic = cross3(omega_f, mat_vec3(inertia, omega_f))
     external_torque = (inertia_rate[0] + gyroscopic[0] - rotor_torque_f[0],
                        inertia_rate[1] + gyroscopic[1] - rotor_torque_f[1],
                        inertia_rate[2] + gyroscopic[2] - rotor_torque_f[2])
     zero = (0.0, 0.0, 0.0)
-    increment = Compensation(True, mat_vec3(rotation, external_body), external_torque, zero, zero)
+    increment = Compensation(True, mat_vec3(rotation, external_body), external_torque, rate_world, zero)
     own = GeometricParams(m, params.matrices, params.integral, params.integral_limit, True, 0.0)
     return geometric.geometric_law(own, memory, t, reference, position, rotation, velocity_world, angular_velocity,
                                    increment)
