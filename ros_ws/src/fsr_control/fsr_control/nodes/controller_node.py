@@ -181,7 +181,11 @@ class ControllerNode(Node):
         except ValueError as error:
             self.warn(f"dropped an imu: {error}")
             return
-        self.offer(start, IMU_INPUT, stamp_ns, np.array(values))
+        imu = np.array(values)
+        if not np.isfinite(imu).all():
+            self.warn(f"dropped an imu at {stamp_ns * 1e-9:.3f} s: it holds NaN or inf")
+            return
+        self.offer(start, IMU_INPUT, stamp_ns, imu)
 
     def on_rotor_state(self, data: bytes) -> None:
         """Take one ``rotor_state`` (CDR bytes): the rotors' measured speeds [rad/s] and tilts [rad]."""
