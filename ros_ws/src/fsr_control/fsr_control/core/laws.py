@@ -17,7 +17,8 @@ Each law takes the reference, the state (position and velocity world NED [m, m/s
 angular velocity body [rad/s]) and, with ``controller.compensation: estimate``, the estimated external wrench
 to cancel (:class:`Compensation`), and returns ``(status, force_body, torque_body, R_c)``: the body wrench
 [N, N m] to produce and the attitude the law steers to. Their equations and the reasons behind them are in
-:mod:`fsr_control.controllers.geometric` and :mod:`fsr_control.controllers.voliro` (the Python shells).
+:mod:`fsr_control.controllers.geometric`, :mod:`fsr_control.controllers.voliro` and
+:mod:`fsr_control.controllers.indi` (the Python shells).
 """
 
 from __future__ import annotations
