@@ -32,7 +32,7 @@ from fsr_estimation.core.observer import MomentumObserver
 from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
 from fsr_sim.core import lockstep
 from fsr_sim.core.jit import numba
-from fsr_sim.core.odometry import PUBLISHED_SIZE, read_odometry
+from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, PUBLISHED_SIZE, read_odometry
 from fsr_sim.core.plant import plant_step
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "ros_ws/src/fsr_control/test/scenarios"
@@ -49,10 +49,11 @@ PART_STEPS = 20_000
 
 
 @numba.njit  # not cached: a benchmark writes nothing next to its source
-def _ticks(params, state, row, out, n):  # noqa: ANN001, ANN202
+def _ticks(params, state, row, rotors, out, n):  # noqa: ANN001, ANN202
     position, rotation, velocity, omega = read_odometry(row)
+    imu = row[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6]
     for k in range(n):
-        controller_tick(params, state, k * 1e-3, position, rotation, velocity, omega, out)
+        controller_tick(params, state, k * 1e-3, position, rotation, velocity, omega, imu, rotors, rotors, out)
 
 
 @numba.njit
@@ -87,7 +88,8 @@ def parts(scenario) -> tuple[float, float, float]:  # noqa: ANN001
     row = np.zeros(PUBLISHED_SIZE)
     lockstep.publish(plant.params, plant.core_state, row)
     observer = MomentumObserver(sim.vehicle.mass, sim.vehicle.inertia, 10.0, 1, sim.control_period)
-    return (_per_step(_ticks, controller.params, controller.state, row, controller.output),
+    rotors = np.zeros(sim.vehicle.rotor_count)  # rotor_state (read only by a law or an observer that needs it)
+    return (_per_step(_ticks, controller.params, controller.state, row, rotors, controller.output),
             _per_step(_plant_steps, plant.params, plant.core_state),
             _per_step(_samples, observer.params, observer.state, row, np.zeros(7)))
 

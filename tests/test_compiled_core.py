@@ -31,7 +31,15 @@ FLIGHTS = (("ex3_estimation", SHORT), ("ex4_geometric", {**SHORT, "actuation": "
            # the flight profile: reference feed-forward, the integral held by the allocation's shortfall, the
            # compensated estimate's filtered rates; and the report's measured feed-forward with an integral
            ("step_disturbance", {**REALISM, "disturbances.0.start": 0.5, "controller.compensation": "estimate"}),
-           ("ex4_geometric", {"duration": 2.0, "actuation": "rotors", "controller.gains.k_i": [1.0, 1.0, 2.0]}))
+           ("ex4_geometric", {"duration": 2.0, "actuation": "rotors", "controller.gains.k_i": [1.0, 1.0, 2.0]}),
+           # INDI on the noisy IMU and the Hummingbird's measured rotor speeds through a force and torque step;
+           # the compensating observer and the estimator on the rotors' measured speeds (estimator.input)
+           ("step_disturbance", {**REALISM, "vehicle": "hummingbird", "controller.type": "indi",
+                                 "estimator.enabled": False, "disturbances": [
+                                     {"kind": "step", "frame": "world", "start": 0.5, "force": [1.0, 0.5, 0.0],
+                                      "torque": [0.01, -0.01, 0.005]}]}),
+           ("wind_rejection", {"duration": 2.0, "plant.rotor_time_constant": 0.05, "estimator.input": "measured",
+                               "controller.compensation": "estimate"}))
 
 FINAL_STATES = """
 import json, sys

@@ -4,7 +4,10 @@
 :class:`WrenchCompensator`. It runs a :class:`fsr_estimation.core.observer.MomentumObserver` *inside the
 controller*, on the controller's nominal model (mass ``m_c``, inertia ``I_c``: the scenario's vehicle), fed
 with the controller's own input (``odom``) and its own output (the body wrench commanded after allocation,
-what ``wrench_cmd`` carries), with the scenario's ``estimator.c0`` and ``estimator.r``.
+what ``wrench_cmd`` carries), with the scenario's ``estimator.c0`` and ``estimator.r``. With
+``estimator.input: measured`` it takes, instead of its output, the wrench the rotors' measured speeds and tilts
+(``rotor_state`` of the same stamp) produce through the nominal allocation: a motor lag then no longer enters the
+estimate as a disturbance (docs/estimation.md, *Compensation under rotor lag*).
 
 **Timing.** At ``t_k`` the law uses the estimate stamped ``t_(k-1)``: ``w_hat[k-1]``, computed at the end of
 step ``k-1`` from the state and the command of ``t_(k-1)`` (the estimator node's pairing). The observer lives
@@ -66,13 +69,16 @@ class CompensationConfig:
 
     c0 [rad/s], r: the filter (scenario ``estimator`` section); control_period [s]: the observer's sample
     time (``physics_dt * physics_substeps``); surfaces: the contact rule's geometry (the environment around the
-    nominal vehicle, :func:`fsr_sim.model.environment.pack_surfaces`).
+    nominal vehicle, :func:`fsr_sim.model.environment.pack_surfaces`); measured: the observer takes the rotors'
+    measured speeds and tilts (``rotor_state``, ``estimator.input: measured``) through the nominal allocation
+    instead of the commanded wrench (False: the command, also where the rotors do not lag).
     """
 
     c0: float
     r: int
     control_period: float
     surfaces: Surfaces
+    measured: bool = False
 
 
 class CompensationReport:
@@ -113,7 +119,8 @@ def pack_compensation(config: CompensationConfig | None, vehicle: Vehicle) -> tu
 
         surfaces = pack_surfaces(Environment(), vehicle)
     params = core.CompensationParams(config is not None, observer.params, observer.sample_time,
-                                     config is not None and config.r >= 2, surfaces)
+                                     config is not None and config.r >= 2, surfaces,
+                                     config is not None and config.measured)
     state = core.CompensationState(observer.state, np.zeros((3, 3)), np.eye(3), np.zeros(core.MEMORY_SIZE))
     return params, state
 

@@ -162,6 +162,12 @@ class FlightController:
         self.trajectory: Trajectory | None = None
         self._pending_goal: tuple[np.ndarray, np.ndarray, float] | None = None
         self.last_stamp = start_time
+        self._imu, self._rotors = np.zeros(6), np.zeros(vehicle.rotor_count)  # when not measured
+        law_type = LAWS[config.type]
+        self.needs_imu = law_type.needs_imu  # the law reads the IMU (imu)
+        measured_input = config.compensation is not None and config.compensation.measured
+        # the law or the compensation's observer reads the rotors' measured speeds (rotor_state), where published
+        self.needs_rotor_state = config.rotor_state and (law_type.needs_rotor_state or measured_input)
         if start_position is not None and start_rotation is not None:
             self._plan(start_position, start_rotation, start_time)
 
@@ -200,16 +206,22 @@ class FlightController:
         return self.trajectory.evaluate(stamp_s)
 
     def command_row(self, stamp_s: float, position: Vec3, rotation: Mat3, velocity_world: Vec3,
-                    angular_velocity_body: Vec3) -> np.ndarray:
+                    angular_velocity_body: Vec3, imu: np.ndarray | None = None, speeds: np.ndarray | None = None,
+                    tilts: np.ndarray | None = None) -> np.ndarray:
         """The core tick for the state at ``stamp_s`` [s] (position, velocity world and angular velocity body as
-        3-tuples of floats, ``R`` as its rows): its output row (:attr:`output`, reused at every call).
+        3-tuples of floats, ``R`` as its rows): its output row (:attr:`output`, reused at every call). ``imu``
+        (6,): the IMU's angular velocity [rad/s] and specific force [m/s^2] of the same stamp; ``speeds``,
+        ``tilts`` (n,): the rotors' measured state (``rotor_state``); float arrays, read only by a law or an
+        observer that uses them (:attr:`needs_imu`, :attr:`needs_rotor_state`; None: zeros).
 
         Raises ValueError when no attitude can be commanded (the reference is in the row then, nothing else)."""
         if self.trajectory is None:
             self._plan(np.array(position), np.array(rotation), stamp_s)
         self.last_stamp = stamp_s
         status = core.controller_tick(self.params, self.state, stamp_s, position, rotation, velocity_world,
-                                      angular_velocity_body, self.output)
+                                      angular_velocity_body, self._imu if imu is None else imu,
+                                      self._rotors if speeds is None else speeds,
+                                      self._rotors if tilts is None else tilts, self.output)
         if status != ATTITUDE_OK:
             raise ValueError(ATTITUDE_ERRORS[status])
         return self.output
@@ -221,10 +233,18 @@ class FlightController:
         rotation: np.ndarray,
         velocity_world: np.ndarray,
         angular_velocity_body: np.ndarray,
+        imu: np.ndarray | None = None,
+        speeds: np.ndarray | None = None,
+        tilts: np.ndarray | None = None,
     ) -> ControlOutput:
-        """Command for the state at ``stamp_s`` [s] (arrays: position (3,), ``R`` (3, 3), velocities (3,))."""
+        """Command for the state at ``stamp_s`` [s] (arrays: position (3,), ``R`` (3, 3), velocities (3,); ``imu``
+        (6,), ``speeds`` and ``tilts`` (n,) the measurements of :meth:`command_row`)."""
+        def array(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else np.ascontiguousarray(values, dtype=float)
+
         row = self.command_row(float(stamp_s), _vector(position), matrix_rows(np.ascontiguousarray(rotation, float)),
-                               _vector(velocity_world), _vector(angular_velocity_body))
+                               _vector(velocity_world), _vector(angular_velocity_body), array(imu), array(speeds),
+                               array(tilts))
         return ControlOutput.from_row(float(stamp_s), row, self.rotors, self.tilting)
 
     def set_goal(

@@ -102,9 +102,10 @@ def test_invalid_controller_sections_are_refused(tmp_path, controller, key, reas
     assert "scenario.yaml" in str(error.value)
 
 
-@pytest.mark.parametrize("key", ["feedforward", "integral_limit"])
-def test_the_geometric_laws_keys_are_refused_for_voliro(tmp_path, key):
-    with pytest.raises(ConfigError, match=f"controller.{key}: only the geometric law has it, not voliro"):
+@pytest.mark.parametrize(("key", "laws"), [("feedforward", "geometric law"),
+                                           ("integral_limit", "geometric and indi laws"), ("filter_hz", "indi law")])
+def test_the_geometric_laws_keys_are_refused_for_voliro(tmp_path, key, laws):
+    with pytest.raises(ConfigError, match=f"controller.{key}: only the {laws} ha(s|ve) it, not voliro"):
         controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={key: "reference"}))
 
 
@@ -117,6 +118,10 @@ def test_the_aerodynamic_model_defaults_by_profile_and_is_for_fixed_rotors(tmp_p
     with pytest.raises(ConfigError, match="controller.aerodynamics: 'model' is for fixed rotors; "
                                           "'tilting_quadrotor_ex5' tilts its rotors"):
         controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={"aerodynamics": "model"}))
+    indi = ["controller.type=indi", "sensors.preset=onboard"]  # INDI measures what the model would predict
+    assert controller_config(load_scenario("figure8_hummingbird", indi)).aerodynamics == "none"
+    with pytest.raises(ConfigError, match="controller.aerodynamics: indi measures the aerodynamics"):
+        controller_config(load_scenario("figure8_hummingbird", [*indi, "controller.aerodynamics=model"]))
 
 
 def test_geometric_refused_for_tilting_vehicle_and_voliro_for_wrench_actuation(tmp_path):

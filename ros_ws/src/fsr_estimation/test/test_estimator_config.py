@@ -41,6 +41,8 @@ def test_values_from_the_section(tmp_path):
         ("estimator: {c_0: 5}\n", "estimator.c_0: unknown key \\(did you mean 'c0'\\?\\)"),
         ("estimator: {enabled: yes please}\n", "estimator.enabled: must be true or false"),
         ("estimator: [1, 2]\n", "estimator: expected a mapping"),
+        ("estimator: {input: rotors}\n", "estimator.input: must be one of commanded, measured"),
+        ("actuation: wrench\nestimator: {input: measured}\n", "estimator.input: 'measured' .* 'actuation: rotors'"),
     ],
 )
 def test_bad_sections_are_refused_naming_file_and_key(tmp_path, text, message):
@@ -59,6 +61,20 @@ def test_node_parameters_override_the_scenario(tmp_path):
     np.testing.assert_array_equal(np.diag(settings.config.inertia), [1.0, 1.0, 2.0])
     no_scenario = node_settings({"mass": 1.5, "inertia": [1, 0, 0, 0, 1, 0, 0, 0, 2]})
     assert no_scenario.control_period is None and no_scenario.config.inertia[2, 2] == 2.0
+
+
+def test_measured_input_takes_rotor_state_where_the_rotors_lag(tmp_path):
+    """``input: measured`` reads rotor_state where the simulator publishes it (a rotor lag); the node then pairs
+    odom with it through the nominal allocation; without lag it takes wrench_cmd (the command is what acts)."""
+    assert estimator_config(scenario(tmp_path, "")).input == "commanded"
+    no_lag = estimator_config(scenario(tmp_path, "actuation: rotors\nestimator: {input: measured}\n"))
+    assert no_lag.input == "measured" and not no_lag.rotor_state
+    lag = "actuation: rotors\nplant: {rotor_time_constant: 0.02}\nestimator: {input: measured}\n"
+    assert estimator_config(scenario(tmp_path, lag)).rotor_state
+    settings = node_settings({"scenario": str(tmp_path / "s.yaml")})
+    allocation, c_f, tilting = settings.rotor_allocation
+    assert allocation.shape == (6, 4) and c_f > 0.0 and not tilting
+    assert node_settings({"scenario": "ex3_estimation"}).rotor_allocation is None
 
 
 @pytest.mark.parametrize(

@@ -183,6 +183,16 @@ def test_readers_match_rclpy(frame: str) -> None:
             w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = v[3:6]
             assert cdr_read.wrench_stamped(serialize_message(w)) == (stamp, tuple(v[:6])) or repr(
                 cdr_read.wrench_stamped(serialize_message(w))) == repr((stamp, tuple(v[:6])))
+            imu = Imu()
+            imu.header.stamp, imu.header.frame_id = _time(stamp), frame
+            imu.orientation.x, imu.orientation_covariance[8], imu.angular_velocity_covariance[4] = v[6:9]
+            imu.linear_acceleration_covariance[0] = v[9]
+            g, a = imu.angular_velocity, imu.linear_acceleration
+            g.x, g.y, g.z, a.x, a.y, a.z = v[:6]
+            got_stamp, values = cdr_read.imu(serialize_message(imu))
+            assert got_stamp == stamp and repr(values) == repr(tuple(v[:6]))
+    with pytest.raises(ValueError):
+        cdr_read.imu(serialize_message(Imu())[:100])
     with pytest.raises(ValueError):
         cdr_read.odometry(serialize_message(Odometry())[:40])
     with pytest.raises(ValueError):

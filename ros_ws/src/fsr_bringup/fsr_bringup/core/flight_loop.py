@@ -10,7 +10,8 @@ Per step ``k`` (``t_k = k T``, stamps in integer ns, ``t_k = stamp * 1e-9`` as t
    graph agree;
 2. the controller's tick (:func:`fsr_control.core.controller.controller_tick`) for the state stamped ``t_k``;
 3. the estimator (:func:`fsr_estimation.core.observer_step.estimate_from_state`) on the state and the
-   commanded wrench of ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd``;
+   commanded wrench of ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd`` (``estimator.input:
+   measured``: the wrench of the rotors' speeds and tilts of ``t_k``, as it pairs ``odom`` and ``rotor_state``);
 4. the command held over ``[t_k, t_k+1]``, the plant stepped and the state ``t_k+1`` published by the
    simulator node's own step (:func:`fsr_sim.core.lockstep.advance`); a state that diverges ends the flight,
    as the simulator does.
@@ -28,8 +29,9 @@ from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import actuator_row, advance, publish
-from fsr_sim.core.odometry import read_odometry
+from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
+from fsr_sim.core.rotors import measured_rotor_wrench
 
 GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED = 0, 1, 2, 3  # outcomes of fly_steps
 
@@ -51,30 +53,40 @@ def hold_command(plant: PlantParams, plant_state: PlantState, mode: int, row, fo
 
 @jit_inline
 def closed_loop_tick(controller: ControllerParams, controller_state: ControllerState, with_estimator: bool,
-                     observer: ObserverParams, observer_state: ObserverState, t: float, odometry, row,  # noqa: ANN001
-                     estimate) -> tuple:  # noqa: ANN001
-    """The controller's answer ``row`` to the published ``odometry`` of ``t`` [s] and, with the estimator, its
-    estimate of that state and command into ``estimate``. Returns ``(status, force, torque)`` (the law's status;
-    on a failure the estimator is not called)."""
+                     estimator_measured: bool, observer: ObserverParams, observer_state: ObserverState, t: float,
+                     odometry, speeds, tilts, row, estimate) -> tuple:  # noqa: ANN001
+    """The controller's answer ``row`` to the published ``odometry`` of ``t`` [s] (the published row: odom and,
+    with an IMU, imu) and the rotors' measured ``speeds``, ``tilts`` (``rotor_state``) and, with the estimator,
+    its estimate of that state and the commanded wrench (``estimator_measured``: the rotors' measured wrench)
+    into ``estimate``. Returns ``(status, force, torque)``: the law's status and the commanded wrench (on a
+    failure the estimator is not called)."""
     position, rotation, velocity_world, angular_velocity = read_odometry(odometry)
+    imu = odometry[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6]
     status = controller_tick(controller, controller_state, t, position, rotation, velocity_world, angular_velocity,
-                             row)
+                             imu, speeds, tilts, row)
     force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
     torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
     if status == ATTITUDE_OK and with_estimator:
-        estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force, torque,
+        force_e, torque_e = force, torque
+        if estimator_measured:
+            allocation = controller.allocation
+            force_e, torque_e = measured_rotor_wrench(allocation.allocation, allocation.c_f,
+                                                      allocation.mode == TILTING, speeds, tilts)
+        estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force_e, torque_e,
                             estimate)
     return status, force, torque
 
 
 @jit
 def fly_steps(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
-              controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
+              controller_state: ControllerState, with_estimator: bool, estimator_measured: bool,
+              observer: ObserverParams,
               observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
               states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
     """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (the row of
     :mod:`fsr_sim.core.odometry`), ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``),
-    ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published.
+    ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published;
+    ``estimator_measured``: the estimator takes the rotors' measured wrench (``estimator.input: measured``).
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
     ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""
@@ -87,8 +99,10 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
         for i in range(plant_state.x.shape[0]):
             states[k, i] = plant_state.x[i]
         row = control[k]
-        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, observer,
-                                                 observer_state, t, published[k], row, estimates[k])
+        n = actuators.shape[1] // 2
+        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, estimator_measured,
+                                                 observer, observer_state, t, published[k], actuators[k, :n],
+                                                 actuators[k, n:], row, estimates[k])
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status
         if k == step_count:

@@ -354,7 +354,8 @@ def rotor_command_row(m: MeasureParams, k: int, row, actual_speeds, actual_tilts
 
 @jit
 def fly_measured(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
-                 controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
+                 controller_state: ControllerState, with_estimator: bool, estimator_measured: bool,
+                 observer: ObserverParams,
                  observer_state: ObserverState, step_count: int, period_ns: int, measures: MeasureParams,
                  actuator_plant: PlantParams, actuator_state: PlantState, states, published, row, estimate,
                  rotor_rows, acc) -> tuple:  # noqa: ANN001
@@ -383,8 +384,9 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
                 rotor_rows[ACTUAL_SPEEDS, i] = plant_state.speeds[i]
                 rotor_rows[ACTUAL_TILTS, i] = plant_state.tilts[i]
                 rotor_rows[RATIOS, i] = rotor_rows[RATIOS_NEXT, i]
-        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, observer,
-                                                 observer_state, t, now, row, estimate)
+        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, estimator_measured,
+                                                 observer, observer_state, t, now, plant_state.speeds,
+                                                 plant_state.tilts, row, estimate)
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status
         measure_sample(measures, acc, k, states, rotation_k, row)

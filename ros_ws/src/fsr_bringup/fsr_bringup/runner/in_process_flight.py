@@ -231,8 +231,8 @@ class FlightSetup:
         a = self.arrays
         return flight_loop.fly_steps(
             self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
-            self.estimation.enabled, self.observer.params, self.observer.state, first, last, self.steps,
-            self.period_ns, a.states, a.published, a.actuators, a.control, a.estimates)
+            self.estimation.enabled, self.estimation.rotor_state, self.observer.params, self.observer.state, first,
+            last, self.steps, self.period_ns, a.states, a.published, a.actuators, a.control, a.estimates)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""

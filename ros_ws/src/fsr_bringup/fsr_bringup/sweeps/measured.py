@@ -51,6 +51,7 @@ class LoopFlight:
     controller_params: Any
     controller_state: Any
     with_estimator: bool
+    estimator_measured: bool  # estimator.input: measured, where rotor_state is published
     observer_params: Any
     observer_state: Any
     steps: int
@@ -94,8 +95,9 @@ def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSet
         with_tilts=rotors and vehicle.has_servos and plant.has_servos,
         ground=surfaces._replace(ceiling_effect=False), ceiling=surfaces._replace(ground_effect=False))
     return LoopFlight(setup.plant.params, setup.plant.core_state, setup.controller.params, setup.controller.state,
-                      bool(estimation.enabled), setup.observer.params, setup.observer.state, setup.steps,
-                      setup.period_ns, sim.vehicle.rotor_count, measures, actuator.params, actuator.core_state)
+                      bool(estimation.enabled), bool(estimation.rotor_state), setup.observer.params,
+                      setup.observer.state, setup.steps, setup.period_ns, sim.vehicle.rotor_count, measures,
+                      actuator.params, actuator.core_state)
 
 
 def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
@@ -107,9 +109,9 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
         scratch = _SCRATCH[n] = _Scratch(n)
     outcome, _, _ = core.fly_measured(
         flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
-        flight.with_estimator, flight.observer_params, flight.observer_state, flight.steps, flight.period_ns,
-        flight.measures, flight.actuator_params, flight.actuator_state, scratch.states, scratch.published,
-        scratch.row, scratch.estimate, scratch.rotor_rows, scratch.acc)
+        flight.with_estimator, flight.estimator_measured, flight.observer_params, flight.observer_state,
+        flight.steps, flight.period_ns, flight.measures, flight.actuator_params, flight.actuator_state,
+        scratch.states, scratch.published, scratch.row, scratch.estimate, scratch.rotor_rows, scratch.acc)
     if outcome != core.FINISHED or scratch.acc[core.TRUTH_UNDEFINED] > 0:
         return None
     return measured_row(flight, scratch.acc)

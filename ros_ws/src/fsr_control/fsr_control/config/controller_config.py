@@ -3,7 +3,8 @@
 
 ```yaml
 controller:
-  type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | a law of
+  type: geometric                   # geometric (thrust along -z_b) | voliro (fully actuated) | indi
+                                    # (thrust along -z_b, from the IMU and the rotors' speeds) | a law of
                                     # fsr_control.controllers.catalog.LAWS; default by vehicle
   profile: flight                   # flight (default): gains designed from the vehicle
                                     # (fsr_sim.model.gain_design), geometric feedforward: reference |
@@ -13,7 +14,9 @@ controller:
                                     # (>= 0: 3 numbers or a symmetric positive semi-definite 3x3; 0: none)
   feedforward: reference            # geometric: where R_d's rates come from: reference (jerk, snap) |
                                     # measured (the measured acceleration: the report's); default by profile
-  integral_limit: 2.94              # geometric, with k_i: bound [N] on |K_i int e_p| (default: 0.25 m g)
+  integral_limit: 2.94              # geometric and indi, with k_i: bound [N] on |K_i int e_p| (default: 0.25 m g)
+  filter_hz: 30                     # indi: cutoff [Hz] of the second-order low-pass on every measured signal
+                                    # (below the Nyquist frequency of the control rate)
   angular_feedforward: consistent   # voliro only: consistent | report
   secondary_objective: {type: none} # voliro only: none | min_peak_speed (exponent: 8, iterations: 3)
   allocation: priority              # beyond the rotor limits: priority (yaw gives way first) | clamp
@@ -23,15 +26,18 @@ controller:
                                     # use, and on the compensated estimate's rates (0: none, the report's
                                     # law); for noisy odom and sharp disturbances
   compensation: none                # none | estimate: cancel the external wrench the controller's own
-                                    # observer estimates (needs estimator.enabled; fsr_control.compensation)
+                                    # observer estimates (needs estimator.enabled; fsr_control.compensation;
+                                    # not with indi, which is its own)
   aerodynamics: model               # model: cancel the vehicle file's aerodynamics (drag, rotor drag,
-                                    # inflow, lift, flapping) at the measured velocity, in still air, when
-                                    # there is no compensation | none; default by profile (flight: model)
+                                    # inflow, lift, flapping) predicted along the reference, in still air,
+                                    # when there is no compensation | none; default by profile (flight:
+                                    # model), none for indi (it measures them) and vehicles on servos
 ```
 
 Each gain is 3 positive numbers (a diagonal) or a symmetric positive-definite 3x3 matrix (``k_i`` may be
 zero); gains not given take the profile's: ``report`` the report's values for the controller type,
-``flight`` those designed from the vehicle. Unknown keys are refused with a typo hint.
+``flight`` those designed from the vehicle. Unknown keys are refused with a typo hint. ``indi`` takes the
+geometric law's gains and needs the vehicle's IMU (``sensors.imu``).
 """
 
 from __future__ import annotations
@@ -47,7 +53,7 @@ from fsr_control.config.trajectory_config import (
     DEFAULT_GOAL_DURATION,
     trajectory_config,
 )
-from fsr_control.controllers import geometric, voliro
+from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.controllers.catalog import LAWS
 from fsr_control.planning.feasibility import (
     DEFAULT_FEASIBILITY,
@@ -103,6 +109,9 @@ class ControllerConfig:
     trajectory_kind: str = "waypoints"  # trajectory.kind
     plan_end_time: float = 0.0  # [s] when the scenario's plan (from its initial state) comes to rest for good
     aerodynamics: str = "none"  # controller.aerodynamics: model | none
+    filter_hz: float = 0.0  # indi: controller.filter_hz [Hz]
+    control_period: float = 0.0  # [s] the lockstep's step (the period indi's filter is discretised at)
+    rotor_state: bool = False  # the simulator publishes rotor_state (the rotors' measured speeds)
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
@@ -157,7 +166,7 @@ def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> 
         raise controller.error("compensation", f"estimator.c0 * control period must be <= {MAX_C0_PERIOD:g} with "
                                                f"compensation (the compensated loop diverges from about 1), got "
                                                f"{estimation.c0:g} * {sim.control_period:g} s; lower estimator.c0")
-    return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces)
+    return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces, estimation.rotor_state)
 
 
 def controller_config(scenario: Scenario) -> ControllerConfig:
@@ -187,15 +196,29 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
                                              "(the priority rules are for thrust-and-torque vehicles)")
     air_mode = controller.boolean("air_mode", True)
     acceleration_filter_hz = controller.number("acceleration_filter_hz", 0.0, minimum=0.0)
-    feedforward, integral_limit = PROFILE_FEEDFORWARD[profile], 0.0
+    feedforward, integral_limit, filter_hz = PROFILE_FEEDFORWARD[profile], 0.0, 0.0
+    sim = simulation_config(scenario)
     if controller_type == "geometric":
         feedforward = controller.string("feedforward", feedforward, choices=geometric.FEEDFORWARDS)
+    elif controller.has("feedforward"):
+        raise controller.error("feedforward", f"only the geometric law has it, not {controller_type}")
+    if controller_type in ("geometric", "indi"):
         integral_limit = controller.number("integral_limit", INTEGRAL_LIMIT_SHARE * vehicle.weight,
                                            strictly_positive=True)
-    else:
-        for name in ("feedforward", "integral_limit"):
-            if controller.has(name):
-                raise controller.error(name, f"only the geometric law has it, not {controller_type}")
+    elif controller.has("integral_limit"):
+        raise controller.error("integral_limit", f"only the geometric and indi laws have it, not {controller_type}")
+    if controller_type == "indi":
+        filter_hz = controller.number("filter_hz", indi.DEFAULT_FILTER_HZ, strictly_positive=True)
+        if filter_hz >= 0.5 / sim.control_period:
+            raise controller.error("filter_hz", f"must be below the Nyquist frequency of the control rate, "
+                                                f"{0.5 / sim.control_period:g} Hz, got {filter_hz:g}")
+    elif controller.has("filter_hz"):
+        raise controller.error("filter_hz", f"only the indi law has it, not {controller_type}")
+    if law.needs_imu and not sim.imu.enabled:
+        raise controller.error("type", f"{controller_type} needs the vehicle's IMU: set sensors.imu (e.g. "
+                                       f"sensors.preset: ideal)")
+    if law.needs_rotor_state and actuation != "rotors":
+        raise controller.error("type", f"{controller_type} needs the rotors' speeds: it needs 'actuation: rotors'")
     angular_feedforward = "consistent"
     secondary = SecondaryObjectiveConfig()
     if controller_type == "voliro":
@@ -211,20 +234,28 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
             raise objective.error("exponent", f"must be an even integer >= 4, got {secondary.exponent}")
         objective.reject_unknown()
     compensation = _compensation(scenario, controller, vehicle)
-    aerodynamics = controller.string("aerodynamics", "none" if vehicle.has_servos else PROFILE_AERODYNAMICS[profile],
-                                     choices=AERODYNAMICS_MODES)
+    if compensation is not None and law.needs_imu:
+        raise controller.error("compensation", f"{controller_type} cancels the external wrench its sensors measure "
+                                               "itself: use controller.compensation: none")
+    measures = law.needs_imu  # a law that measures the external wrench measures the aerodynamics with it
+    aerodynamics = controller.string("aerodynamics", "none" if vehicle.has_servos or measures
+                                     else PROFILE_AERODYNAMICS[profile], choices=AERODYNAMICS_MODES)
     if aerodynamics == "model" and vehicle.has_servos:
         raise controller.error("aerodynamics", f"'model' is for fixed rotors; '{vehicle.name}' tilts its rotors")
+    if aerodynamics == "model" and measures:
+        raise controller.error("aerodynamics", f"{controller_type} measures the aerodynamics with the rest of the "
+                                               "external wrench: use controller.aerodynamics: none")
     controller.reject_unknown()
 
     section = scenario.section("trajectory")
-    sim = simulation_config(scenario)
     trajectory = trajectory_config(section, vehicle, sim.initial.position)
     config = ControllerConfig(controller_type, gains, trajectory.waypoints, angular_feedforward, profile, feedforward,
                               integral_limit, secondary, trajectory.goal_duration, scenario.source, allocation,
                               compensation, air_mode, trajectory.authority_margin,
                               acceleration_filter_hz=acceleration_filter_hz, feasibility=trajectory.feasibility,
-                              path=trajectory.path, trajectory_kind=trajectory.kind, aerodynamics=aerodynamics)
+                              path=trajectory.path, trajectory_kind=trajectory.kind, aerodynamics=aerodynamics,
+                              filter_hz=filter_hz, control_period=sim.control_period,
+                              rotor_state=sim.publishes_rotor_state)
     # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     try:
         plan = config.trajectory(vehicle, actuation, sim.initial.position, sim.initial.rotation)

@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from fsr_control.controllers import geometric, voliro
-from fsr_control.core import geometric_law, laws, voliro_law
+from fsr_control.controllers import geometric, indi, voliro
+from fsr_control.core import geometric_law, indi_law, laws, voliro_law
 from fsr_sim.model.gain_design import design_gains
 from fsr_sim.model.vehicle import Vehicle
 
@@ -49,6 +49,10 @@ class LawType:
         Gains a scenario may give beyond ``default_gains`` (zero in the report's profile).
     horizon_steps, horizon_dt : int, float
         The reference ahead the law reads: ``horizon_steps`` samples ``horizon_dt`` [s] apart (0: none).
+    needs_imu : bool
+        The law reads the IMU (``imu``: the vehicle needs ``sensors.imu``; the controller node subscribes it).
+    needs_rotor_state : bool
+        The law reads the rotors' measured speeds (``rotor_state``, subscribed where the simulator publishes it).
     """
 
     kind: int
@@ -60,6 +64,8 @@ class LawType:
     optional_gains: tuple[str, ...] = ()
     horizon_steps: int = 0
     horizon_dt: float = 0.0
+    needs_imu: bool = False
+    needs_rotor_state: bool = False
 
 
 def _pack_geometric(vehicle: Vehicle, config: ControllerConfig) -> geometric_law.GeometricParams:
@@ -71,10 +77,18 @@ def _pack_voliro(vehicle: Vehicle, config: ControllerConfig) -> voliro_law.Volir
     return voliro.pack_voliro(vehicle, config.gains, config.angular_feedforward)
 
 
+def _pack_indi(vehicle: Vehicle, config: ControllerConfig) -> indi_law.IndiParams:
+    return indi.pack_indi(vehicle, config.gains, config.filter_hz, config.control_period, config.rotor_state,
+                          config.integral_limit)
+
+
 LAWS: dict[str, LawType] = {
     "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS, lambda vehicle: design_gains(vehicle).wrench_gains(),
                          _pack_geometric, geometric_law.MEMORY_SIZE, fully_actuated=False,
                          optional_gains=geometric.OPTIONAL_GAINS),
     "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS, lambda vehicle: design_gains(vehicle).acceleration_gains(),
                       _pack_voliro, voliro_law.MEMORY_SIZE, fully_actuated=True),
+    "indi": LawType(laws.INDI, geometric.DEFAULT_GAINS, indi.designed_gains,
+                    _pack_indi, indi_law.MEMORY_SIZE, fully_actuated=False, optional_gains=geometric.OPTIONAL_GAINS,
+                    needs_imu=True, needs_rotor_state=True),
 }

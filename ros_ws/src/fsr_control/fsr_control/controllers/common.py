@@ -122,10 +122,13 @@ class CompiledLaw:
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
                 angular_velocity_body: np.ndarray, compensation: Compensation | None = None,
-                horizon: np.ndarray | None = None) -> WrenchCommand:
+                horizon: np.ndarray | None = None, imu: np.ndarray | None = None,
+                speeds: np.ndarray | None = None, tilts: np.ndarray | None = None) -> WrenchCommand:
         """The body wrench for this state and reference (:meth:`ControlLaw.compute`); ``horizon``: the reference
         ahead, (``params.horizon_steps``, ``HORIZON_WIDTH``) rows of :mod:`fsr_control.core.reference` (needed
-        only by a law that looks ahead). Raises ValueError when no attitude can be commanded (a zero thrust
+        only by a law that looks ahead); ``imu`` (6,): the IMU's angular velocity [rad/s] and specific force
+        [m/s^2], body FRD, and ``speeds``, ``tilts`` (n,): the rotors' measured state (needed only by a law that
+        reads them; None: zeros). Raises ValueError when no attitude can be commanded (a zero thrust
         vector, or one horizontal along the heading) or the horizon does not have the law's shape."""
         steps = self.params.horizon_steps
         horizon = np.zeros((0, HORIZON_WIDTH)) if horizon is None and steps == 0 else horizon
@@ -136,10 +139,16 @@ class CompiledLaw:
                  _vector(angular_velocity_body))
         status, force, torque, rotation_commanded = laws.control_law(
             self.params, self.memory, np.ascontiguousarray(horizon, dtype=float), float(reference.time),
-            reference_sample(reference), *state, compensation_of(compensation))
+            reference_sample(reference), *state, compensation_of(compensation), _array(imu, 6), _array(speeds, 0),
+            _array(tilts, 0))
         if status != ATTITUDE_OK:
             raise ValueError(ATTITUDE_ERRORS[status])
         return WrenchCommand(np.array(force), np.array(torque), np.array(rotation_commanded))
+
+
+def _array(values: np.ndarray | None, size: int) -> np.ndarray:
+    """``values`` as a contiguous float array (None: ``size`` zeros)."""
+    return np.zeros(size) if values is None else np.ascontiguousarray(values, dtype=float)
 
 
 def _vector(values: np.ndarray) -> tuple[float, float, float]:

@@ -40,6 +40,7 @@ class CompensationParams(NamedTuple):
     period: float  # control period [s]
     smooth: bool  # r >= 2: the estimate's second difference is used
     surfaces: Surfaces  # the contact rule's geometry
+    measured: bool  # the observer takes the rotors' measured wrench (rotor_state) instead of the commanded one
 
 
 class CompensationState(NamedTuple):

@@ -9,6 +9,11 @@ slice holding its numbers in field order), then what only the Python API and the
 then the rotor speeds and tilts.
 
 Frames: position world NED [m], ``R`` body FRD -> world, velocity world [m/s], angular velocity body [rad/s].
+Besides the state (``odom``) the tick is handed what the vehicle measures of the same stamp: ``imu`` (6,), the
+IMU's angular velocity [rad/s] and specific force [m/s^2] (body FRD, ``imu``'s numbers), and the rotors' speeds
+[rad/s] and tilts [rad] (n,) (``rotor_state``'s). Only a law or an observer configured to use them reads them
+(:data:`fsr_control.controllers.catalog.LAWS`' ``needs_imu`` and ``needs_rotor_state``, ``estimator.input:
+measured``); otherwise they may hold anything (the node passes zeros when it is not subscribed).
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, aerodynamic_feedforward
-from fsr_control.core.allocation import AllocationParams, AllocationState, allocate
+from fsr_control.core.allocation import TILTING, AllocationParams, AllocationState, allocate
 from fsr_control.core.compensation import (
     CompensationParams,
     CompensationState,
@@ -29,6 +34,7 @@ from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_control.core.laws import NO_COMPENSATION, LawParams, control_law, law_allocated
 from fsr_control.core.reference import TrajectoryTable, sample_horizon, sample_reference
 from fsr_sim.core.jit import jit
+from fsr_sim.core.rotors import measured_rotor_wrench
 from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, quaternion_from_rotation_rows
 
 # The output row. wrench_cmd: the body wrench the allocated command produces (body FRD, N and N m).
@@ -90,9 +96,10 @@ def _put_quaternion(out, at: int, rows: Mat3) -> None:  # noqa: ANN001
 
 @jit
 def controller_tick(params: ControllerParams, state: ControllerState, t: float, position: Vec3, rotation: Mat3,
-                    velocity_world: Vec3, angular_velocity: Vec3, out) -> int:  # noqa: ANN001
-    """The command for the state at ``t`` [s] into ``out`` (module docstring). Returns the law's status
-    (``ATTITUDE_OK``, or why no attitude could be commanded: ``out`` then holds only the reference)."""
+                    velocity_world: Vec3, angular_velocity: Vec3, imu, speeds, tilts, out) -> int:  # noqa: ANN001
+    """The command for the state at ``t`` [s] into ``out`` (module docstring), with the IMU's ``imu`` (6,) and the
+    rotors' measured ``speeds``, ``tilts`` (n,) of the same stamp. Returns the law's status (``ATTITUDE_OK``, or
+    why no attitude could be commanded: ``out`` then holds only the reference)."""
     reference = sample_reference(params.trajectory, t, state.reference)
     rotation_d = reference.rotation
     _put3(out, REFERENCE_POSITION, reference.position)
@@ -116,7 +123,8 @@ def controller_tick(params: ControllerParams, state: ControllerState, t: float, 
     if params.law.horizon_steps > 0:
         sample_horizon(params.trajectory, t, params.law.horizon_dt, state.reference, state.horizon)
     status, force_d, torque_d, rotation_c = control_law(params.law, state.law, state.horizon, t, reference, position,
-                                                        rotation, velocity_world, angular_velocity, compensation)
+                                                        rotation, velocity_world, angular_velocity, compensation,
+                                                        imu, speeds, tilts)
     if status != ATTITUDE_OK:
         return status
     _put3(out, DESIRED_FORCE, force_d)
@@ -129,8 +137,13 @@ def controller_tick(params: ControllerParams, state: ControllerState, t: float, 
     _put3(out, FORCE, actuated.force)
     _put3(out, TORQUE, actuated.torque)
     out[SATURATED] = 1.0 if actuated.saturated else 0.0
-    law_allocated(params.law, state.law, out[SHORTFALL:SHORTFALL + 6])
+    law_allocated(params.law, state.law, actuated.force, actuated.torque, out[SHORTFALL:SHORTFALL + 6])
     if params.compensation.enabled:
+        force_a, torque_a = actuated.force, actuated.torque  # the commanded wrench, or (input measured) the rotors'
+        if params.compensation.measured:
+            allocation = params.allocation
+            force_a, torque_a = measured_rotor_wrench(allocation.allocation, allocation.c_f,
+                                                      allocation.mode == TILTING, speeds, tilts)
         compensation_record(params.compensation, state.compensation, rotation, velocity_world, angular_velocity,
-                            actuated.force, actuated.torque)
+                            force_a, torque_a)
     return ATTITUDE_OK

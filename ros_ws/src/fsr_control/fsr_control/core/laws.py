@@ -7,8 +7,8 @@ that does not look ahead), the state, the compensation and the law's own memory;
 tells it, after the allocation, what of its wrench the rotors could not produce.
 
 A law's parameters are its own: a NamedTuple in the law's core file (:class:`GeometricParams`,
-:class:`VoliroParams`), held in its field of :class:`LawParams` (the other laws' fields hold placeholders,
-so that one compiled tick serves every law); its memory is its own array, of the size its core file says.
+:class:`VoliroParams`, :class:`IndiParams`), held in its field of :class:`LawParams` (the other laws' fields hold
+placeholders, so that one compiled tick serves every law); its memory is its own array, of the size its core file says.
 A new law is its core file (its function, its parameters with an ``unused()`` placeholder, its memory size),
 an import, a field and a branch here, and an entry in
 :data:`fsr_control.controllers.catalog.LAWS` (``docs/extending.md``).
@@ -17,7 +17,8 @@ Each law takes the reference, the state (position and velocity world NED [m, m/s
 angular velocity body [rad/s]) and, with ``controller.compensation: estimate``, the estimated external wrench
 to cancel (:class:`Compensation`), and returns ``(status, force_body, torque_body, R_c)``: the body wrench
 [N, N m] to produce and the attitude the law steers to. Their equations and the reasons behind them are in
-:mod:`fsr_control.controllers.geometric` and :mod:`fsr_control.controllers.voliro` (the Python shells).
+:mod:`fsr_control.controllers.geometric`, :mod:`fsr_control.controllers.voliro` and
+:mod:`fsr_control.controllers.indi` (the Python shells).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from __future__ import annotations
 from typing import NamedTuple, get_type_hints
 
 from fsr_control.core.geometric_law import GeometricParams, geometric_allocated, geometric_law
+from fsr_control.core.indi_law import IndiParams, indi_allocated, indi_law
 from fsr_control.core.law_terms import NO_COMPENSATION, Compensation, linear_feedback
 from fsr_control.core.reference import ReferenceSample
 from fsr_control.core.voliro_law import VoliroParams, voliro_law
@@ -41,11 +43,12 @@ class LawParams(NamedTuple):
     horizon_dt: float  # their spacing [s]
     geometric: GeometricParams
     voliro: VoliroParams
+    indi: IndiParams
     # a new law: its parameters here, e.g. ``my_law: MyLawParams``
 
 
 LAW_FIELDS = LawParams._fields[3:]  # the laws, in the order of their kinds
-GEOMETRIC, VOLIRO = LAW_FIELDS.index("geometric"), LAW_FIELDS.index("voliro")
+GEOMETRIC, VOLIRO, INDI = LAW_FIELDS.index("geometric"), LAW_FIELDS.index("voliro"), LAW_FIELDS.index("indi")
 
 
 def law_params(kind: int, own: NamedTuple, horizon_steps: int = 0, horizon_dt: float = 0.0) -> LawParams:
@@ -62,20 +65,28 @@ def law_params(kind: int, own: NamedTuple, horizon_steps: int = 0, horizon_dt: f
 @jit_inline
 def control_law(params: LawParams, memory, horizon, t: float, reference: ReferenceSample,  # noqa: ANN001
                 position: Vec3, rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3,
-                compensation: Compensation) -> tuple:
+                compensation: Compensation, imu, speeds, tilts) -> tuple:  # noqa: ANN001
     """``(status, force_body, torque_body, R_c)`` of the law ``params.kind`` (module docstring): ``memory`` the
-    law's own, ``horizon`` the reference ahead (``params.horizon_steps`` rows)."""
+    law's own, ``horizon`` the reference ahead (``params.horizon_steps`` rows); ``imu`` (6,) the IMU's angular
+    velocity [rad/s] and specific force [m/s^2], ``speeds`` and ``tilts`` (n,) the rotors' measured state, of
+    the same stamp (read only by a law that needs them)."""
     if params.kind == VOLIRO:
         return voliro_law(params.voliro, reference, position, rotation, velocity_world, angular_velocity,
                           compensation)
+    if params.kind == INDI:
+        return indi_law(params.indi, memory, t, reference, position, rotation, velocity_world, angular_velocity,
+                        imu, speeds, tilts)
     # a new law: its branch here, e.g. ``if params.kind == MY_LAW: return my_law(params.my_law, horizon, ...)``
     return geometric_law(params.geometric, memory, t, reference, position, rotation, velocity_world,
                          angular_velocity, compensation)
 
 
 @jit_inline
-def law_allocated(params: LawParams, memory, shortfall) -> None:  # noqa: ANN001
-    """After the allocation of the law's wrench: ``shortfall`` (6,) the demanded minus the produced body wrench
-    [N, N m] (what a law with an integral needs for its anti-windup)."""
+def law_allocated(params: LawParams, memory, force: Vec3, torque: Vec3, shortfall) -> None:  # noqa: ANN001
+    """After the allocation of the law's wrench: ``force``, ``torque`` the body wrench its command produces
+    [N, N m], ``shortfall`` (6,) the demanded minus that (what a law with an integral needs for its
+    anti-windup)."""
     if params.kind == GEOMETRIC:
         geometric_allocated(params.geometric, memory, shortfall)
+    elif params.kind == INDI:
+        indi_allocated(params.indi, memory, force, torque, shortfall)

@@ -3,7 +3,10 @@
 Parameters: :data:`USAGE` (what ``controller --help`` prints; ``exit_on_finish``: :mod:`fsr_sim.ros.flight_end`).
 An invalid value exits with code 2 and names it.
 
-Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS). Each odom (stamp ``t_k``) is answered, in the callback, with
+Subscribes ``odom`` (STREAM_QOS) and ``goal`` (GOAL_QOS) and, where the law or its observer reads them, ``imu``
+and ``rotor_state`` (:attr:`fsr_control.flight_controller.FlightController.needs_imu`, ``needs_rotor_state``;
+paired with the odom of their stamp by :class:`fsr_control.nodes.inputs.StampedInputs`). Each odom (stamp
+``t_k``) is answered, in the callback that completes its stamp, with
 ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall`` (demanded minus commanded body wrench: which
 axis gave way at the rotor limits, see fsr_control.allocation), ``reference``, ``attitude_cmd`` (the commanded
 attitude ``R_c``) and ``wrench_desired`` (the law's wrench before allocation), all stamped ``t_k`` (lockstep
@@ -25,12 +28,14 @@ import copy
 import sys
 import time
 
+import numpy as np
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 
 from fsr_control.config.controller_config import controller_config
 from fsr_control.controllers.catalog import LAWS
 from fsr_control.flight_controller import FlightController, seconds_from_ns
+from fsr_control.nodes.inputs import IMU_INPUT, ODOM_INPUT, ROTOR_STATE_INPUT, StampedInputs
 from fsr_control.nodes.messages import goal_from_message
 from fsr_control.nodes.packets import ControllerPackets
 from fsr_sim.config.scenario import Scenario, load_scenario, simulation_config
@@ -42,10 +47,14 @@ from fsr_sim.contract import (
     EXIT_FAILURE,
     EXIT_OK,
     GOAL,
+    IMU,
     ODOM,
+    ROTOR_STATE,
     SIM_STATUS,
 )
 from fsr_sim.model.allocation import WRENCH_AXES
+from fsr_sim.nodes.commands import RotorCommandReader
+from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import odometry_state_from_bytes
 from fsr_sim.ros.endpoints import publisher, subscription
 from fsr_sim.ros.flight_end import FlightEnd
@@ -65,7 +74,7 @@ USAGE = NodeUsage(
         Parameter("exit_on_finish", "true", "end by itself once sim_status reports the end of the flight"),
         RECORDED_TOPICS,
     ),
-    (ODOM, GOAL, SIM_STATUS),
+    (ODOM, IMU, ROTOR_STATE, GOAL, SIM_STATUS),
     (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR),
 )
 
@@ -120,8 +129,19 @@ class ControllerNode(Node):
         self.packets = ControllerPackets(self.rotors, sim.vehicle.rotor_count, sim.vehicle.has_servos)
         self.publishers_by_topic = {name: publisher(self, BY_NAME[name]) for name in self.packets.templates}
         wait_until_recorded(self, self.publishers_by_topic, recorded)  # before odom: no state comes before
+        controller = self.controller
+        self.inputs = StampedInputs(controller.needs_imu, controller.needs_rotor_state)
+        self.hot_subscriptions = []
+        if controller.needs_imu:  # subscribed before odom: a stamp's inputs all come from the simulator at once
+            imu = subscription(self, IMU, self.on_imu, raw=True)
+            self.hot_subscriptions.append((imu, self.on_imu))
+        if controller.needs_rotor_state:
+            self.rotor_reader = RotorCommandReader(sim.vehicle.rotor_count, sim.vehicle.has_servos)
+            self.no_tilts = np.zeros(sim.vehicle.rotor_count)
+            rotor_state = subscription(self, ROTOR_STATE, self.on_rotor_state, raw=True)
+            self.hot_subscriptions.append((rotor_state, self.on_rotor_state))
         odom = subscription(self, ODOM, self.on_odom, raw=True)
-        self.hot_subscriptions = [(odom, self.on_odom)]
+        self.hot_subscriptions.insert(0, (odom, self.on_odom))
         subscription(self, GOAL, self.on_goal)
         self.flight_end = FlightEnd(self, exit_on_finish)
         self.stop_flag: object = None  # run_node's StopFlag: bounds the drain after a signal
@@ -138,17 +158,65 @@ class ControllerNode(Node):
         return self.flight_end.ended()
 
     def on_odom(self, data: bytes) -> None:
-        """Answer one ``odom`` (CDR bytes) with every controller topic, stamped like it."""
+        """Answer one ``odom`` (CDR bytes) with every controller topic, stamped like it (once the ``imu`` and
+        ``rotor_state`` of its stamp are there too, where the controller reads them)."""
         start = time.perf_counter()
         self.flight_end.activity()
         try:
-            stamp_ns, position, rotation, velocity_world, angular_velocity = odometry_state_from_bytes(data)
+            state = odometry_state_from_bytes(data)
         except ValueError as error:
             self.warn(f"dropped an odom: {error}")
             return
+        if len(self.inputs.kinds) == 1:
+            self.answer(start, state)
+        else:
+            self.offer(start, ODOM_INPUT, state[0], state)
+
+    def on_imu(self, data: bytes) -> None:
+        """Take one ``imu`` (CDR bytes): angular velocity [rad/s] and specific force [m/s^2], body FRD."""
+        start = time.perf_counter()
+        self.flight_end.activity()
+        try:
+            stamp_ns, values = cdr_read.imu(data)
+        except ValueError as error:
+            self.warn(f"dropped an imu: {error}")
+            return
+        imu = np.array(values)
+        if not np.isfinite(imu).all():
+            self.warn(f"dropped an imu at {stamp_ns * 1e-9:.3f} s: it holds NaN or inf")
+            return
+        self.offer(start, IMU_INPUT, stamp_ns, imu)
+
+    def on_rotor_state(self, data: bytes) -> None:
+        """Take one ``rotor_state`` (CDR bytes): the rotors' measured speeds [rad/s] and tilts [rad]."""
+        start = time.perf_counter()
+        self.flight_end.activity()
+        try:
+            stamp_ns = cdr_read.stamp(data)
+            speeds, tilts = self.rotor_reader.read_raw(data)
+        except ValueError as error:
+            self.warn(f"dropped a rotor_state: {error}")
+            return
+        self.offer(start, ROTOR_STATE_INPUT, stamp_ns, (speeds, self.no_tilts if tilts is None else tilts))
+
+    def offer(self, start: float, kind: int, stamp_ns: int, value: object) -> None:
+        """One input of a stamp; answer the stamp once it has all of them."""
+        inputs = self.inputs
+        values = inputs.add(kind, stamp_ns, value)
+        if values is None:
+            return
+        found = dict(zip(inputs.kinds, values, strict=True))
+        rotors = found.get(ROTOR_STATE_INPUT, (None, None))
+        self.answer(start, found[ODOM_INPUT], found.get(IMU_INPUT), *rotors)
+
+    def answer(self, start: float, state: tuple, imu: np.ndarray | None = None, speeds: np.ndarray | None = None,
+               tilts: np.ndarray | None = None) -> None:
+        """Publish the command for the odom ``state`` (stamp, position, rotation, velocities) and the
+        measurements of its stamp."""
+        stamp_ns, position, rotation, velocity_world, angular_velocity = state
         try:
             row = self.controller.command_row(
-                seconds_from_ns(stamp_ns), position, rotation, velocity_world, angular_velocity
+                seconds_from_ns(stamp_ns), position, rotation, velocity_world, angular_velocity, imu, speeds, tilts
             )
         except (ValueError, ArithmeticError) as error:  # never crash mid-flight; the simulator holds/fails safe
             self.warn(f"no command for odom at {stamp_ns * 1e-9:.3f} s: {error}")

@@ -1,6 +1,9 @@
 """Estimator node: momentum-based external wrench and mass estimation on the live graph (docs/model.md §3.8, §4).
 
-Subscribes ``odom`` (nav_msgs/Odometry) and ``wrench_cmd`` (geometry_msgs/WrenchStamped) and hands them to
+Subscribes ``odom`` (nav_msgs/Odometry) and ``wrench_cmd`` (geometry_msgs/WrenchStamped) -- with
+``estimator.input: measured`` where the simulator publishes it, ``rotor_state`` (sensor_msgs/JointState: the
+rotors' speeds and tilts, through the nominal allocation, :func:`fsr_sim.core.rotors.measured_rotor_wrench`)
+instead -- and hands them to
 :class:`fsr_estimation.core.stamped.StampedEstimator` (pairing by header stamp, sample-period checks and
 resets on gaps live there), then publishes each estimate as ``wrench_estimate`` (WrenchStamped, body FRD:
 force ``R_b^T f_e``, torque ``Q^-T tau_e``, stamped with the pair's stamp) and ``mass_estimate`` (Float64,
@@ -31,7 +34,9 @@ from std_srvs.srv import Trigger
 from fsr_estimation.core.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, USAGE, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
-from fsr_sim.contract import MASS_ESTIMATE, ODOM, WRENCH_CMD, WRENCH_ESTIMATE
+from fsr_sim.contract import MASS_ESTIMATE, ODOM, ROTOR_STATE, WRENCH_CMD, WRENCH_ESTIMATE
+from fsr_sim.core.rotors import measured_rotor_wrench
+from fsr_sim.nodes.commands import RotorCommandReader
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import state_from_odometry_bytes
 from fsr_sim.ros.endpoints import publisher, subscription
@@ -70,8 +75,15 @@ class EstimatorNode(Node):
         recorded_publishers = {WRENCH_ESTIMATE.name: self.wrench_pub, MASS_ESTIMATE.name: self.mass_pub}
         wait_until_recorded(self, recorded_publishers, recorded)  # before odom: no state comes before
         odom = subscription(self, ODOM, self._on_odom, raw=True)
-        wrench = subscription(self, WRENCH_CMD, self._on_wrench, raw=True)
-        self.hot_subscriptions = [(odom, self._on_odom), (wrench, self._on_wrench)]
+        self.rotor_allocation = settings.rotor_allocation
+        if self.rotor_allocation is None:  # the commanded wrench (estimator.input: commanded)
+            actuator = subscription(self, WRENCH_CMD, self._on_wrench, raw=True)
+            self.hot_subscriptions = [(odom, self._on_odom), (actuator, self._on_wrench)]
+        else:  # the rotors' measured speeds and tilts
+            allocation, _, tilting = self.rotor_allocation
+            self.rotor_reader = RotorCommandReader(allocation.shape[1] // (2 if tilting else 1), tilting)
+            actuator = subscription(self, ROTOR_STATE, self._on_rotor_state, raw=True)
+            self.hot_subscriptions = [(odom, self._on_odom), (actuator, self._on_rotor_state)]
         self.hot_gather_s = GATHER_S  # nobody waits for the estimates step by step: take them in batches
         self.create_service(Trigger, "~/reset", self._on_reset)
         period = settings.control_period
@@ -109,6 +121,20 @@ class EstimatorNode(Node):
             self.warn_input(f"wrench_cmd at {stamp} ns holds NaN/inf: dropped")
             return
         self._publish(lambda: self.estimator.add_command(stamp, np.array(values[:3]), np.array(values[3:])))
+
+    def _on_rotor_state(self, data: bytes) -> None:
+        """``rotor_state`` (``estimator.input: measured``): the wrench of the rotors' speeds and tilts through the
+        nominal allocation, paired with the state of the same stamp as ``wrench_cmd`` would be."""
+        try:
+            stamp = cdr_read.stamp(data)
+            speeds, tilts = self.rotor_reader.read_raw(data)
+        except ValueError as error:
+            self.warn_input(f"dropped a rotor_state that cannot be read: {error}")
+            return
+        allocation, c_f, tilting = self.rotor_allocation
+        force, torque = measured_rotor_wrench(allocation, c_f, tilting, speeds,
+                                              speeds if tilts is None else tilts)
+        self._publish(lambda: self.estimator.add_command(stamp, np.array(force), np.array(torque)))
 
     def _publish(self, add: Callable[[], Estimate | None]) -> None:
         self.flight_end.activity()

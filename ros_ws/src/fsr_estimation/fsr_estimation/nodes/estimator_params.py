@@ -30,9 +30,11 @@ from fsr_sim.contract import (
     EXIT_FAILURE,
     EXIT_OK,
     ODOM,
+    ROTOR_STATE,
     SIM_STATUS,
     WRENCH_CMD,
 )
+from fsr_sim.model.allocation import actuation_matrix
 from fsr_sim.ros.node_usage import NodeUsage, Parameter
 from fsr_sim.ros.recorder_match import RECORDED_TOPICS
 
@@ -50,7 +52,7 @@ USAGE = NodeUsage(
         Parameter("exit_on_finish", "true", "end by itself once sim_status reports the end of the flight"),
         RECORDED_TOPICS,
     ),
-    (ODOM, WRENCH_CMD, SIM_STATUS),
+    (ODOM, WRENCH_CMD, ROTOR_STATE, SIM_STATUS),
     (EXIT_OK, EXIT_FAILURE, EXIT_CONFIG_ERROR),
 )
 PARAMETER_NAMES = tuple(p.name for p in USAGE.parameters  # those two: fsr_sim.ros
@@ -61,6 +63,9 @@ PARAMETER_NAMES = tuple(p.name for p in USAGE.parameters  # those two: fsr_sim.r
 class EstimatorNodeSettings:
     config: EstimatorConfig
     control_period: float | None  # s; None: measured from the first two samples
+    # estimator.input measured (and rotor_state published): the nominal vehicle's allocation (fsr_sim.model.
+    # allocation.actuation_matrix), c_f [N s^2] and whether its rotors tilt; None: the observer takes wrench_cmd
+    rotor_allocation: tuple[np.ndarray, float, bool] | None = None
 
 
 def node_settings(values: dict[str, Any]) -> EstimatorNodeSettings:
@@ -77,11 +82,17 @@ def node_settings(values: dict[str, Any]) -> EstimatorNodeSettings:
         inertia = checked_spd(raw.reshape(3, 3) if raw.size == 9 else raw, "inertia", PARAMETER_SOURCE)
     period = section.number("control_period", strictly_positive=True) if section.has("control_period") else None
     section.reject_unknown()
+    rotor_allocation = None
     if scenario:
         loaded = load_scenario(scenario)
         base = estimator_config(loaded)
+        sim = simulation_config(loaded)
         if period is None:
-            period = simulation_config(loaded).control_period
+            period = sim.control_period
+        if base.rotor_state:
+            vehicle = sim.vehicle
+            rotor_allocation = (np.ascontiguousarray(actuation_matrix(vehicle)), float(vehicle.c_f),
+                                bool(vehicle.has_servos))
     else:
         for name, value in (("mass", mass), ("inertia", inertia)):
             if value is None:
@@ -93,10 +104,12 @@ def node_settings(values: dict[str, Any]) -> EstimatorNodeSettings:
         inertia=base.inertia if inertia is None else inertia,
         c0=base.c0 if c0 is None else c0,
         r=base.r if r is None else r,
+        input=base.input,
+        rotor_state=base.rotor_state,
     )
     if period is not None:
         try:
             check_filter_parameters(config.c0, config.r, period)
         except ValueError as error:
             raise ConfigError("", str(error), PARAMETER_SOURCE) from None
-    return EstimatorNodeSettings(config=config, control_period=period)
+    return EstimatorNodeSettings(config=config, control_period=period, rotor_allocation=rotor_allocation)

@@ -36,7 +36,7 @@ from fsr_sim.config.vehicle_file import dynamics_and_drag, load_vehicle_file
 from fsr_sim.core.aerodynamics import has_aerodynamics
 from fsr_sim.model.disturbances import DisturbanceProfile
 from fsr_sim.model.environment import Environment
-from fsr_sim.model.plant import Plant, pack_aerodynamics
+from fsr_sim.model.plant import Plant, actuator_lags, pack_aerodynamics
 from fsr_sim.model.sensors import ImuModel, OdometryNoise
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.turbulence import DrydenTurbulence
@@ -213,6 +213,12 @@ class SimulationConfig:
     @property
     def step_count(self) -> int:
         return int(round(self.duration / self.control_period))
+
+    @property
+    def publishes_rotor_state(self) -> bool:
+        """The simulator publishes ``rotor_state`` (the rotors' measured speeds and tilts): the plant's rotors
+        or servos lag their commands (without, they follow them within the step: the command is the measurement)."""
+        return any(actuator_lags(self.plant_vehicle, self.actuation))
 
 
 def load_vehicle_for(scenario: Scenario) -> Vehicle:

@@ -155,3 +155,32 @@ def static_from_rotor_command(speed_sq: float, tilt: float, c_f: float) -> tuple
     """The inverse of :func:`rotor_command_from_static`: ``(c_f u_w cos(alpha), c_f u_w sin(alpha))`` [N]."""
     thrust = c_f * speed_sq
     return thrust * math.cos(tilt), thrust * math.sin(tilt)
+
+
+
+@jit
+def _measured_row(allocation, c_f: float, tilting: bool, speeds, tilts, row: int) -> float:  # noqa: ANN001
+    total = 0.0
+    for i in range(speeds.shape[0]):
+        if tilting:
+            u_v, u_l = static_from_rotor_command(speeds[i] * speeds[i], tilts[i], c_f)
+            total += allocation[row, 2 * i] * u_v
+            total += allocation[row, 2 * i + 1] * u_l
+        else:
+            total += allocation[row, i] * (abs(speeds[i]) * speeds[i])
+    return total
+
+
+@jit
+def measured_rotor_wrench(allocation, c_f: float, tilting: bool, speeds, tilts) -> tuple:  # noqa: ANN001
+    """Body (force [N], torque [N m]) that rotors at ``speeds`` (n,) [rad/s] and ``tilts`` (n,) [rad] produce
+    through the nominal allocation: fixed rotors ``allocation`` (6, n) on ``u_w,i = |w_i| w_i``, rotors on servos
+    the static ``allocation`` (6, 2n) on ``(c_f u_w cos(alpha), c_f u_w sin(alpha))``: the allocation's own
+    arithmetic for the wrench of its command (:mod:`fsr_control.core.allocation`), here on the rotors' measured
+    state (``rotor_state``)."""
+    return ((_measured_row(allocation, c_f, tilting, speeds, tilts, 0),
+             _measured_row(allocation, c_f, tilting, speeds, tilts, 1),
+             _measured_row(allocation, c_f, tilting, speeds, tilts, 2)),
+            (_measured_row(allocation, c_f, tilting, speeds, tilts, 3),
+             _measured_row(allocation, c_f, tilting, speeds, tilts, 4),
+             _measured_row(allocation, c_f, tilting, speeds, tilts, 5)))

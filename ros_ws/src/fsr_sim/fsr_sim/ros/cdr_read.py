@@ -17,6 +17,7 @@ _STAMP = struct.Struct("<iIi")  # sec, nanosec, frame_id length
 _UINT32 = struct.Struct("<I")
 _POSE = struct.Struct("<7d")
 _SIX = struct.Struct("<6d")  # a twist, a wrench
+_THREE = struct.Struct("<3d")  # a vector
 _COVARIANCE_BYTES = 36 * 8
 NS_PER_S = 1_000_000_000
 
@@ -60,6 +61,19 @@ def wrench_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
     except struct.error as error:
         raise ValueError(f"WrenchStamped message cut short: {error}") from None
     return stamp, values
+
+
+def imu(data: bytes) -> tuple[int, tuple[float, ...]]:
+    """``sensor_msgs/Imu``: (stamp [ns], (angular velocity xyz, linear acceleration xyz))."""
+    _check(data)
+    try:
+        stamp_ns, offset = _after_header(data)
+        offset = _align(offset, 8) + 32 + 72  # orientation, its covariance
+        angular = _THREE.unpack_from(data, offset)
+        linear = _THREE.unpack_from(data, offset + 24 + 72)  # after the angular velocity's covariance
+    except struct.error as error:
+        raise ValueError(f"Imu message cut short: {error}") from None
+    return stamp_ns, angular + linear
 
 
 def stamp(data: bytes) -> int:

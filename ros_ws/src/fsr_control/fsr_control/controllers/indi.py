@@ -1,0 +1,121 @@
+"""Incremental nonlinear dynamic inversion (INDI) for fixed-rotor multirotors (Smeur, de Croon & Chu, JGCD 2016;
+Tal & Karaman, IEEE T-CST 2021).
+
+INDI replaces the model of what acts on the vehicle by what its sensors measure: the command is the wrench the
+rotors produce now plus what it takes to change the measured acceleration into the desired one. World NED,
+body FRD, ``e3 = [0, 0, 1]`` (down), ``g = 9.81``, nominal mass ``m`` and inertia ``I``; every measured signal
+``x`` enters through the same second-order low-pass, ``x_f`` (cutoff ``controller.filter_hz``, damping
+1/sqrt(2)), so that the signals are synchronous:
+
+    omega_f, omega_dot_f                       IMU angular velocity [rad/s] and its derivative [rad/s^2], body
+    s_f                                        IMU specific force R^T (p_ddot - g e3) [m/s^2], body
+    f_f, tau_f                                 rotor force [N] and torque [N m], body: the measured rotor speeds
+                                               (rotor_state) through the nominal allocation (c_f, c_m, geometry)
+
+**Linear.** ``m s = f_rotors + f_ext`` (body), so the desired rotor force (world) for a desired acceleration is
+
+    a_des = -K_p e_p - K_v e_v (- K_i int e_p) + m p_ddot_d                 [N]   (the geometric law's PD)
+    F     = R f_f + (a_des - m g e3) - R m s_f = a_des - m g e3 - f_hat,    f_hat = R (m s_f - f_f)
+
+i.e. ``T_vec = T_f_vec + m (a_d - a_f)`` with ``a_f = R s_f + g e3`` the filtered acceleration (gravity
+cancels: ``F - R f_f = m (a_d - a_f)`` with ``m a_d = a_des``). ``R_d`` is built from ``-F`` and the reference
+yaw, the thrust is its projection ``u_T = -F^T R e3``, and the rates of ``R_d`` come from the reference's jerk
+and snap through the flatness map (the geometric law's ``controller.feedforward: reference``).
+
+**Angular.** ``I omega_dot + omega x I omega = tau_rotors + tau_ext``, so
+
+    alpha_d = I^-1 (-K_R e_R - K_w e_w) - S(w) R^T R_d w_d + R^T R_d w_dot_d     (the geometric attitude PD)
+    tau_b   = tau_f + I (alpha_d - omega_dot_f) + omega x I omega - omega_f x I omega_f
+
+the geometric law's torque with ``tau_hat = I omega_dot_f + omega_f x I omega_f - tau_f``.
+
+Both increments are an external wrench estimated from the filtered signals, ``(f_hat, tau_hat)``, handed to the
+geometric law (reference feed-forward, :mod:`fsr_control.controllers.geometric`) in place of an observer's: the
+law is written once. Without ``rotor_state`` (rotors without lag follow their commands within the step) the
+rotors' wrench is the one commanded at the previous step (at the first step: the one that makes ``f_hat`` and
+``tau_hat`` zero). No estimator is needed (``controller.compensation: estimate`` is refused: INDI is itself the
+compensation). The law needs the IMU (``sensors.imu``).
+
+**Filter.** ``y'' = w_n^2 (u - y) - 2 zeta w_n y'``, ``w_n = 2 pi filter_hz``, ``zeta = 1/sqrt(2)``
+(Butterworth), discretised exactly for an input held over the control period ``T``: ``x_k = Phi x_(k-1) +
+Gamma u_k`` with ``Phi = exp(A T)``, ``Gamma = A^-1 (Phi - 1) B``; started at rest on the first sample. The
+default :data:`DEFAULT_FILTER_HZ` (30 Hz) keeps the gyro's derivative quiet at 1 kHz while the filter's group
+delay (``2 zeta / w_n``, 7.5 ms) stays below the designed 30 ms motor.
+
+The law is written once, in the compiled core (:func:`fsr_control.core.indi_law.indi_law`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import expm
+
+from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.controllers.geometric import OPTIONAL_GAINS
+from fsr_control.core import indi_law, laws
+from fsr_sim.model.allocation import wrench_from_rotor_speed_sq
+from fsr_sim.model.gain_design import design_gains
+from fsr_sim.model.vehicle import Vehicle
+
+DEFAULT_FILTER_HZ = 30.0  # controller.filter_hz: the low-pass on every measured signal [Hz]
+FILTER_DAMPING = 1.0 / math.sqrt(2.0)  # Butterworth
+
+
+def designed_gains(vehicle: Vehicle) -> dict[str, np.ndarray]:
+    """The gains of ``controller.profile: flight``: the geometric law's designed from the vehicle
+    (:func:`fsr_sim.model.gain_design.design_gains`) without the integral (``k_i = 0``): the increment removes
+    a constant external force itself, and an integral would only wind up during the transient and overshoot."""
+    gains = design_gains(vehicle).wrench_gains()
+    gains["k_i"] = np.zeros((3, 3))
+    return gains
+
+
+def filter_coefficients(cutoff_hz: float, period: float) -> np.ndarray:
+    """``(Phi row by row, Gamma)`` (6,) of the second-order low-pass of cutoff ``cutoff_hz`` [Hz] held over
+    ``period`` [s] (module docstring). Raises ValueError for a cutoff or a period that is not positive, or a
+    cutoff at or above the Nyquist frequency ``1 / (2 period)``."""
+    if not (cutoff_hz > 0.0 and period > 0.0):
+        raise ValueError(f"the filter needs a cutoff > 0 Hz and a period > 0 s, got {cutoff_hz} Hz, {period} s")
+    if cutoff_hz >= 0.5 / period:
+        raise ValueError(f"the filter's cutoff must be below the Nyquist frequency {0.5 / period:g} Hz, got "
+                         f"{cutoff_hz:g} Hz")
+    w_n = 2.0 * math.pi * cutoff_hz
+    a = np.array([[0.0, 1.0], [-w_n * w_n, -2.0 * FILTER_DAMPING * w_n]])
+    b = np.array([0.0, w_n * w_n])
+    phi = expm(a * period)
+    gamma = np.linalg.solve(a, (phi - np.eye(2)) @ b)
+    return np.ascontiguousarray([phi[0, 0], phi[0, 1], phi[1, 0], phi[1, 1], gamma[0], gamma[1]])
+
+
+def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, period: float, rotor_state: bool,
+              integral_limit: float = 0.0) -> indi_law.IndiParams:
+    """The core's parameters of INDI (module docstring): the geometric law's ``gains`` (``k_p``, ``k_v``,
+    ``k_r``, ``k_w``, optionally ``k_i``), the filter's cutoff [Hz] at the control ``period`` [s], whether the
+    rotors' speeds are measured (``rotor_state``) and the bound [N] on the integral's force."""
+    if vehicle.fully_actuated or vehicle.has_servos:
+        raise ValueError(f"INDI is for fixed rotors that produce thrust along -z_b; '{vehicle.name}' is not")
+    matrices = law_matrices(vehicle, gains, indi_law.MATRICES[1:], OPTIONAL_GAINS)
+    integral = bool(np.any(matrices[indi_law.MATRICES.index("k_i")] != 0.0))
+    if integral and not integral_limit > 0.0:
+        raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
+    return indi_law.IndiParams(float(vehicle.mass), matrices, integral, float(integral_limit),
+                               filter_coefficients(filter_hz, period),
+                               np.ascontiguousarray(wrench_from_rotor_speed_sq(vehicle)), float(vehicle.c_f),
+                               bool(rotor_state))
+
+
+class IndiController(CompiledLaw):
+    """INDI (module docstring) on the nominal ``vehicle`` (fixed rotors), outside the controller's tick.
+
+    ``compute(..., imu=..., speeds=...)`` takes the IMU's angular velocity and specific force (6,) and, with
+    ``rotor_state``, the rotors' speeds (n,). Outside the tick nothing tells it of the allocation: without
+    ``rotor_state`` its rotor wrench is then always the first step's (no external wrench), so fly it in the
+    :class:`fsr_control.flight_controller.FlightController`.
+    """
+
+    def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], period: float,
+                 filter_hz: float = DEFAULT_FILTER_HZ, rotor_state: bool = True, integral_limit: float = 0.0) -> None:
+        own = pack_indi(vehicle, gains, filter_hz, period, rotor_state, integral_limit)
+        super().__init__(laws.law_params(laws.INDI, own), indi_law.MEMORY_SIZE)
