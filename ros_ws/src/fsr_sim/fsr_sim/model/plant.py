@@ -2,13 +2,14 @@
 (docs/model.md §3.4) + ground contact.
 
 A checked shell around the compiled core (:mod:`fsr_sim.core.plant`): the constructor checks its arguments and
-packs them once (:class:`~fsr_sim.core.plant.PlantParams`); every method calls the core. Inputs are held
-constant over a step (zero-order hold) while the state-dependent parts (thrust ratios near surfaces,
-time-varying disturbances) are evaluated at every RK4 stage. Two actuation modes:
+packs them once (:class:`~fsr_sim.core.plant.PlantParams`); every method calls the core. Commands are held
+constant over a step (zero-order hold) while the state-dependent parts (rotor speeds and tilts lagging their
+commands, thrust ratios near surfaces, aerodynamics, time-varying disturbances) are evaluated at every RK4
+stage. Two actuation modes:
 
 * ``rotors``: rotor speeds ``w_i`` [rad/s] (clamped to the vehicle's limits, saturation recorded) and, for
-  a tilting vehicle, tilt angles ``alpha_i`` [rad] (clamped to +-tilt_angle_max), applied instantly (or through
-  the vehicle's first-order lags);
+  a tilting vehicle, tilt angles ``alpha_i`` [rad] (clamped to +-tilt_angle_max), applied instantly, or through
+  the vehicle's first-order lags (the speeds and tilts integrated within the RK4 stages, docs/model.md);
   ``f_b = sum c_f r_i |w_i| w_i z_i``, ``tau_b = sum |w_i| w_i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the
   thrust ratio ``r_i`` of :mod:`fsr_sim.model.environment` (drag torque is not scaled).
 * ``wrench``: the commanded body wrench directly, ``f_b`` and ``tau_b`` (the report's exercises 3 and 4 use
