@@ -1,7 +1,8 @@
 """Simulator node: steps the plant in lockstep with the controller and publishes the state (docs/model.md §4).
 
 Publishes ``/clock`` (if ``publish_clock``), ``odom``, ``wrench_truth``, with actuator dynamics ``rotor_state``,
-with an IMU (``sensors.imu``) ``imu``, and ``sim_status`` (a
+with an IMU (``sensors.imu``) ``imu``, with a measured ``odom`` (``sensors.odometry``) the true state on
+``odom_truth``, and ``sim_status`` (a
 :class:`fsr_sim.contract.SimStatus` as JSON: ``running``, then ``finished``, ``diverged`` or ``stopped``; also
 published when the controller stops answering and when it answers again), each with its QoS of
 :mod:`fsr_sim.contract`; subscribes ``rotor_cmd``
@@ -54,6 +55,7 @@ from fsr_sim.contract import (
     FINISHED,
     IMU,
     ODOM,
+    ODOM_TRUTH,
     ROTOR_CMD,
     ROTOR_STATE,
     RUNNING,
@@ -109,7 +111,9 @@ class SimulatorNode(Node):
         vehicle = self.config.plant_vehicle
         self.publish_rotor_state = has_actuator_dynamics(self.plant.params)
         imu = self.plant.params.sensors.imu
-        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos, imu)
+        truth = self.plant.params.sensors.odometry.enabled  # odom is measured: the true state beside it
+        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos, imu,
+                                     truth)
         self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.has_servos)
 
@@ -119,13 +123,14 @@ class SimulatorNode(Node):
         self.wrench_pub = publisher(self, WRENCH_TRUTH)
         self.rotor_state_pub = publisher(self, ROTOR_STATE) if self.publish_rotor_state else None
         self.imu_pub = publisher(self, IMU) if imu.enabled else None
+        self.truth_pub = publisher(self, ODOM_TRUTH) if truth else None
         self.clock_pub = publisher(self, CLOCK) if self.params.publish_clock else None
         self.progress_pub = publisher(self, SIM_PROGRESS)
         self.status_pub = publisher(self, SIM_STATUS)
         self.recorded_publishers = {topic.name: pub for topic, pub in (
             (ODOM, self.odom_pub), (WRENCH_TRUTH, self.wrench_pub), (ROTOR_STATE, self.rotor_state_pub),
-            (IMU, self.imu_pub), (CLOCK, self.clock_pub), (SIM_PROGRESS, self.progress_pub),
-            (SIM_STATUS, self.status_pub))}
+            (IMU, self.imu_pub), (ODOM_TRUTH, self.truth_pub), (CLOCK, self.clock_pub),
+            (SIM_PROGRESS, self.progress_pub), (SIM_STATUS, self.status_pub))}
         self.command_sub = subscription(self, command, _unused, raw=True)  # commands are read from their CDR bytes
         self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
 
@@ -410,10 +415,12 @@ class SimulatorNode(Node):
 
     def _send_state(self) -> None:
         """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``; with an IMU,
-        ``imu``) and, with actuator dynamics, ``rotor_state``."""
+        ``imu``; with a measured ``odom``, ``odom_truth``) and, with actuator dynamics, ``rotor_state``."""
         messages, plant = self.messages, self.plant
         messages.fill_from_row(plant.stamp_ns, self.published)
         self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
+        if self.truth_pub is not None:
+            self.truth_pub.publish(messages.truth)
         self.wrench_pub.publish(messages.wrench)
         if self.rotor_state_pub is not None:
             state = plant.core_state
