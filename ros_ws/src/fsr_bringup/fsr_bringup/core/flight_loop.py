@@ -11,7 +11,10 @@ Per step ``k`` (``t_k = k T``, stamps in integer ns, ``t_k = stamp * 1e-9`` as t
 2. the controller's tick (:func:`fsr_control.core.controller.controller_tick`) for the state stamped ``t_k``;
 3. the estimator (:func:`fsr_estimation.core.observer_step.estimate_from_state`) on the state and the
    commanded wrench of ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd``;
-4. the command held over ``[t_k, t_k+1]``, the plant stepped and the state ``t_k+1`` published by the
+4. the true state ``t_k`` checked against the reference answered for it (:func:`fsr_sim.core.control_loss.
+   control_loss`: attitude error against ``R_c`` or position error beyond the scenario's ``divergence`` bounds),
+   as the simulator node checks it: a flight that lost control ends there;
+5. the command held over ``[t_k, t_k+1]``, the plant stepped and the state ``t_k+1`` published by the
    simulator node's own step (:func:`fsr_sim.core.lockstep.advance`); a state that diverges ends the flight,
    as the simulator does.
 
@@ -23,15 +26,25 @@ applied. :func:`fly_steps` runs steps ``first..last`` and returns, so the Python
 from __future__ import annotations
 
 from fsr_control.core.allocation import TILTING, WRENCH
-from fsr_control.core.controller import FORCE, ROTOR_SPEEDS, TORQUE, ControllerParams, ControllerState, controller_tick
+from fsr_control.core.controller import (
+    COMMANDED_QUATERNION,
+    FORCE,
+    REFERENCE_POSITION,
+    ROTOR_SPEEDS,
+    TORQUE,
+    ControllerParams,
+    ControllerState,
+    controller_tick,
+)
 from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
+from fsr_sim.core.control_loss import IN_CONTROL, control_loss
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import actuator_row, advance, publish
 from fsr_sim.core.odometry import read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
 
-GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED = 0, 1, 2, 3  # outcomes of fly_steps
+GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly_steps
 
 
 @jit_inline
@@ -71,13 +84,16 @@ def closed_loop_tick(controller: ControllerParams, controller_state: ControllerS
 def fly_steps(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
               controller_state: ControllerState, with_estimator: bool, observer: ObserverParams,
               observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
-              states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
+              control_bounds: tuple, states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
     """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (the row of
     :mod:`fsr_sim.core.odometry`), ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``),
     ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published.
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
-    ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""
+    ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference);
+    ``LOST_CONTROL`` with the :func:`fsr_sim.core.control_loss.control_loss` code of state ``k`` (``k < step_count``:
+    the simulator node does not check the final state either) against its answer, within ``control_bounds``
+    (:meth:`fsr_sim.model.control_loss.ControlBounds.pack`): row ``k`` is complete."""
     mode = controller.allocation.mode
     if first == 0:
         publish(plant, plant_state, published[0])
@@ -93,6 +109,10 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
             return CONTROLLER_FAILED, k, status
         if k == step_count:
             return FINISHED, k, 0
+        lost = control_loss(control_bounds, plant_state.x, row[REFERENCE_POSITION:REFERENCE_POSITION + 3],
+                            row[COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4])
+        if lost != IN_CONTROL:
+            return LOST_CONTROL, k, lost
         hold_command(plant, plant_state, mode, row, force, torque)
         code = advance(plant, plant_state, published[k + 1])
         actuator_row(plant_state, actuators[k + 1])

@@ -20,6 +20,7 @@ import numpy as np
 from fsr_bringup.core import flight_loop
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
+from fsr_control.core.controller import COMMANDED_QUATERNION, REFERENCE_POSITION
 from fsr_control.core.flatness import ATTITUDE_ERRORS
 from fsr_control.flight_controller import FlightController
 from fsr_control.planning.trajectory import mid_path, mid_path_note
@@ -35,6 +36,7 @@ from fsr_sim.core.odometry import (
     TRUTH_FORCE,
     TRUTH_TORQUE,
 )
+from fsr_sim.model.control_loss import loss_reason
 from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import process_age
@@ -245,6 +247,11 @@ class FlightSetup:
         return self.simulation.imu.enabled
 
     @property
+    def control_bounds(self) -> tuple[float, float]:
+        """The scenario's ``divergence`` bounds as the compiled check takes them."""
+        return self.simulation.divergence.pack()
+
+    @property
     def odometry_measured(self) -> bool:
         """``odom`` is a measurement (a sensor stage on), not the true state (the graph then publishes
         ``odom_truth``)."""
@@ -256,14 +263,21 @@ class FlightSetup:
         return flight_loop.fly_steps(
             self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
             self.estimation.enabled, self.observer.params, self.observer.state, first, last, self.steps,
-            self.period_ns, a.states, a.published, a.actuators, a.control, a.estimates)
+            self.period_ns, self.control_bounds, a.states, a.published, a.actuators, a.control, a.estimates)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""
         return k + 1 if outcome != flight_loop.CONTROLLER_FAILED else k
 
     def end(self, outcome: int, k: int, detail: int) -> tuple[str, str] | None:
-        """``(end_reason, reason)`` of a divergence or a failed law (``fly``'s outcome), None otherwise."""
+        """``(end_reason, reason)`` of a divergence, a loss of control or a failed law (``fly``'s outcome), None
+        otherwise."""
+        if outcome == flight_loop.LOST_CONTROL:
+            a = self.arrays
+            return DIVERGED, loss_reason(detail, self.simulation.divergence, a.states[k],
+                                         a.control[k, REFERENCE_POSITION:REFERENCE_POSITION + 3],
+                                         a.control[k, COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4],
+                                         k * self.period_ns * 1e-9)
         if outcome == flight_loop.DIVERGED:
             return DIVERGED, divergence_reason(detail, self.plant.params, self.plant.core_state)
         if outcome == flight_loop.CONTROLLER_FAILED:

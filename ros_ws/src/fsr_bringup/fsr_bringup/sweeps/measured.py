@@ -59,6 +59,7 @@ class LoopFlight:
     measures: core.MeasureParams
     actuator_params: Any  # the plant without actuator dynamics (the rotors' wrench of a command)
     actuator_state: Any  # its scratch state
+    control_bounds: tuple  # the scenario's divergence bounds (fsr_sim.model.control_loss.ControlBounds.pack)
 
     def replace(self, **changes: Any) -> LoopFlight:
         return replace(self, **changes)
@@ -95,7 +96,8 @@ def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSet
         ground=surfaces._replace(ceiling_effect=False), ceiling=surfaces._replace(ground_effect=False))
     return LoopFlight(setup.plant.params, setup.plant.core_state, setup.controller.params, setup.controller.state,
                       bool(estimation.enabled), setup.observer.params, setup.observer.state, setup.steps,
-                      setup.period_ns, sim.vehicle.rotor_count, measures, actuator.params, actuator.core_state)
+                      setup.period_ns, sim.vehicle.rotor_count, measures, actuator.params, actuator.core_state,
+                      setup.control_bounds)
 
 
 def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
@@ -108,7 +110,8 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
     outcome, _, _ = core.fly_measured(
         flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
         flight.with_estimator, flight.observer_params, flight.observer_state, flight.steps, flight.period_ns,
-        flight.measures, flight.actuator_params, flight.actuator_state, scratch.states, scratch.published,
+        flight.measures, flight.actuator_params, flight.actuator_state, flight.control_bounds, scratch.states,
+        scratch.published,
         scratch.row, scratch.estimate, scratch.rotor_rows, scratch.acc)
     if outcome != core.FINISHED or scratch.acc[core.TRUTH_UNDEFINED] > 0:
         return None
