@@ -30,6 +30,7 @@ def test_a_vehicle_whose_thrust_turns_against_its_command_ends_diverged_at_the_f
     angle = np.degrees(np.arccos(np.clip(thrust_axes, -1.0, 1.0)))
     assert angle[-1] > DEFAULT_ATTITUDE_ERROR_DEG and np.all(angle[:-1] <= DEFAULT_ATTITUDE_ERROR_DEG)
     assert f"thrust axis {angle[-1]:.1f} deg from the commanded one" in run.reason
+    assert run.metrics()["diagnosis"]["why"] == run.reason  # and the summary says why (see test_diagnosis)
 
 
 def test_a_heading_that_gives_way_is_not_a_loss_of_control():

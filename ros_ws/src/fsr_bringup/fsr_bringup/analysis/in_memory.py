@@ -48,8 +48,8 @@ def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun
     flight.plan = {"kind": run.plan_kind, "end_s": run.plan_end_time} if run.plan_end_time is not None else None
     flight.sim_status = [SimStatus(run.end_reason, run.reason, float(t[-1]) if len(t) else 0.0, max(len(t) - 1, 0))]
     if run.scenario is not None:  # the controller's side as a recording's metadata gives it
-        flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan = controller_side(
-            run.scenario, flight.notes)
+        (flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan,
+         flight.controller) = controller_side(run.scenario, flight.notes)
     true = Odometry(stamp_ns, t, run.position, run.state[:, 6:10], rotation, run.velocity, run.angular_velocity)
     flight.odom = true
     if run.odometry_measured is not None:  # odom is the measurement: the true state is odom_truth (its numbers,

@@ -21,7 +21,7 @@ import numpy as np
 
 from fsr_bringup.recording.metadata import scenario_from_text
 from fsr_control.compensation import CompensationConfig
-from fsr_control.config.controller_config import controller_config
+from fsr_control.config.controller_config import ControllerConfig, controller_config
 from fsr_estimation.config.estimator_config import EstimatorConfig, estimator_config
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError
@@ -136,6 +136,7 @@ class RecordedFlight:
     compensation_mode: str | None = None  # the scenario's controller.compensation (None without a scenario)
     plan_adjustments: list[dict] | None = None  # the legs the planner shaped or stretched (None: no scenario)
     plan: dict | None = None  # the scenario's plan: {"kind": trajectory.kind, "end_s": when it comes to rest}
+    controller: ControllerConfig | None = None  # the scenario's validated controller section (None: unknown)
     odom: Odometry | None = None
     odom_truth: Odometry | None = None  # the true state, recorded only when odom is measured (sensors.odometry)
     reference: Reference | None = None
@@ -204,8 +205,8 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     scenario = recorded_scenario(recording, namespace, notes)
     config, scenario_name, estimator = _scenario(scenario, recording.path.stem, notes)
     flight = RecordedFlight(recording, namespace, scenario_name, config, estimator, notes=notes)
-    flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan = controller_side(scenario,
-                                                                                                         notes)
+    (flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan,
+     flight.controller) = controller_side(scenario, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
@@ -270,20 +271,21 @@ def _scenario(scenario: Scenario | None, fallback: str,
 
 
 def controller_side(scenario: Scenario | None, notes: list[str]
-                    ) -> tuple[str | None, CompensationConfig | None, list[dict] | None, dict | None]:
+                    ) -> tuple[str | None, CompensationConfig | None, list[dict] | None, dict | None,
+                               ControllerConfig | None]:
     """(``controller.compensation`` of the recorded scenario, its validated settings or None, the legs its
     planner shaped or stretched: :attr:`fsr_control.config.controller_config.ControllerConfig.plan_adjustments`
-    as plain values, and its plan's kind and end time)."""
+    as plain values, its plan's kind and end time, and the validated controller section)."""
     if scenario is None:
-        return None, None, None, None
+        return None, None, None, None, None
     try:
         config = controller_config(scenario)
     except ConfigError as error:
         notes.append(f"controller section of the scenario cannot be used: {error}")
-        return None, None, None, None
+        return None, None, None, None, None
     adjustments = [item.as_dict() | {"text": item.text()} for item in config.plan_adjustments]
     plan = {"kind": config.trajectory_kind, "end_s": config.plan_end_time}
-    return ("estimate" if config.compensation else "none"), config.compensation, adjustments, plan
+    return ("estimate" if config.compensation else "none"), config.compensation, adjustments, plan, config
 
 
 def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from fsr_bringup.analysis.diagnosis import diagnosis
 from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import RecordedFlight, load_flight, zero_order_hold
 from fsr_control.planning.trajectory import mid_path, mid_path_note
@@ -459,6 +460,7 @@ def flight_metrics(
         metrics[WRENCH_SHORTFALL.name] = wrench_shortfall(flight)
         if metrics[WRENCH_SHORTFALL.name] is None:
             notes.append("wrench shortfall skipped: wrench_shortfall missing")
+    metrics["diagnosis"] = diagnosis(flight, metrics)
     if errors is not None and not errors.attitude_commanded:
         notes.append("no attitude_cmd: attitude error measured against the planner's attitude R_d")
     metrics["external_wrench"] = wrench_comparison(flight, settle_time, settling, after)

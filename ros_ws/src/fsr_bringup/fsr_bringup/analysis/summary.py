@@ -168,8 +168,34 @@ def _notes(notes: list[str]) -> list[str]:
     return ["", "Notes:", *(f"- {note}" for note in notes)] if notes else []
 
 
+def diagnosis_lines(found: dict[str, Any] | None) -> list[str]:
+    """The *Diagnosis* section of a flight that diverged or saturated much (empty otherwise)."""
+    if not found:
+        return []
+    lines = ["", f"**Diagnosis** ({found['why']}):", ""]
+    first = found.get("first_saturation")
+    if first is None:
+        lines.append("- no rotor reached a limit")
+    elif first.get("axis") is not None:
+        lines.append(f"- first saturated step: {first['step']} (t = {_num(first['time_s'])} s), the "
+                     f"{first['axis']} demand gave way by {_num(first['shortfall'])}")
+    else:
+        lines.append(f"- first rotor command at a limit: t = {_num(first['time_s'])} s (rotor {first.get('rotor')})")
+    if found.get("rotor_limit_share") is not None:
+        lines.append(f"- steps with a rotor at a speed limit: {found['rotor_limit_share']:.1%}"
+                     + (f"; tilts at their limit: {found['tilt_limit_share']:.1%}"
+                        if found.get("tilt_limit_share") is not None else ""))
+    causes = found.get("likely_causes") or []
+    for item in causes:
+        lines.append(f"- likely cause: {item['cause']} - change `{item['key']}`")
+    if not causes:
+        lines.append("- likely cause: none fsr can name from the scenario (see the saturation and gave-way rows)")
+    return lines
+
+
 def markdown_summary(metrics: dict[str, Any]) -> str:
-    """A title line (scenario, recording), a two-column Markdown table (quantity, value) and the notes."""
+    """A title line (scenario, recording), a two-column Markdown table (quantity, value), the diagnosis of a
+    flight that diverged or saturated much, and the notes."""
     where = f" ({metrics['namespace']})" if metrics.get("namespace") not in (None, "/") else ""
     lines = [
         f"### Flight `{metrics.get('scenario')}`{where}",
@@ -180,7 +206,7 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
         "|---|---|",
         *(f"| {name} | {value} |" for name, value in summary_rows(metrics)),
     ]
-    return "\n".join(lines + _notes(metrics.get("notes") or [])) + "\n"
+    return "\n".join(lines + diagnosis_lines(metrics.get("diagnosis")) + _notes(metrics.get("notes") or [])) + "\n"
 
 
 def comparison_summary(labels: list[str], runs: list[dict[str, Any]], notes: list[str] | None = None) -> str:
