@@ -192,3 +192,12 @@ def test_a_wrench_actuated_flight_has_no_rotor_saturation_to_report(tmp_path: Pa
     assert "no rotor saturation: wrench actuation applies the commanded wrench as it is" in notes
     assert "saturation skipped" not in notes and "wrench shortfall skipped" not in notes
     assert result.metrics["saturation"] is None and "gave way" not in result.summary
+
+
+def test_run_labels_leave_out_the_time_stamp_of_a_run_name() -> None:
+    from fsr_bringup.analysis.run import run_labels
+
+    assert run_labels(["ex4_geometric_20261205-152426"]) == ["ex4_geometric"]
+    assert run_labels(["a_20261205-152426", "b_20261205-152430"]) == ["a", "b"]
+    same = ["ex4_geometric_20261205-152426", "ex4_geometric_20261205-152430"]
+    assert run_labels(same) == same  # the stamp is what tells them apart

@@ -50,7 +50,7 @@ from fsr_bringup.analysis.figure_rules import disturbance_windows, limits_near, 
 from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_bringup.visualization.frames import NED_TO_ENU
-from fsr_sim.contract import ODOM, REFERENCE, WRENCH_CMD
+from fsr_sim.contract import ODOM, REFERENCE, ROTOR_STATE, WRENCH_CMD
 from fsr_sim.model.so3 import euler_zyx_from_rotation
 
 ONE_COLUMN_IN = 3.5  # in, one journal column
@@ -229,14 +229,14 @@ def pose_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     """Position (world NED) [m] and ZYX Euler attitude [deg] of each run (solid), its commanded attitude
     ``R_c`` (``attitude_cmd``: what the attitude error of the summary is measured against; dashed, the run's
     colour) and the planner's reference ``p_d``, ``R_d`` (black dashed)."""
-    runs_with = [r for r in runs if r.flight.odom is not None]
+    runs_with = [r for r in runs if r.flight.true_odom is not None]
     if not runs_with:
         return Drawn(None, "no odom")
     panels = panel_grid(3, 2, _width("two", options))
     notes = []
     yaw_start = None
     for index, run in enumerate(runs_with):
-        odom = run.flight.odom
+        odom = run.flight.true_odom
         rpy = _degrees_unwrapped(euler_zyx_from_rotation(odom.rotation), yaw_start)
         yaw_start = rpy[0, 2] if yaw_start is None else yaw_start
         style = {"color": _colour(index), "label": f"{run.label}: $p$, $R$"}
@@ -334,33 +334,60 @@ def _limit_lines(panel: Panel, limits: Iterable[float], label: str) -> None:
             panel.hline(limit, label=label, **LIMIT)
 
 
+ROTORS_PER_PANEL = 2  # beyond PANEL_ROTORS rotors, a panel per pair: eight overlaid traces cannot be told apart
+PANEL_ROTORS = 4
+MEASURED = {"ls": (0, (2.0, 1.2)), "lw": 0.9}  # in the rotor's colour: what the rotor did (rotor_state)
+
+
+def rotor_groups(count: int) -> list[list[int]]:
+    """The rotors (0-based) drawn in each panel: all of them up to :data:`PANEL_ROTORS`, else pairs."""
+    if count <= PANEL_ROTORS:
+        return [list(range(count))]
+    return [list(range(i, min(i + ROTORS_PER_PANEL, count))) for i in range(0, count, ROTORS_PER_PANEL)]
+
+
 def rotors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
-    """Commanded rotor speeds [rad/s] (and tilt angles [deg]) per run (one row each), a colour per rotor, on
-    axes scaled to the data; a limit is drawn (grey) where the data come near it."""
+    """Commanded rotor speeds [rad/s] (and tilt angles [deg]) per run, a colour per rotor, and - where the rotors
+    lag their commands - what they did (``rotor_state``, dashed in the same colour), on axes scaled to the
+    data; more than four rotors get a panel per pair (rows), so that each trace can be followed; a limit is
+    drawn (grey) where the data come near it."""
     runs_with = [r for r in runs if r.flight.rotor_cmd is not None]
     if not runs_with:
         return Drawn(None, "no rotor_cmd (wrench actuation has no rotors, or not recorded)")
     tilting = any(r.flight.rotor_cmd.tilts is not None for r in runs_with)
-    panels = panel_grid(len(runs_with), 2 if tilting else 1, _width("two" if tilting else "one", options),
-                        row_height=1.5)
-    for row, run in enumerate(runs_with):
-        cmd = run.flight.rotor_cmd
+    groups = [rotor_groups(r.flight.rotor_cmd.speeds.shape[1]) for r in runs_with]
+    rows = sum(len(g) for g in groups)
+    panels = panel_grid(rows, 2 if tilting else 1, _width("two" if tilting else "one", options),
+                        row_height=1.5 if rows == len(runs_with) else 1.15)
+    row = 0
+    for run, rotor_sets in zip(runs_with, groups, strict=True):
+        cmd, actual = run.flight.rotor_cmd, run.flight.rotor_state
         vehicle = run.flight.config.vehicle if run.flight.config is not None else None
         prefix = f"{run.label}: " if len(runs_with) > 1 else ""
-        for i in range(cmd.speeds.shape[1]):
-            colour = ROTOR_COLOURS[i % len(ROTOR_COLOURS)]
-            panels[row, 0].plot(cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
-            if tilting and cmd.tilts is not None:
-                panels[row, 1].plot(cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
-        panels[row, 0].label(prefix + r"$\omega_{c,i}$", "rotor rad/s", "rotor axis")
-        if vehicle is not None:
-            _limit_lines(panels[row, 0], (vehicle.rotor_speed_min, vehicle.rotor_speed_max),
-                         r"speed limits $\omega_{\min}$, $\omega_{\max}$")
-        if tilting:
-            panels[row, 1].label(prefix + r"$\alpha_{c,i}$", "deg", "about the arm")
-            if vehicle is not None and vehicle.tilt_angle_max < math.pi:
-                limit = math.degrees(vehicle.tilt_angle_max)
-                _limit_lines(panels[row, 1], (-limit, limit), r"tilt limits $\pm\alpha_{\max}$")
+        for rotors in rotor_sets:
+            which = "rotor axis" if len(rotor_sets) == 1 else f"rotors {', '.join(str(i + 1) for i in rotors)}"
+            for i in rotors:
+                colour = ROTOR_COLOURS[i % len(ROTOR_COLOURS)]
+                panels[row, 0].plot(cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
+                if actual is not None and i < actual.speeds.shape[1]:
+                    panels[row, 0].plot(actual.t, actual.speeds[:, i], color=colour,
+                                        label=f"{ROTOR_STATE.name} (measured)", **MEASURED)
+                if tilting and cmd.tilts is not None:
+                    panels[row, 1].plot(cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
+                    if actual is not None and actual.tilts is not None and i < actual.tilts.shape[1]:
+                        panels[row, 1].plot(actual.t, np.degrees(actual.tilts[:, i]), color=colour,
+                                            label=f"{ROTOR_STATE.name} (measured)", **MEASURED)
+            panels[row, 0].label(prefix + r"$\omega_{c,i}$", "rotor rad/s", which)
+            if vehicle is not None:
+                _limit_lines(panels[row, 0], (vehicle.rotor_speed_min, vehicle.rotor_speed_max),
+                             r"speed limits $\omega_{\min}$, $\omega_{\max}$")
+            if tilting:
+                panels[row, 1].label(prefix + r"$\alpha_{c,i}$", "deg",
+                                     "about the arm" if len(rotor_sets) == 1 else which)
+                if vehicle is not None and vehicle.tilt_angle_max < math.pi:
+                    limit = math.degrees(vehicle.tilt_angle_max)
+                    _limit_lines(panels[row, 1], (-limit, limit), r"tilt limits $\pm\alpha_{\max}$")
+            row += 1
     finish_panels(panels, runs_with, "rotor commands", options, legend_cols=5)
     return Drawn(panels.fig)
 
@@ -444,10 +471,10 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
                     panels[row, 0].plot(t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
                                         label=f"rotor {i + 1}")
             panels[row, 0].label(rf"{surface} $T/T_{{\mathrm{{OGE}}}}$", "-", "per rotor")
-        if flight.odom is not None:
+        if flight.true_odom is not None:
             twin = panels.twin(panels[0, 0])
-            height = flight.config.environment.ground.height - flight.odom.position[:, 2]
-            twin.plot(*envelope(flight.odom.t, height), **ASIDE)
+            height = flight.config.environment.ground.height - flight.true_odom.position[:, 2]
+            twin.plot(*envelope(flight.true_odom.t, height), **ASIDE)
             twin.set_ylabel("height $h$ [m]\nabove ground", color="0.35")
             panels[0, 0].ax.plot([], [], label="height above ground $h$", **ASIDE)  # its legend entry
         finish_panels(panels, [run], "thrust ratio near surfaces", options, legend_cols=5, zoom=False)
@@ -460,7 +487,7 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
 def _moving_reference(runs: list[Run]) -> tuple[list[Run], object | None, str]:
     """(runs with odom and reference, the first reference, why nothing is drawn: "" when its position moves by at
     least the metre floor)."""
-    runs_with = [r for r in runs if r.flight.odom is not None and r.flight.reference is not None]
+    runs_with = [r for r in runs if r.flight.true_odom is not None and r.flight.reference is not None]
     if not runs_with:
         return [], None, "odom or reference missing"
     reference = runs_with[0].flight.reference
@@ -488,7 +515,7 @@ def path_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     space = fig.add_axes((0.0, 0.0, 0.5, 1.0), projection="3d", proj_type="ortho", label="path 3d")
     top = fig.add_axes((0.6, 0.15, 0.38, 0.7), label="path top view")
     paths = [(f"{REFERENCE.name} $p_d$", reference.position, TRUTH)]
-    paths += [(f"{run.label}: $p$", run.flight.odom.position, {"color": _colour(index), "lw": 1.0})
+    paths += [(f"{run.label}: $p$", run.flight.true_odom.position, {"color": _colour(index), "lw": 1.0})
               for index, run in enumerate(runs_with)]
     for label, position, style in paths:
         east, north, up = (_decimated(position) @ NED_TO_ENU.T).T
@@ -540,7 +567,7 @@ def speed_figure(runs: list[Run], options: FigureOptions) -> Drawn:
         return Drawn(None, reason)
     panels = panel_grid(2, 1, _width("one", options), row_height=1.2)
     for index, run in enumerate(runs_with):
-        odom = run.flight.odom
+        odom = run.flight.true_odom
         acceleration = np.gradient(odom.velocity_world, odom.t, axis=0) if len(odom.t) > 1 else odom.velocity_world
         style = {"color": _colour(index), "label": f"{run.label} ({ODOM.name})"}
         panels[0, 0].plot(odom.t, np.linalg.norm(odom.velocity_world, axis=1), **style)

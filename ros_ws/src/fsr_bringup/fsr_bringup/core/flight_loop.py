@@ -114,6 +114,8 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
         if lost != IN_CONTROL:
             return LOST_CONTROL, k, lost
         hold_command(plant, plant_state, mode, row, force, torque)
+        if k == 0:  # rotor_state of t_0: the rotors spin at the first command from the start, as the node publishes
+            actuator_row(plant_state, actuators[0])
         code = advance(plant, plant_state, published[k + 1])
         actuator_row(plant_state, actuators[k + 1])
         if code != RUNNING:

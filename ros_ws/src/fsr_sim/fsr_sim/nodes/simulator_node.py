@@ -235,6 +235,9 @@ class SimulatorNode(Node):
         if self._take_commands(expected, WAIT_SLICE):
             self.have_command = True
             self.phase = STEPPING
+            if self.rotor_state_pub is not None:  # t_0's: the rotors spin at the first command from the start
+                state = self.plant.core_state
+                self.rotor_state_pub.publish(self.messages.rotor_state(expected, state.speeds, state.tilts))
             self.wall_start = time.monotonic()
             self._refresh_controller_name()
             self.get_logger().info(f"controller {self.controller_name} answered the initial state: stepping")
@@ -479,7 +482,7 @@ class SimulatorNode(Node):
         if self.truth_pub is not None:
             self.truth_pub.publish(messages.truth)
         self.wrench_pub.publish(messages.wrench)
-        if self.rotor_state_pub is not None:
+        if self.rotor_state_pub is not None and self.phase != HANDSHAKE:  # t_0's: once the first command came
             state = plant.core_state
             self.rotor_state_pub.publish(messages.rotor_state(plant.stamp_ns, state.speeds, state.tilts))
         if self.imu_pub is not None:
