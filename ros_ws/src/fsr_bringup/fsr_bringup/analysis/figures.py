@@ -32,8 +32,11 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+import signal
+import sys
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import matplotlib
@@ -597,7 +600,7 @@ FIGURES: dict[str, Callable[[list[Run], FigureOptions], Drawn]] = {
 def figure_metadata(name: str, runs: list[Run], fmt: str) -> dict[str, str]:
     """File metadata naming the figure, the scenario(s) and the recordings (keys as each backend wants)."""
     title = f"fsr {name}: " + ", ".join(f"{r.label} ({r.flight.scenario_name})" for r in runs)
-    description = "recordings: " + ", ".join(str(r.flight.recording.path) for r in runs)
+    description = "recordings: " + ", ".join(str(getattr(r.flight.recording, "path", None)) for r in runs)
     if fmt == "pdf":
         return {"Title": title, "Subject": description, "Creator": "fsr-analyze"}
     if fmt == "svg":
@@ -626,26 +629,98 @@ def draw_and_save(name: str, runs: list[Run], out_dir: Path, options: FigureOpti
                            lambda fmt: figure_metadata(name, runs, fmt)), notes
 
 
-_JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, inherited by forked workers
+_JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, in a worker: set at its start
+WORKER_MODULES = ["fsr_bringup.analysis.figures"]  # imported once by the fork server, inherited by every worker
+
+
+@dataclass(frozen=True)
+class RecordingName:
+    """What a figure needs of a recording (its path, in the files' metadata): a worker gets this, not the
+    recording's messages."""
+
+    path: Path | None
+    truncated: bool = False
+
+
+def _light(run: Run) -> Run:
+    """``run`` with its flight's recording reduced to its name (what is sent to a worker process)."""
+    recording = run.flight.recording
+    name = RecordingName(getattr(recording, "path", None), bool(getattr(recording, "truncated", False)))
+    return replace(run, flight=replace(run.flight, recording=name))
+
+
+def _start_worker(job: tuple[list[Run], Path, FigureOptions]) -> None:
+    global _JOB
+    _JOB = job
 
 
 def _draw_in_worker(name: str) -> tuple[list[Path], list[str]]:
     return draw_and_save(name, *_JOB)
 
 
+@contextmanager
+def _main_left_out() -> Iterator[None]:
+    """While the fork server and the workers start: the caller's ``__main__`` is not run again in them (a started -
+    not forked - worker imports the main script or module first, which would fly a user's script, unguarded by
+    ``if __name__ == "__main__"``, once more per worker; they need nothing of it), and they ignore SIGINT from
+    their start (an ignored signal stays ignored across exec: a Ctrl-C at the terminal, which reaches the whole
+    process group, leaves no traceback of theirs; the pool ends them)."""
+    main = sys.modules.get("__main__")
+    saved = {name: main.__dict__[name] for name in ("__file__", "__spec__") if name in main.__dict__} if main else {}
+    if main is not None:
+        main.__dict__.pop("__file__", None)
+        main.__spec__ = None
+    try:
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: signals are the main thread's business
+        handler = None
+    try:
+        yield
+    finally:
+        if handler is not None:
+            signal.signal(signal.SIGINT, handler)
+        if main is not None:
+            main.__dict__.pop("__spec__", None)
+            main.__dict__.update(saved)
+
+
+def prepare_workers() -> None:
+    """Start the fork server now (it imports the figures' modules, a few seconds) so that it is ready when the
+    figures are drawn: ``fsr-fly`` calls this before the flight, ``fsr-analyze`` before reading the recordings."""
+    if _worker_context() is not None and "forkserver" in multiprocessing.get_all_start_methods():
+        from multiprocessing import forkserver
+
+        with _main_left_out():
+            forkserver.ensure_running()
+
+
+def _worker_context() -> multiprocessing.context.BaseContext | None:
+    """Workers started by a fork server (it imports the figures' modules once; its children fork from it, a
+    single-threaded process: no fork of this one, whatever threads it runs), else spawned; None where neither
+    exists."""
+    methods = multiprocessing.get_all_start_methods()
+    if "forkserver" in methods:
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(WORKER_MODULES)
+        return context
+    return multiprocessing.get_context("spawn") if "spawn" in methods else None
+
+
 class FigureJob:
-    """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by forked
-    worker processes (one figure each, at most one per core) while the caller goes on (the analysis computes
-    its metrics meanwhile); otherwise here, one after the other, when :meth:`result` is called."""
+    """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by worker
+    processes (one figure each, at most one per core; started by a fork server, :func:`_worker_context`: this
+    process, which may run threads, is never forked) while the caller goes on (the analysis computes its metrics
+    meanwhile); otherwise here, one after the other, when :meth:`result` is called."""
 
     def __init__(self, runs: list[Run], out_dir: Path, options: FigureOptions) -> None:
-        global _JOB
         self.job = (runs, out_dir, options)
         self.pool = self.pending = None
         workers = min(len(FIGURES), len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
-        if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
-            _JOB = self.job
-            self.pool = multiprocessing.get_context("fork").Pool(workers)
+        context = _worker_context() if workers > 1 else None
+        if context is not None:
+            job = ([_light(run) for run in runs], out_dir, options)
+            with _main_left_out():
+                self.pool = context.Pool(workers, initializer=_start_worker, initargs=(job,))
             self.pending = self.pool.map_async(_draw_in_worker, list(FIGURES), chunksize=1)
 
     def result(self) -> tuple[list[Path], list[str]]:
