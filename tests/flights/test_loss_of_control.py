@@ -29,7 +29,7 @@ def test_a_vehicle_whose_thrust_turns_against_its_command_ends_diverged_at_the_f
     thrust_axes = np.einsum("ki,ki->k", run.rotation[:, :, 2], run.rotation_commanded[:, :, 2])
     angle = np.degrees(np.arccos(np.clip(thrust_axes, -1.0, 1.0)))
     assert angle[-1] > DEFAULT_ATTITUDE_ERROR_DEG and np.all(angle[:-1] <= DEFAULT_ATTITUDE_ERROR_DEG)
-    assert f"thrust axis {angle[-1]:.1f} deg from the commanded one" in run.reason
+    assert f"thrust axis {angle[-1]:.2f} deg from the commanded one" in run.reason
     assert run.metrics()["diagnosis"]["why"] == run.reason  # and the summary says why (see test_diagnosis)
 
 

@@ -44,8 +44,8 @@ def loss_reason(code: int, bounds: ControlBounds, state_vector: np.ndarray, posi
     if code == core.ATTITUDE_LOST:
         c = [float(v) for v in quaternion_c]
         cosine = max(-1.0, min(1.0, core.thrust_axes_cosine(*(float(v) for v in x[6:10]), *c)))
-        return (f"lost control at t = {time_s:.4f} s: thrust axis {math.degrees(math.acos(cosine)):.1f} deg from the "
+        return (f"lost control at t = {time_s:.4f} s: thrust axis {math.degrees(math.acos(cosine)):.2f} deg from the "
                 f"commanded one beyond {bounds.attitude_error_deg:g} deg ({SECTION}.attitude_error_deg)")
     error = float(np.linalg.norm(x[0:3] - np.asarray(position_d, float)))
-    return (f"lost control at t = {time_s:.4f} s: position error {error:.3g} m from the reference beyond "
+    return (f"lost control at t = {time_s:.4f} s: position error {error:.4g} m from the reference beyond "
             f"{bounds.position_error_m:g} m ({SECTION}.position_error_m)")
