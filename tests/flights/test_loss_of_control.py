@@ -44,6 +44,16 @@ def test_a_heading_that_gives_way_is_not_a_loss_of_control():
     assert run.metrics()["tracking"]["attitude_error_deg"]["peak"] > DEFAULT_ATTITUDE_ERROR_DEG
 
 
+def test_a_vehicle_landed_on_a_goal_below_the_ground_has_not_lost_control():
+    # held by the ground, the law asks to go 5 cm lower: its commanded thrust points down, the vehicle sits still
+    run = simulate("ex4_geometric", set={"actuation": "rotors", "initial_state.position": [0.0, 0.0, -0.4],
+                                         "environment.ground": {"enabled": True, "height": 0.0},
+                                         "trajectory.waypoints": [{"position": [0.0, 0.0, 0.05], "duration": 2.0}]},
+                   duration=3.0)
+    assert run.end_reason == "finished", run.reason
+    assert run.metrics()["tracking"]["attitude_error_deg"]["final"] > DEFAULT_ATTITUDE_ERROR_DEG
+
+
 def test_a_position_error_beyond_the_scenario_bound_ends_the_flight():
     push = {"disturbances": [{"kind": "step", "start": 0.5, "end": 3.0, "force": [3, 0, 0]}]}  # 0.24 m off at most
     run = simulate("ex4_geometric", set={**push, "divergence.position_error_m": 0.05}, duration=3.0)

@@ -59,7 +59,7 @@ from fsr_control.core.controller import (
 )
 from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState
-from fsr_sim.core.control_loss import IN_CONTROL, control_loss
+from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import advance, publish
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
@@ -400,7 +400,7 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         if k == step_count:
             return FINISHED, k, 0
         lost = control_loss(control_bounds, plant_state.x, row[REFERENCE_POSITION:REFERENCE_POSITION + 3],
-                            row[COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4])
+                            row[COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4], held_by_surface(plant_state))
         if lost != IN_CONTROL:
             return LOST_CONTROL, k, lost
         hold_command(plant, plant_state, mode, row, force, torque)

@@ -73,7 +73,7 @@ from fsr_sim.contract import (
     SimStatus,
 )
 from fsr_sim.core import lockstep
-from fsr_sim.core.control_loss import IN_CONTROL, control_loss
+from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.odometry import PUBLISHED_SIZE
 from fsr_sim.core.plant import RUNNING as PLANT_RUNNING
 from fsr_sim.model.control_loss import loss_reason
@@ -361,7 +361,8 @@ class SimulatorNode(Node):
         if None in self.answer_ns or (expected_ns is not None and self.answer_ns != [expected_ns, expected_ns]):
             return False
         plant = self.plant
-        code = control_loss(self.control_bounds, plant.core_state.x, self.position_d, self.quaternion_c)
+        code = control_loss(self.control_bounds, plant.core_state.x, self.position_d, self.quaternion_c,
+                            held_by_surface(plant.core_state))
         if code == IN_CONTROL:
             return False
         reason = loss_reason(code, self.config.divergence, plant.core_state.x, self.position_d, self.quaternion_c,
