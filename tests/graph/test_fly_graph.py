@@ -224,6 +224,27 @@ def test_divergence_ends_the_flight_with_the_reason_and_a_recording(tmp_path):
     assert status["state"] == "diverged" and status["reason"]
 
 
+@pytest.mark.slow
+def test_a_loss_of_control_ends_both_ways_at_the_same_state_with_the_same_reason(tmp_path):
+    """The report's law on rotors under noise turns the vehicle over: the simulator node and the in-process loop
+    end the flight as diverged at the same state (the same compiled check), exit 3, the same recording."""
+    sets = ["--set", "actuation=rotors", "--set", "controller.profile=report", "--set",
+            "sensors.odometry={position_std: 0.0005, attitude_std_deg: 0.05, velocity_std: 0.001, "
+            "angular_velocity_std: 0.003, seed: 1}"]
+    out = {label: tmp_path / f"{label}.mcap" for label in ("graph", "local")}
+    for label, extra in (("graph", []), ("local", ["--in-process"])):
+        run = fly(["ex4_geometric", "--duration", "5", "--out", str(out[label]), "--no-analysis", *sets, *extra])
+        assert run.returncode == 3, run.stdout + run.stderr
+    graph, local = open_recording(out["graph"]), open_recording(out["local"])
+    ended = [final_status(graph), final_status(local)]
+    assert ended[0]["state"] == ended[1]["state"] == "diverged"
+    assert ended[0]["reason"] == ended[1]["reason"] and "lost control" in ended[0]["reason"]
+    assert ended[0]["sim_time"] == ended[1]["sim_time"] < 5.0
+    for topic in ("/odom", "/odom_truth", "/rotor_cmd", "/reference"):
+        assert graph.count(topic) == local.count(topic), topic
+        assert list(graph.raw(topic)) == list(local.raw(topic)), topic
+
+
 def test_two_runs_at_once_do_not_see_each_other(tmp_path):
     runs = {name: (tmp_path / f"{name}.mcap") for name in ("ex4_geometric", "step_disturbance")}
     processes = [start_fly([name, "--quiet", "--duration", "1", "--out", str(out), "--no-analysis"])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -192,3 +193,27 @@ def test_a_wrench_actuated_flight_has_no_rotor_saturation_to_report(tmp_path: Pa
     assert "no rotor saturation: wrench actuation applies the commanded wrench as it is" in notes
     assert "saturation skipped" not in notes and "wrench shortfall skipped" not in notes
     assert result.metrics["saturation"] is None and "gave way" not in result.summary
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one core: the figures are drawn in this process")
+def test_the_figures_are_drawn_in_workers_that_were_not_forked_from_this_process(synthetic_recording: Path,
+                                                                                 tmp_path: Path, monkeypatch) -> None:
+    """Python 3.12+ warns when a process that runs threads forks: the figures' workers come from a fork server."""
+    from fsr_bringup.analysis.figures import Run, make_figures
+
+    def no_fork() -> int:
+        raise AssertionError("the analysis forked this process")
+
+    flight = load_flight(synthetic_recording)
+    monkeypatch.setattr(os, "fork", no_fork)
+    written, _ = make_figures([Run.of(flight, "synthetic")], tmp_path)
+    assert {path.stem for path in written} >= {"pose", "rotors"}
+
+
+def test_run_labels_leave_out_the_time_stamp_of_a_run_name() -> None:
+    from fsr_bringup.analysis.run import run_labels
+
+    assert run_labels(["ex4_geometric_20261205-152426"]) == ["ex4_geometric"]
+    assert run_labels(["a_20261205-152426", "b_20261205-152430"]) == ["a", "b"]
+    same = ["ex4_geometric_20261205-152426", "ex4_geometric_20261205-152430"]
+    assert run_labels(same) == same  # the stamp is what tells them apart

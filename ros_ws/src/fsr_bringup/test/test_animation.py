@@ -192,3 +192,19 @@ def test_an_interrupted_animation_leaves_no_file(synthetic_recording: Path, tmp_
         write_animation(flight, tmp_path, AnimationOptions(format=kind, fps=10.0, size=(320, 240)),
                         interrupt_at_third)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("bounds", [[[-5, 5], [-5, 5], [0, 1]], [[-10, 10], [-1, 1], [0, 2]],
+                                    [[-1, 1], [-1, 1], [0, 4]]])
+def test_the_axis_labels_are_within_the_frame_whatever_the_box(synthetic_recording: Path, bounds) -> None:
+    import dataclasses
+
+    from fsr_bringup.analysis.animation import FlightAnimation
+
+    scene = build_scene(load_flight(synthetic_recording), 10.0, 1.0)
+    animation = FlightAnimation(dataclasses.replace(scene, bounds=np.array(bounds, float)))
+    renderer, frame = animation.canvas.get_renderer(), animation.figure.bbox
+    for axis in (animation.axes.xaxis, animation.axes.yaxis, animation.axes.zaxis):
+        extent = axis.label.get_window_extent(renderer)
+        assert frame.x0 <= extent.x0 and extent.x1 <= frame.x1 and frame.y0 <= extent.y0 and extent.y1 <= frame.y1, (
+            axis.label.get_text(), extent)

@@ -31,6 +31,7 @@ from fsr_bringup.analysis.figures import (
     errors_figure,
     external_wrench_figure,
     pose_figure,
+    rotor_groups,
     rotors_figure,
     wrench_command_figure,
 )
@@ -182,7 +183,7 @@ def test_rotor_axes_follow_the_data_and_limits_only_when_near(step: Run, synthet
     with matplotlib.rc_context(RC):
         for run, expected in ((hover, []), (step, [0.0]), (Run.of(load_flight(synthetic_recording)), [0.0, 1000.0])):
             ax = rotors_figure([run], FigureOptions()).figure.axes[0]
-            speeds = run.flight.rotor_cmd.speeds
+            speeds = run.flight.rotor_cmd.speeds[:, rotor_groups(run.flight.rotor_cmd.speeds.shape[1])[0]]
             low, high = speeds.min(), speeds.max()
             assert _limit_lines(ax) == expected, run.label
             shown = sorted([low, high, *expected])  # the axis spans the data and the limits drawn, no more
@@ -193,6 +194,25 @@ def test_rotor_axes_follow_the_data_and_limits_only_when_near(step: Run, synthet
     assert step.flight.rotor_cmd.speeds.max() < 700.0
     assert limits_near(440.0, 545.0, (0.0, 1000.0)) == []
     assert limits_near(440.0, 990.0, (0.0, 1000.0)) == [1000.0]
+
+
+def test_an_octocopters_rotors_get_a_panel_per_pair_with_what_they_did_beside_the_command() -> None:
+    lagging = _run("octo", "octo_ground_effect", duration=0.2, set={"plant.rotor_time_constant": 0.03})
+    assert rotor_groups(8) == [[0, 1], [2, 3], [4, 5], [6, 7]] and rotor_groups(4) == [[0, 1, 2, 3]]
+    with matplotlib.rc_context(RC):
+        figure = rotors_figure([lagging], FigureOptions()).figure
+    panels = [ax for ax in figure.axes if ax.get_label().startswith(PANEL_LABEL)]
+    assert len(panels) == 4
+    state = lagging.flight.rotor_state.speeds
+    for rotors, ax in zip(rotor_groups(8), panels, strict=True):
+        lines = [line for line in ax.get_lines() if len(line.get_xdata()) == len(state)]
+        commanded = [line for line in lines if line.get_linestyle() == "-"]
+        measured = [line for line in lines if line.get_linestyle() != "-"]
+        assert len(commanded) == len(measured) == 2
+        for i, line in zip(rotors, measured, strict=True):
+            np.testing.assert_array_equal(line.get_ydata(), state[:, i])
+    legend = [text.get_text() for text in figure.legends[0].get_texts()]
+    assert "rotor_state (measured)" in legend
 
 
 def test_disturbance_windows_are_shaded(step: Run, ex3_figures: dict) -> None:

@@ -35,6 +35,17 @@ def test_rotor_state_is_recorded_with_actuator_dynamics_only(tmp_path):
     np.testing.assert_array_equal(plain.actual_rotor_speeds[1:], plain.rotor_speeds[:-1])  # applied at once
 
 
+def test_rotor_state_starts_at_the_first_command_not_at_rest(tmp_path):
+    """The flight starts with the rotors spun up at the first command (docs/model.md): ``rotor_state``'s first
+    message says so (it used to be all zero)."""
+    fly_in_process(load_scenario("ex4_geometric", [*LAG[:2], "duration=0.01"]), tmp_path / "lag.mcap")
+    flight = load_flight(tmp_path / "lag.mcap")
+    vehicle = flight.config.plant_vehicle
+    first = np.clip(flight.rotor_cmd.speeds[0], vehicle.rotor_speed_min, vehicle.rotor_speed_max)
+    np.testing.assert_array_equal(flight.rotor_state.speeds[0], first)
+    assert np.all(flight.rotor_state.speeds[0] > 0.0)  # spinning (near hover), not at rest
+
+
 def test_the_effective_truth_is_made_of_the_actual_rotor_speeds(tmp_path):
     # With a 20 ms lag the commanded wrench is not the one the rotors give: the observer sees the difference
     # as an external wrench, and the effective truth (from rotor_state) says so - from rotor_cmd it would not.

@@ -91,6 +91,9 @@ CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", "CLOCK", SIMULATOR, True, Tru
               notes="simulated time")
 ODOM = Topic("odom", "nav_msgs/msg/Odometry", "STREAM", SIMULATOR, True, True, WORLD_FRAME, BODY_FRAME,
              "pose of `base_link_frd` in `world_ned`; twist in `base_link_frd`")
+ODOM_TRUTH = Topic("odom_truth", "nav_msgs/msg/Odometry", "STREAM", SIMULATOR, True, True, WORLD_FRAME, BODY_FRAME,
+                   "the true state, as `odom` would carry it without a sensor stage; only when `odom` is measured "
+                   "(`sensors.odometry` noise, bias, delay or rate): the tracking errors are taken on it")
 WRENCH_TRUTH = Topic("wrench_truth", "geometry_msgs/msg/WrenchStamped", "STREAM", SIMULATOR, True, True, BODY_FRAME,
                      notes="true external wrench, body frame")
 ROTOR_STATE = Topic("rotor_state", "sensor_msgs/msg/JointState", "STREAM", SIMULATOR, True, True, BODY_FRAME,
@@ -144,8 +147,8 @@ MARKERS = Topic("markers", "visualization_msgs/msg/MarkerArray", "STREAM", RECOR
                       "rotors (colour: speed between its limits), thrust arrows, true and estimated external force, "
                       "planned path, goal, reference, ground and ceiling")
 
-TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, WRENCH_TRUTH, ROTOR_STATE, IMU, SIM_STATUS, SIM_PROGRESS, ROTOR_CMD,
-                             WRENCH_CMD, WRENCH_SHORTFALL, REFERENCE, ATTITUDE_CMD, WRENCH_DESIRED, GOAL,
+TOPICS: tuple[Topic, ...] = (CLOCK, ODOM, ODOM_TRUTH, WRENCH_TRUTH, ROTOR_STATE, IMU, SIM_STATUS, SIM_PROGRESS,
+                             ROTOR_CMD, WRENCH_CMD, WRENCH_SHORTFALL, REFERENCE, ATTITUDE_CMD, WRENCH_DESIRED, GOAL,
                              WRENCH_ESTIMATE, MASS_ESTIMATE, TF, TF_STATIC, MARKERS)
 BY_NAME = {topic.name: topic for topic in TOPICS}
 

@@ -199,6 +199,32 @@ def test_readers_match_rclpy(frame: str) -> None:
         cdr_read.wrench_stamped(b"\x01\x00\x00\x00" + bytes(60))
 
 
+@pytest.mark.parametrize("frame", FRAMES)
+@pytest.mark.parametrize("joints", [["base_link_frd"], ["a", "bc", "def"], []])
+def test_the_reference_and_attitude_cmd_readers_match_rclpy(frame: str, joints: list[str]) -> None:
+    """The reference pose and the commanded attitude (what the simulator checks a loss of control against), read from
+    rclpy's serialisation whatever the joint names' lengths, bit for bit."""
+    from fsr_sim.ros import cdr_read
+
+    for stamp in STAMPS:
+        v = _values(1, 7)
+        msg = MultiDOFJointTrajectory()
+        msg.header.stamp, msg.header.frame_id = _time(stamp), frame
+        msg.joint_names = joints
+        transform = Transform()
+        tr, ro = transform.translation, transform.rotation
+        tr.x, tr.y, tr.z, ro.x, ro.y, ro.z, ro.w = v
+        msg.points = [MultiDOFJointTrajectoryPoint(transforms=[transform])]
+        assert repr(cdr_read.reference_pose(serialize_message(msg))) == repr((stamp, tuple(v)))
+    with pytest.raises(ValueError):
+        cdr_read.reference_pose(serialize_message(MultiDOFJointTrajectory()))
+    attitude = QuaternionStamped()
+    attitude.header.stamp, attitude.header.frame_id = _time(STAMPS[-1]), frame
+    q = attitude.quaternion
+    q.x, q.y, q.z, q.w = _values(2, 4)
+    assert repr(cdr_read.quaternion_stamped(serialize_message(attitude))) == repr((STAMPS[-1], tuple(_values(2, 4))))
+
+
 @pytest.mark.parametrize("names", [["rotor_1", "rotor_2", "rotor_3", "rotor_4"],
                                    [f"rotor_{i + 1}" for i in range(8)] + [f"tilt_{i + 1}" for i in range(8)],
                                    ["rotor_10", "a", "bc"]])

@@ -82,11 +82,14 @@ def test_the_node_graph_measures_what_one_process_measures(tmp_path):
                              env={**os.environ, "MPLBACKEND": "Agg"}, capture_output=True, text=True, timeout=180)
         assert run.returncode == 0, run.stdout + run.stderr
     graph, local = open_recording(out["graph"]), open_recording(out["local"])
-    for topic in ("/odom", "/imu", "/wrench_cmd", "/wrench_estimate"):
+    for topic in ("/odom", "/odom_truth", "/imu", "/wrench_cmd", "/wrench_estimate"):
         assert graph.count(topic) == 301
         assert [d for _, d in graph.raw(topic)] == [d for _, d in local.raw(topic)], topic
-    flown = load_flight(out["graph"]).imu  # the IMU's numbers to 1e-9 (here: bit for bit) from the graph's bytes
+    recorded = load_flight(out["graph"])
+    flown = recorded.imu  # the IMU's numbers to 1e-9 (here: bit for bit) from the graph's bytes
     run = fly_in_process(load_scenario("ex4_geometric", ["duration=0.3", *sets[1::2]]))
+    assert np.abs(recorded.odom_truth.position - run.position).max() < 1e-9  # the true state, beside odom
+    assert np.abs(recorded.odom_truth.velocity_world - run.velocity).max() < 1e-9
     assert np.abs(flown.linear_acceleration - run.imu_specific_force_measured).max() < 1e-9
     assert np.abs(flown.angular_velocity - run.imu_angular_velocity_measured).max() < 1e-9
 

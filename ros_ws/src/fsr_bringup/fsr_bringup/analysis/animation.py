@@ -42,6 +42,7 @@ ELEVATION_DEG = 25.0
 AZIMUTH_DEG = -60.0  # seen from the south-south-east, above
 AXES_RECT = (0.25, 0.03, 0.72, 0.95)  # figure fractions: the text (scenario, time, legend) on the left
 BOX_ZOOM = 0.86  # the box a little smaller than its axes: room for the axis labels
+FIT_SHRINK, FIT_TRIES = 0.92, 8  # the box shrunk by this until its axis labels fit in the figure (at most so often)
 TICKS = 5  # at most this many ticks per axis
 LEGEND_PT = 7.0
 MP4_QUALITY = 7  # imageio-ffmpeg's 0..10 (H.264 CRF 15): sharp lines, a few MB for 30 s at 640 x 480
@@ -82,11 +83,13 @@ class FlightAnimation:
             for set_limits, (low, high) in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), scene.bounds, strict=True):
                 set_limits(low, high)
             ax.set_box_aspect(np.ptp(scene.bounds, axis=1), zoom=BOX_ZOOM)  # one scale on every axis
+            self.box_zoom = BOX_ZOOM
             for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
                 axis.set_major_locator(MaxNLocator(TICKS))
             ax.set_xlabel("east [m]")
             ax.set_ylabel("north [m]")
             ax.set_zlabel("up [m]")
+            self._fit_axis_labels(np.ptp(scene.bounds, axis=1))
             handles = self._static_artists(title)
             self._moving = self._moving_artists()
             handles += self._legend_handles()
@@ -97,6 +100,20 @@ class FlightAnimation:
                                         np.sin(elevation)])
         self.canvas.draw()  # the moving artists are animated: left out of this, the background
         self._background = self.canvas.copy_from_bbox(self.figure.bbox)
+
+    def _fit_axis_labels(self, sides: np.ndarray) -> None:
+        """Shrink the box until the three axis labels lie within the figure (a wide, flat box puts "up [m]" past
+        its right edge)."""
+        renderer = self.canvas.get_renderer()
+        frame = self.figure.bbox
+        for _ in range(FIT_TRIES):
+            self.canvas.draw()
+            extents = [axis.label.get_window_extent(renderer) for axis in (self.axes.xaxis, self.axes.yaxis,
+                                                                            self.axes.zaxis)]
+            if all(e.x0 >= frame.x0 and e.x1 <= frame.x1 and e.y0 >= frame.y0 and e.y1 <= frame.y1 for e in extents):
+                return
+            self.box_zoom *= FIT_SHRINK
+            self.axes.set_box_aspect(sides, zoom=self.box_zoom)
 
     @property
     def frame_count(self) -> int:

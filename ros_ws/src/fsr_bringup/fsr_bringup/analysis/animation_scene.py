@@ -148,7 +148,7 @@ def decimated(count: int, points: int = TRAIL_POINTS) -> np.ndarray:
 
 def build_scene(flight: RecordedFlight, fps: float, speed: float) -> Scene:
     """The scene of ``flight`` at ``fps`` frames per second of video and ``speed`` (ValueError without odometry)."""
-    odom = flight.odom
+    odom = flight.true_odom  # the true state (a measured odom beside odom_truth: the vehicle as it flew)
     if odom is None or odom.t.size == 0:
         raise ValueError(f"{flight.recording.path}: no odometry ({flight.namespace.rstrip('/')}/odom): nothing to "
                          "animate")

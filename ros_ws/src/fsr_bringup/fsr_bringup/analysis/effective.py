@@ -114,7 +114,7 @@ def applied_wrench(config: SimulationConfig, force: np.ndarray, torque: np.ndarr
 
 def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
     """The effective truth of the module docstring; None without odom, wrench_cmd, scenario or estimator model."""
-    odom, cmd, config, model = flight.odom, flight.wrench_cmd, flight.config, flight.estimator
+    odom, cmd, config, model = flight.true_odom, flight.wrench_cmd, flight.config, flight.estimator
     if odom is None or cmd is None or config is None or model is None or len(odom.t) < 2:
         return None
     target = odom.stamp_ns
@@ -199,7 +199,7 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
 def thrust_ratio_series(flight: RecordedFlight) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """``(t, ground, ceiling)``: per-rotor ``T / T_OGE`` of each surface along the flight, shape (n, rotors)
     (1 where a surface is off); None without odom or scenario."""
-    odom, config = flight.odom, flight.config
+    odom, config = flight.true_odom, flight.config
     if odom is None or config is None:
         return None
     surfaces = pack_surfaces(config.environment, config.plant_vehicle)

@@ -32,8 +32,11 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+import signal
+import sys
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import matplotlib
@@ -50,7 +53,7 @@ from fsr_bringup.analysis.figure_rules import disturbance_windows, limits_near, 
 from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_bringup.visualization.frames import NED_TO_ENU
-from fsr_sim.contract import ODOM, REFERENCE, WRENCH_CMD
+from fsr_sim.contract import ODOM, REFERENCE, ROTOR_STATE, WRENCH_CMD
 from fsr_sim.model.so3 import euler_zyx_from_rotation
 
 ONE_COLUMN_IN = 3.5  # in, one journal column
@@ -229,14 +232,14 @@ def pose_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     """Position (world NED) [m] and ZYX Euler attitude [deg] of each run (solid), its commanded attitude
     ``R_c`` (``attitude_cmd``: what the attitude error of the summary is measured against; dashed, the run's
     colour) and the planner's reference ``p_d``, ``R_d`` (black dashed)."""
-    runs_with = [r for r in runs if r.flight.odom is not None]
+    runs_with = [r for r in runs if r.flight.true_odom is not None]
     if not runs_with:
         return Drawn(None, "no odom")
     panels = panel_grid(3, 2, _width("two", options))
     notes = []
     yaw_start = None
     for index, run in enumerate(runs_with):
-        odom = run.flight.odom
+        odom = run.flight.true_odom
         rpy = _degrees_unwrapped(euler_zyx_from_rotation(odom.rotation), yaw_start)
         yaw_start = rpy[0, 2] if yaw_start is None else yaw_start
         style = {"color": _colour(index), "label": f"{run.label}: $p$, $R$"}
@@ -334,33 +337,60 @@ def _limit_lines(panel: Panel, limits: Iterable[float], label: str) -> None:
             panel.hline(limit, label=label, **LIMIT)
 
 
+ROTORS_PER_PANEL = 2  # beyond PANEL_ROTORS rotors, a panel per pair: eight overlaid traces cannot be told apart
+PANEL_ROTORS = 4
+MEASURED = {"ls": (0, (2.0, 1.2)), "lw": 0.9}  # in the rotor's colour: what the rotor did (rotor_state)
+
+
+def rotor_groups(count: int) -> list[list[int]]:
+    """The rotors (0-based) drawn in each panel: all of them up to :data:`PANEL_ROTORS`, else pairs."""
+    if count <= PANEL_ROTORS:
+        return [list(range(count))]
+    return [list(range(i, min(i + ROTORS_PER_PANEL, count))) for i in range(0, count, ROTORS_PER_PANEL)]
+
+
 def rotors_figure(runs: list[Run], options: FigureOptions) -> Drawn:
-    """Commanded rotor speeds [rad/s] (and tilt angles [deg]) per run (one row each), a colour per rotor, on
-    axes scaled to the data; a limit is drawn (grey) where the data come near it."""
+    """Commanded rotor speeds [rad/s] (and tilt angles [deg]) per run, a colour per rotor, and - where the rotors
+    lag their commands - what they did (``rotor_state``, dashed in the same colour), on axes scaled to the
+    data; more than four rotors get a panel per pair (rows), so that each trace can be followed; a limit is
+    drawn (grey) where the data come near it."""
     runs_with = [r for r in runs if r.flight.rotor_cmd is not None]
     if not runs_with:
         return Drawn(None, "no rotor_cmd (wrench actuation has no rotors, or not recorded)")
     tilting = any(r.flight.rotor_cmd.tilts is not None for r in runs_with)
-    panels = panel_grid(len(runs_with), 2 if tilting else 1, _width("two" if tilting else "one", options),
-                        row_height=1.5)
-    for row, run in enumerate(runs_with):
-        cmd = run.flight.rotor_cmd
+    groups = [rotor_groups(r.flight.rotor_cmd.speeds.shape[1]) for r in runs_with]
+    rows = sum(len(g) for g in groups)
+    panels = panel_grid(rows, 2 if tilting else 1, _width("two" if tilting else "one", options),
+                        row_height=1.5 if rows == len(runs_with) else 1.15)
+    row = 0
+    for run, rotor_sets in zip(runs_with, groups, strict=True):
+        cmd, actual = run.flight.rotor_cmd, run.flight.rotor_state
         vehicle = run.flight.config.vehicle if run.flight.config is not None else None
         prefix = f"{run.label}: " if len(runs_with) > 1 else ""
-        for i in range(cmd.speeds.shape[1]):
-            colour = ROTOR_COLOURS[i % len(ROTOR_COLOURS)]
-            panels[row, 0].plot(cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
-            if tilting and cmd.tilts is not None:
-                panels[row, 1].plot(cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
-        panels[row, 0].label(prefix + r"$\omega_{c,i}$", "rotor rad/s", "rotor axis")
-        if vehicle is not None:
-            _limit_lines(panels[row, 0], (vehicle.rotor_speed_min, vehicle.rotor_speed_max),
-                         r"speed limits $\omega_{\min}$, $\omega_{\max}$")
-        if tilting:
-            panels[row, 1].label(prefix + r"$\alpha_{c,i}$", "deg", "about the arm")
-            if vehicle is not None and vehicle.tilt_angle_max < math.pi:
-                limit = math.degrees(vehicle.tilt_angle_max)
-                _limit_lines(panels[row, 1], (-limit, limit), r"tilt limits $\pm\alpha_{\max}$")
+        for rotors in rotor_sets:
+            which = "rotor axis" if len(rotor_sets) == 1 else f"rotors {', '.join(str(i + 1) for i in rotors)}"
+            for i in rotors:
+                colour = ROTOR_COLOURS[i % len(ROTOR_COLOURS)]
+                panels[row, 0].plot(cmd.t, cmd.speeds[:, i], color=colour, label=f"rotor {i + 1}")
+                if actual is not None and i < actual.speeds.shape[1]:
+                    panels[row, 0].plot(actual.t, actual.speeds[:, i], color=colour,
+                                        label=f"{ROTOR_STATE.name} (measured)", **MEASURED)
+                if tilting and cmd.tilts is not None:
+                    panels[row, 1].plot(cmd.t, np.degrees(cmd.tilts[:, i]), color=colour, label=f"rotor {i + 1}")
+                    if actual is not None and actual.tilts is not None and i < actual.tilts.shape[1]:
+                        panels[row, 1].plot(actual.t, np.degrees(actual.tilts[:, i]), color=colour,
+                                            label=f"{ROTOR_STATE.name} (measured)", **MEASURED)
+            panels[row, 0].label(prefix + r"$\omega_{c,i}$", "rotor rad/s", which)
+            if vehicle is not None:
+                _limit_lines(panels[row, 0], (vehicle.rotor_speed_min, vehicle.rotor_speed_max),
+                             r"speed limits $\omega_{\min}$, $\omega_{\max}$")
+            if tilting:
+                panels[row, 1].label(prefix + r"$\alpha_{c,i}$", "deg",
+                                     "about the arm" if len(rotor_sets) == 1 else which)
+                if vehicle is not None and vehicle.tilt_angle_max < math.pi:
+                    limit = math.degrees(vehicle.tilt_angle_max)
+                    _limit_lines(panels[row, 1], (-limit, limit), r"tilt limits $\pm\alpha_{\max}$")
+            row += 1
     finish_panels(panels, runs_with, "rotor commands", options, legend_cols=5)
     return Drawn(panels.fig)
 
@@ -444,10 +474,10 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
                     panels[row, 0].plot(t, ratio[:, i], color=ROTOR_COLOURS[i % len(ROTOR_COLOURS)],
                                         label=f"rotor {i + 1}")
             panels[row, 0].label(rf"{surface} $T/T_{{\mathrm{{OGE}}}}$", "-", "per rotor")
-        if flight.odom is not None:
+        if flight.true_odom is not None:
             twin = panels.twin(panels[0, 0])
-            height = flight.config.environment.ground.height - flight.odom.position[:, 2]
-            twin.plot(*envelope(flight.odom.t, height), **ASIDE)
+            height = flight.config.environment.ground.height - flight.true_odom.position[:, 2]
+            twin.plot(*envelope(flight.true_odom.t, height), **ASIDE)
             twin.set_ylabel("height $h$ [m]\nabove ground", color="0.35")
             panels[0, 0].ax.plot([], [], label="height above ground $h$", **ASIDE)  # its legend entry
         finish_panels(panels, [run], "thrust ratio near surfaces", options, legend_cols=5, zoom=False)
@@ -460,7 +490,7 @@ def thrust_ratio_figure(runs: list[Run], options: FigureOptions) -> Drawn:
 def _moving_reference(runs: list[Run]) -> tuple[list[Run], object | None, str]:
     """(runs with odom and reference, the first reference, why nothing is drawn: "" when its position moves by at
     least the metre floor)."""
-    runs_with = [r for r in runs if r.flight.odom is not None and r.flight.reference is not None]
+    runs_with = [r for r in runs if r.flight.true_odom is not None and r.flight.reference is not None]
     if not runs_with:
         return [], None, "odom or reference missing"
     reference = runs_with[0].flight.reference
@@ -488,7 +518,7 @@ def path_figure(runs: list[Run], options: FigureOptions) -> Drawn:
     space = fig.add_axes((0.0, 0.0, 0.5, 1.0), projection="3d", proj_type="ortho", label="path 3d")
     top = fig.add_axes((0.6, 0.15, 0.38, 0.7), label="path top view")
     paths = [(f"{REFERENCE.name} $p_d$", reference.position, TRUTH)]
-    paths += [(f"{run.label}: $p$", run.flight.odom.position, {"color": _colour(index), "lw": 1.0})
+    paths += [(f"{run.label}: $p$", run.flight.true_odom.position, {"color": _colour(index), "lw": 1.0})
               for index, run in enumerate(runs_with)]
     for label, position, style in paths:
         east, north, up = (_decimated(position) @ NED_TO_ENU.T).T
@@ -540,7 +570,7 @@ def speed_figure(runs: list[Run], options: FigureOptions) -> Drawn:
         return Drawn(None, reason)
     panels = panel_grid(2, 1, _width("one", options), row_height=1.2)
     for index, run in enumerate(runs_with):
-        odom = run.flight.odom
+        odom = run.flight.true_odom
         acceleration = np.gradient(odom.velocity_world, odom.t, axis=0) if len(odom.t) > 1 else odom.velocity_world
         style = {"color": _colour(index), "label": f"{run.label} ({ODOM.name})"}
         panels[0, 0].plot(odom.t, np.linalg.norm(odom.velocity_world, axis=1), **style)
@@ -570,7 +600,7 @@ FIGURES: dict[str, Callable[[list[Run], FigureOptions], Drawn]] = {
 def figure_metadata(name: str, runs: list[Run], fmt: str) -> dict[str, str]:
     """File metadata naming the figure, the scenario(s) and the recordings (keys as each backend wants)."""
     title = f"fsr {name}: " + ", ".join(f"{r.label} ({r.flight.scenario_name})" for r in runs)
-    description = "recordings: " + ", ".join(str(r.flight.recording.path) for r in runs)
+    description = "recordings: " + ", ".join(str(getattr(r.flight.recording, "path", None)) for r in runs)
     if fmt == "pdf":
         return {"Title": title, "Subject": description, "Creator": "fsr-analyze"}
     if fmt == "svg":
@@ -599,26 +629,98 @@ def draw_and_save(name: str, runs: list[Run], out_dir: Path, options: FigureOpti
                            lambda fmt: figure_metadata(name, runs, fmt)), notes
 
 
-_JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, inherited by forked workers
+_JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, in a worker: set at its start
+WORKER_MODULES = ["fsr_bringup.analysis.figures"]  # imported once by the fork server, inherited by every worker
+
+
+@dataclass(frozen=True)
+class RecordingName:
+    """What a figure needs of a recording (its path, in the files' metadata): a worker gets this, not the
+    recording's messages."""
+
+    path: Path | None
+    truncated: bool = False
+
+
+def _light(run: Run) -> Run:
+    """``run`` with its flight's recording reduced to its name (what is sent to a worker process)."""
+    recording = run.flight.recording
+    name = RecordingName(getattr(recording, "path", None), bool(getattr(recording, "truncated", False)))
+    return replace(run, flight=replace(run.flight, recording=name))
+
+
+def _start_worker(job: tuple[list[Run], Path, FigureOptions]) -> None:
+    global _JOB
+    _JOB = job
 
 
 def _draw_in_worker(name: str) -> tuple[list[Path], list[str]]:
     return draw_and_save(name, *_JOB)
 
 
+@contextmanager
+def _main_left_out() -> Iterator[None]:
+    """While the fork server and the workers start: the caller's ``__main__`` is not run again in them (a started -
+    not forked - worker imports the main script or module first, which would fly a user's script, unguarded by
+    ``if __name__ == "__main__"``, once more per worker; they need nothing of it), and they ignore SIGINT from
+    their start (an ignored signal stays ignored across exec: a Ctrl-C at the terminal, which reaches the whole
+    process group, leaves no traceback of theirs; the pool ends them)."""
+    main = sys.modules.get("__main__")
+    saved = {name: main.__dict__[name] for name in ("__file__", "__spec__") if name in main.__dict__} if main else {}
+    if main is not None:
+        main.__dict__.pop("__file__", None)
+        main.__spec__ = None
+    try:
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: signals are the main thread's business
+        handler = None
+    try:
+        yield
+    finally:
+        if handler is not None:
+            signal.signal(signal.SIGINT, handler)
+        if main is not None:
+            main.__dict__.pop("__spec__", None)
+            main.__dict__.update(saved)
+
+
+def prepare_workers() -> None:
+    """Start the fork server now (it imports the figures' modules, a few seconds) so that it is ready when the
+    figures are drawn: ``fsr-fly`` calls this before the flight, ``fsr-analyze`` before reading the recordings."""
+    if _worker_context() is not None and "forkserver" in multiprocessing.get_all_start_methods():
+        from multiprocessing import forkserver
+
+        with _main_left_out():
+            forkserver.ensure_running()
+
+
+def _worker_context() -> multiprocessing.context.BaseContext | None:
+    """Workers started by a fork server (it imports the figures' modules once; its children fork from it, a
+    single-threaded process: no fork of this one, whatever threads it runs), else spawned; None where neither
+    exists."""
+    methods = multiprocessing.get_all_start_methods()
+    if "forkserver" in methods:
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(WORKER_MODULES)
+        return context
+    return multiprocessing.get_context("spawn") if "spawn" in methods else None
+
+
 class FigureJob:
-    """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by forked
-    worker processes (one figure each, at most one per core) while the caller goes on (the analysis computes
-    its metrics meanwhile); otherwise here, one after the other, when :meth:`result` is called."""
+    """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by worker
+    processes (one figure each, at most one per core; started by a fork server, :func:`_worker_context`: this
+    process, which may run threads, is never forked) while the caller goes on (the analysis computes its metrics
+    meanwhile); otherwise here, one after the other, when :meth:`result` is called."""
 
     def __init__(self, runs: list[Run], out_dir: Path, options: FigureOptions) -> None:
-        global _JOB
         self.job = (runs, out_dir, options)
         self.pool = self.pending = None
         workers = min(len(FIGURES), len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
-        if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
-            _JOB = self.job
-            self.pool = multiprocessing.get_context("fork").Pool(workers)
+        context = _worker_context() if workers > 1 else None
+        if context is not None:
+            job = ([_light(run) for run in runs], out_dir, options)
+            with _main_left_out():
+                self.pool = context.Pool(workers, initializer=_start_worker, initargs=(job,))
             self.pending = self.pool.map_async(_draw_in_worker, list(FIGURES), chunksize=1)
 
     def result(self) -> tuple[list[Path], list[str]]:

@@ -2,9 +2,9 @@
 :class:`fsr_bringup.analysis.load.RecordedFlight`, without writing or reading a recording: the metrics of
 :mod:`fsr_bringup.analysis.metrics` then apply to it as they are.
 
-The topics are filled with what the graph would publish at each step ``t_k``, with one difference: ``odom`` is
-the *true* state (what the recording carries with the sensor stage off; with sensor noise, bias, delay or a
-reduced rate, a recording's ``odom`` is the measurement instead).
+The topics are filled with what the graph would publish at each step ``t_k``: ``odom`` as published (the
+measurement when a sensor stage is on, with the true state on ``odom_truth`` beside it, as the recording holds
+them), so the metrics of a flight in memory and of its recording are the same.
 """
 
 from __future__ import annotations
@@ -20,7 +20,19 @@ from fsr_bringup.analysis.load import (
     RotorCommand,
     Scalar,
     Wrench,
+    controller_side,
 )
+from fsr_sim.contract import SimStatus
+from fsr_sim.model.so3 import rotations_from_quaternions
+
+
+def measured_odometry(stamp_ns: np.ndarray, t: np.ndarray, rows: np.ndarray) -> Odometry:
+    """The :class:`Odometry` of published ``odom`` (or ``odom_truth``) rows (K, 13): position, quaternion
+    ``[x, y, z, w]``, velocity body, angular velocity body (:mod:`fsr_sim.core.odometry`), as the analysis reads
+    them from a recording."""
+    rotation = rotations_from_quaternions(rows[:, 3:7])
+    return Odometry(stamp_ns, t, rows[:, 0:3], rows[:, 3:7], rotation, np.einsum("nij,nj->ni", rotation, rows[:, 7:10]),
+                    rows[:, 10:13])
 
 
 def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun (import cycle)
@@ -34,8 +46,16 @@ def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun
     rotation = run.rotation
     flight = RecordedFlight(None, "/", sim.name, sim, run.estimator)  # type: ignore[arg-type]
     flight.plan = {"kind": run.plan_kind, "end_s": run.plan_end_time} if run.plan_end_time is not None else None
-    flight.odom = Odometry(stamp_ns, t, run.position, run.state[:, 6:10], rotation, run.velocity,
-                           run.angular_velocity)
+    flight.sim_status = [SimStatus(run.end_reason, run.reason, float(t[-1]) if len(t) else 0.0, max(len(t) - 1, 0))]
+    if run.scenario is not None:  # the controller's side as a recording's metadata gives it
+        (flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan,
+         flight.controller) = controller_side(run.scenario, flight.notes)
+    true = Odometry(stamp_ns, t, run.position, run.state[:, 6:10], rotation, run.velocity, run.angular_velocity)
+    flight.odom = true
+    if run.odometry_measured is not None:  # odom is the measurement: the true state is odom_truth (its numbers,
+        # read as a recording's are)
+        flight.odom = measured_odometry(stamp_ns, t, run.odometry_measured)
+        flight.odom_truth = measured_odometry(stamp_ns, t, run.odometry_true)
     # the metrics read the attitudes as rotation matrices: the quaternions are not made (None)
     flight.reference = Reference(stamp_ns, t, run.reference_position, None, run.reference_rotation,  # type: ignore[arg-type]
                                  run.reference_velocity, run.reference_acceleration,

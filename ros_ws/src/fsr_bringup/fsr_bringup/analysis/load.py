@@ -3,8 +3,10 @@
 Times are the messages' header stamps (simulated time t_k, seconds) where the type has a header, the
 recorder's log time otherwise (``mass_estimate``; the recorder logs it at its latest simulated time).
 Messages are sorted by stamp. Frames (docs/model.md §4): positions and the reference in ``world_ned``, odometry
-twist and wrenches in ``base_link_frd``. The reference (fsr_control.nodes.messages) is all world-frame:
-linear velocity and acceleration ``p_dot_d``, ``p_ddot_d`` and angular velocity ``R_d omega_d``.
+twist and wrenches in ``base_link_frd``. With a sensor stage on, ``odom`` is the measurement and ``odom_truth`` the
+true state (:attr:`RecordedFlight.true_odom`: what the tracking errors are taken on). The reference
+(fsr_control.nodes.messages) is all world-frame: linear velocity and acceleration ``p_dot_d``, ``p_ddot_d`` and
+angular velocity ``R_d omega_d``.
 
 A missing topic is ``None`` with a note in :attr:`RecordedFlight.notes`; nothing here raises for a topic that is
 absent or that cannot be decoded.
@@ -19,7 +21,7 @@ import numpy as np
 
 from fsr_bringup.recording.metadata import scenario_from_text
 from fsr_control.compensation import CompensationConfig
-from fsr_control.config.controller_config import controller_config
+from fsr_control.config.controller_config import ControllerConfig, controller_config
 from fsr_estimation.config.estimator_config import EstimatorConfig, estimator_config
 from fsr_sim.config.scenario import Scenario, SimulationConfig, simulation_config
 from fsr_sim.config.validation import ConfigError
@@ -29,6 +31,7 @@ from fsr_sim.contract import (
     IMU,
     MASS_ESTIMATE,
     ODOM,
+    ODOM_TRUTH,
     REFERENCE,
     ROTOR,
     ROTOR_CMD,
@@ -133,7 +136,9 @@ class RecordedFlight:
     compensation_mode: str | None = None  # the scenario's controller.compensation (None without a scenario)
     plan_adjustments: list[dict] | None = None  # the legs the planner shaped or stretched (None: no scenario)
     plan: dict | None = None  # the scenario's plan: {"kind": trajectory.kind, "end_s": when it comes to rest}
+    controller: ControllerConfig | None = None  # the scenario's validated controller section (None: unknown)
     odom: Odometry | None = None
+    odom_truth: Odometry | None = None  # the true state, recorded only when odom is measured (sensors.odometry)
     reference: Reference | None = None
     wrench_truth: Wrench | None = None
     wrench_cmd: Wrench | None = None
@@ -151,7 +156,17 @@ class RecordedFlight:
 
     @property
     def truncated(self) -> bool:
-        return self.recording.truncated
+        return self.recording is not None and self.recording.truncated
+
+    @property
+    def true_odom(self) -> Odometry | None:
+        """The true state: ``odom_truth`` where ``odom`` is a measurement (it is recorded then), else ``odom``."""
+        return self.odom_truth if self.odom_truth is not None else self.odom
+
+    @property
+    def odom_measured(self) -> bool:
+        """``odom`` is a measurement (noise, bias, delay or rate: ``odom_truth`` holds the true state)."""
+        return self.odom_truth is not None
 
 
 def zero_order_hold(stamp_ns: np.ndarray, values: np.ndarray, target_ns: np.ndarray) -> np.ndarray:
@@ -190,7 +205,8 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
     scenario = recorded_scenario(recording, namespace, notes)
     config, scenario_name, estimator = _scenario(scenario, recording.path.stem, notes)
     flight = RecordedFlight(recording, namespace, scenario_name, config, estimator, notes=notes)
-    flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan = _controller(scenario, notes)
+    (flight.compensation_mode, flight.compensation, flight.plan_adjustments, flight.plan,
+     flight.controller) = controller_side(scenario, notes)
     if recording.truncated:
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
@@ -210,8 +226,9 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
             setattr(flight, name, loader(recording, topic))
         except (LayoutError, KeyError, ValueError) as error:
             notes.append(f"cannot decode {topic}: {error}")
-    for contract_topic, loader in ((ROTOR_STATE, _rotor_command), (IMU, _imu)):  # published only with actuator
-        topic = resolve(contract_topic.name, namespace)  # dynamics, with an IMU: no note without
+    for contract_topic, loader in ((ROTOR_STATE, _rotor_command), (IMU, _imu), (ODOM_TRUTH, _odometry)):
+        topic = resolve(contract_topic.name, namespace)  # published only with actuator dynamics, an IMU, a
+        # measured odom: no note without
         if recording.has(topic) and recording.count(topic):
             try:
                 setattr(flight, contract_topic.name, loader(recording, topic))
@@ -253,21 +270,22 @@ def _scenario(scenario: Scenario | None, fallback: str,
     return config, scenario.name, estimator
 
 
-def _controller(scenario: Scenario | None, notes: list[str]
-                ) -> tuple[str | None, CompensationConfig | None, list[dict] | None, dict | None]:
+def controller_side(scenario: Scenario | None, notes: list[str]
+                    ) -> tuple[str | None, CompensationConfig | None, list[dict] | None, dict | None,
+                               ControllerConfig | None]:
     """(``controller.compensation`` of the recorded scenario, its validated settings or None, the legs its
     planner shaped or stretched: :attr:`fsr_control.config.controller_config.ControllerConfig.plan_adjustments`
-    as plain values, and its plan's kind and end time)."""
+    as plain values, its plan's kind and end time, and the validated controller section)."""
     if scenario is None:
-        return None, None, None, None
+        return None, None, None, None, None
     try:
         config = controller_config(scenario)
     except ConfigError as error:
         notes.append(f"controller section of the scenario cannot be used: {error}")
-        return None, None, None, None
+        return None, None, None, None, None
     adjustments = [item.as_dict() | {"text": item.text()} for item in config.plan_adjustments]
     plan = {"kind": config.trajectory_kind, "end_s": config.plan_end_time}
-    return ("estimate" if config.compensation else "none"), config.compensation, adjustments, plan
+    return ("estimate" if config.compensation else "none"), config.compensation, adjustments, plan, config
 
 
 def _columns(recording: Recording, topic: str) -> tuple[np.ndarray, Columns]:

@@ -1,7 +1,9 @@
 """Flight metrics from a recording: tracking errors, saturation, estimator accuracy, surfaces, end state.
 
-Errors are taken at the odometry stamps t_k against the reference stamped t_k (zero-order hold when a
-stamp has no exact partner):
+Errors are taken on the true state (``odom``, or ``odom_truth`` where ``odom`` is a measurement: a sensor stage
+on; ``tracking.measured_on`` says which) at its stamps t_k against the reference stamped t_k (zero-order hold when
+a stamp has no exact partner); with a measured ``odom`` its own error against the true state is given as
+``odometry_error`` (what the controller was fed, not how it flew):
 
 * position ``e_p = p - p_d`` [m] (world NED), velocity ``e_v = R v_b - p_dot_d`` [m/s] (world);
 * attitude: the angle of ``R_c^T R`` [deg] with ``R_c`` the attitude the controller commanded
@@ -28,7 +30,7 @@ a settling time; the pure external wrench (``wrench_truth``) is reported next to
 ``SHORTFALL_TOLERANCE`` and the largest ``|shortfall|`` (N or N m) with its time.
 
 The path (``path``): the peak (with its time) and RMS speed and acceleration and the length of the reference
-(``planned``) and of the flight (``flown``: ``odom``'s velocity and its central differences). The plan
+(``planned``) and of the flight (``flown``: the true state's velocity and its central differences). The plan
 (``plan``): the scenario's ``trajectory.kind`` and when its plan comes to rest; a flight that finished at the
 scenario's duration before that ended mid-path (``ended_mid_path``, with a note).
 
@@ -45,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from fsr_bringup.analysis.diagnosis import diagnosis
 from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import RecordedFlight, load_flight, zero_order_hold
 from fsr_control.planning.trajectory import mid_path, mid_path_note
@@ -55,6 +58,7 @@ from fsr_sim.contract import (
     FINISHED,
     GOAL,
     ODOM,
+    ODOM_TRUTH,
     REFERENCE,
     SIM_STATUS,
     STOPPED,
@@ -87,9 +91,9 @@ class TrackingErrors:
 
 
 def tracking_errors(flight: RecordedFlight) -> TrackingErrors | None:
-    """Position, velocity, attitude and angular-velocity errors (module docstring); None without odom or
-    reference."""
-    odom, ref = flight.odom, flight.reference
+    """Position, velocity, attitude and angular-velocity errors of the true state (module docstring); None without
+    odom or reference."""
+    odom, ref = flight.true_odom, flight.reference
     if odom is None or ref is None:
         return None
     target = odom.stamp_ns
@@ -150,14 +154,30 @@ def path_motion(flight: RecordedFlight) -> dict[str, Any] | None:
     """Speed, acceleration and path length (:func:`_motion`) of the reference (``planned``: its own velocity and
     acceleration) and of the flight (``flown``: ``odom``'s velocity, world, and its central differences); None
     without odom or reference."""
-    odom, ref = flight.odom, flight.reference
+    odom, ref = flight.true_odom, flight.reference
     if odom is None or ref is None:
         return None
     flown_acceleration = (np.gradient(odom.velocity_world, odom.t, axis=0) if len(odom.t) > 1
                           else np.zeros_like(odom.velocity_world))
     return {"planned": _motion(ref.t, ref.position, ref.velocity, ref.acceleration),
             "flown": _motion(odom.t, odom.position, odom.velocity_world, flown_acceleration),
-            "flown_from": ODOM.name}
+            "flown_from": ODOM_TRUTH.name if flight.odom_measured else ODOM.name}
+
+
+def odometry_error(flight: RecordedFlight) -> dict[str, Any] | None:
+    """How far the measured ``odom`` is from the true state (``odom_truth``): final / peak / RMS of the position
+    [m], attitude [deg] and velocity [m/s] errors; None when ``odom`` is the true state (or a topic is missing)."""
+    measured, true = flight.odom, flight.odom_truth
+    if measured is None or true is None:
+        return None
+    target = measured.stamp_ns
+    rows = zero_order_hold(true.stamp_ns, np.hstack((true.position, true.velocity_world, true.rotation.reshape(-1, 9))),
+                           target)
+    return {
+        "position_m": error_summary(measured.t, measured.position - rows[:, :3]),
+        "attitude_deg": error_summary(measured.t, _angle_deg(rows[:, 6:], measured.rotation)),
+        "velocity_m_s": error_summary(measured.t, measured.velocity_world - rows[:, 3:6]),
+    }
 
 
 def plan_end(flight: RecordedFlight, end_time: float | None) -> dict[str, Any] | None:
@@ -366,6 +386,12 @@ def interrupted_at(status: SimStatus | None) -> float | None:
     return float(status.sim_time)
 
 
+def _odom_measured_by_config(flight: RecordedFlight) -> bool:
+    """The flight's ``odom`` is a measurement: ``odom_truth`` was recorded, or the scenario's odometry has noise,
+    bias, delay or a lower rate."""
+    return flight.odom_measured or (flight.config is not None and flight.config.odometry_noise.enabled)
+
+
 def flight_metrics(
     recording: Recording | RecordedFlight | str | Path, settle_time: float = DEFAULT_SETTLE_S,
     settling: str = "standard", after: float | None = None,
@@ -376,17 +402,17 @@ def flight_metrics(
     definition and the start of the max-error window (default: the last 5 s)."""
     flight = recording if isinstance(recording, RecordedFlight) else load_flight(recording)
     notes = list(flight.notes)
-    odom = flight.odom
+    odom = flight.true_odom
     status = flight.sim_status[-1] if flight.sim_status else None
     metrics: dict[str, Any] = {
-        "recording": str(flight.recording.path),
+        "recording": None if flight.recording is None else str(flight.recording.path),  # None: in memory
         "scenario": flight.scenario_name,
         "namespace": flight.namespace,
         "truncated": flight.truncated,
         "duration_s": float(odom.t[-1] - odom.t[0]) if odom is not None else None,
         "end_time_s": float(odom.t[-1]) if odom is not None else None,
         "steps": int(status.steps) if status is not None and isinstance(status.steps, int) else None,
-        "odom_messages": len(odom.t) if odom is not None else 0,
+        "odom_messages": len(flight.odom.t) if flight.odom is not None else 0,
         "message_counts": dict(flight.message_counts),
         SIM_STATUS.name: None if status is None else status.as_dict(),
         "interrupted_at_s": interrupted_at(status),
@@ -403,7 +429,13 @@ def flight_metrics(
             "attitude_vs": ATTITUDE_CMD.name if errors.attitude_commanded else REFERENCE.name,
             "attitude_vs_reference_deg": error_summary(errors.t, errors.attitude_reference_deg),
             "angular_velocity_error_rad_s": error_summary(errors.t, errors.angular_velocity),
+            "measured_on": ODOM_TRUTH.name if flight.odom_measured else ODOM.name,
+            "odom_is_true_state": not _odom_measured_by_config(flight),
         }
+        if _odom_measured_by_config(flight) and not flight.odom_measured:
+            notes.append("odom is a measurement (sensors.odometry) and odom_truth is not recorded: the tracking "
+                         "errors are against the measured odom, not the true state")
+    metrics["odometry_error"] = odometry_error(flight)
     if flight.wrench_cmd is not None:
         thrust = np.linalg.norm(flight.wrench_cmd.force, axis=1)
         last = flight.wrench_cmd.t >= flight.wrench_cmd.t[-1] - MEAN_WINDOW_S
@@ -428,6 +460,7 @@ def flight_metrics(
         metrics[WRENCH_SHORTFALL.name] = wrench_shortfall(flight)
         if metrics[WRENCH_SHORTFALL.name] is None:
             notes.append("wrench shortfall skipped: wrench_shortfall missing")
+    metrics["diagnosis"] = diagnosis(flight, metrics)
     if errors is not None and not errors.attitude_commanded:
         notes.append("no attitude_cmd: attitude error measured against the planner's attitude R_d")
     metrics["external_wrench"] = wrench_comparison(flight, settle_time, settling, after)

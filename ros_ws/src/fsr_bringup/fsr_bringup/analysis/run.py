@@ -5,6 +5,7 @@ by side."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +37,16 @@ def _opened(recording: Recording | str | Path) -> Recording:
     return recording
 
 
+RUN_STAMP = re.compile(r"_\d{8}-\d{6}$")  # fsr-fly's default run name: <scenario>_<YYYYmmdd-HHMMSS>
+
+
+def run_labels(stems: list[str]) -> list[str]:
+    """Legend labels of recordings named ``stems``: without ``fsr-fly``'s time stamp (``ex4_geometric``), unless
+    that makes two of them the same (then as they are)."""
+    short = [RUN_STAMP.sub("", stem) or stem for stem in stems]
+    return short if len(set(short)) == len(short) else list(stems)
+
+
 def analyze_recordings(
     recordings: list[Recording | str | Path],
     out_dir: str | Path,
@@ -51,13 +62,14 @@ def analyze_recordings(
 
     One recording: ``metrics.json`` is its metrics (:func:`fsr_bringup.analysis.metrics.flight_metrics`).
     Several: every figure overlays them (a colour per run, ``labels`` in the legends, default the file
-    stems), ``metrics.json`` is ``{"labels": [...], "runs": {label: metrics}}`` and ``summary.md`` one table
-    with a column per run. :class:`RecordingError` for a recording without messages; ValueError for labels
+    stems without the time stamp ``fsr-fly`` gives them, :func:`run_labels`), ``metrics.json`` is
+    ``{"labels": [...], "runs": {label: metrics}}`` and ``summary.md`` one table with a column per run.
+    :class:`RecordingError` for a recording without messages; ValueError for labels
     that do not match the recordings one to one.
     """
     opened = [_opened(r) for r in recordings]
     if labels is None:
-        labels = [r.path.stem for r in opened]
+        labels = run_labels([r.path.stem for r in opened])
     if len(labels) != len(opened) or len(set(labels)) != len(labels):
         raise ValueError(f"--labels: need {len(opened)} distinct labels, one per recording; got {labels}")
     out_dir = Path(out_dir)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fsr_sim.contract import ATTITUDE_CMD, SIM_STATUS, WRENCH_SHORTFALL, SimStatus
+from fsr_sim.contract import ATTITUDE_CMD, ODOM, ODOM_TRUTH, SIM_STATUS, WRENCH_SHORTFALL, SimStatus
 
 CHANNEL_LABELS = {"fx": "f_x", "fy": "f_y", "fz": "f_z", "tx": "tau_x", "ty": "tau_y", "tz": "tau_z"}
 
@@ -29,6 +29,17 @@ def _channels(values: dict | None, digits: int = 3) -> str:
         return "n/a"
     shown = [f"{CHANNEL_LABELS.get(k, k)} {_num(v, digits)}" for k, v in values.items() if v is not None]
     return ", ".join(shown) or "n/a"
+
+
+def _measured_on(tracking: dict[str, Any]) -> str:
+    """What the tracking errors are taken on: the true state (``odom`` itself, or ``odom_truth`` beside a measured
+    ``odom``), or - a measured ``odom`` without ``odom_truth`` recorded - the measurement."""
+    on = tracking.get("measured_on", ODOM.name)
+    if on == ODOM_TRUTH.name:
+        return f"true state (`{ODOM_TRUTH.name}`; `{ODOM.name}` is the noisy measurement)"
+    if tracking.get("odom_is_true_state", True):
+        return f"true state (`{ODOM.name}`: no sensor stage)"
+    return f"**measured `{ODOM.name}`** (sensor stage on, `{ODOM_TRUTH.name}` not recorded)"
 
 
 def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
@@ -55,6 +66,7 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
     if tracking:
         commanded = tracking.get("attitude_vs") == ATTITUDE_CMD.name
         against = "R_c, commanded" if commanded else "R_d, planner"
+        rows.append(("tracking errors measured on", _measured_on(tracking)))
         for key, label in (
             ("position_error_m", "position error [m]"),
             ("attitude_error_deg", f"attitude error vs {against} [deg]"),
@@ -69,6 +81,11 @@ def summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
                 f"{_num(item['final'])} / {_num(item['peak'])} (at {_num(item['peak_time_s'], 2)} s) / "
                 f"{_num(item['rms'])}",
             ))
+    odometry = metrics.get("odometry_error")
+    if odometry:
+        rows.append(("odom (measured) vs true state: position [m] / attitude [deg] RMS",
+                     f"{_num(odometry['position_m']['rms'])} / {_num(odometry['attitude_deg']['rms'])} "
+                     "(what the controller was fed, not the tracking error)"))
     thrust = metrics.get("commanded_thrust_N")
     if thrust:
         rows.append(("commanded thrust [N] final / peak", f"{_num(thrust['final'])} / {_num(thrust['peak'])}"))
@@ -151,8 +168,34 @@ def _notes(notes: list[str]) -> list[str]:
     return ["", "Notes:", *(f"- {note}" for note in notes)] if notes else []
 
 
+def diagnosis_lines(found: dict[str, Any] | None) -> list[str]:
+    """The *Diagnosis* section of a flight that diverged or saturated much (empty otherwise)."""
+    if not found:
+        return []
+    lines = ["", f"**Diagnosis** ({found['why']}):", ""]
+    first = found.get("first_saturation")
+    if first is None:
+        lines.append("- no rotor reached a limit")
+    elif first.get("axis") is not None:
+        lines.append(f"- first saturated step: {first['step']} (t = {_num(first['time_s'])} s), the "
+                     f"{first['axis']} demand gave way by {_num(first['shortfall'])}")
+    else:
+        lines.append(f"- first rotor command at a limit: t = {_num(first['time_s'])} s (rotor {first.get('rotor')})")
+    if found.get("rotor_limit_share") is not None:
+        lines.append(f"- steps with a rotor at a speed limit: {found['rotor_limit_share']:.1%}"
+                     + (f"; tilts at their limit: {found['tilt_limit_share']:.1%}"
+                        if found.get("tilt_limit_share") is not None else ""))
+    causes = found.get("likely_causes") or []
+    for item in causes:
+        lines.append(f"- likely cause: {item['cause']} - change `{item['key']}`")
+    if not causes:
+        lines.append("- likely cause: none fsr can name from the scenario (see the saturation and gave-way rows)")
+    return lines
+
+
 def markdown_summary(metrics: dict[str, Any]) -> str:
-    """A title line (scenario, recording), a two-column Markdown table (quantity, value) and the notes."""
+    """A title line (scenario, recording), a two-column Markdown table (quantity, value), the diagnosis of a
+    flight that diverged or saturated much, and the notes."""
     where = f" ({metrics['namespace']})" if metrics.get("namespace") not in (None, "/") else ""
     lines = [
         f"### Flight `{metrics.get('scenario')}`{where}",
@@ -163,7 +206,7 @@ def markdown_summary(metrics: dict[str, Any]) -> str:
         "|---|---|",
         *(f"| {name} | {value} |" for name, value in summary_rows(metrics)),
     ]
-    return "\n".join(lines + _notes(metrics.get("notes") or [])) + "\n"
+    return "\n".join(lines + diagnosis_lines(metrics.get("diagnosis")) + _notes(metrics.get("notes") or [])) + "\n"
 
 
 def comparison_summary(labels: list[str], runs: list[dict[str, Any]], notes: list[str] | None = None) -> str:

@@ -135,6 +135,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         options = figure_options(args)
         animation = animation_options(args)
+        if not args.no_figures:  # the figures' worker processes get ready while the recordings are read
+            from fsr_bringup.analysis.figures import prepare_workers
+
+            prepare_workers()
         recordings = []
         for path in args.recordings:
             recording = open_recording(path)

@@ -189,6 +189,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fsr-fly: cannot create '{run_dir}': {error.strerror}", file=sys.stderr)
         return EXIT_CONFIG_ERROR
     scenario_path, launches = write_scenarios(members, run_dir)
+    if options is not None:  # the figures' worker processes get ready while the vehicle flies
+        from fsr_bringup.analysis.figures import prepare_workers
+
+        prepare_workers()
     for member in members:
         label = f"{member.namespace}: " if member.namespace else ""
         print(f"fsr-fly: {name}: {label}{member.checked.summary_line()}", flush=True)

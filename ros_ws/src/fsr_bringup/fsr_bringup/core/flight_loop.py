@@ -12,7 +12,10 @@ Per step ``k`` (``t_k = k T``, stamps in integer ns, ``t_k = stamp * 1e-9`` as t
 3. the estimator (:func:`fsr_estimation.core.observer_step.estimate_from_state`) on the state and the
    commanded wrench of ``t_k``, as the estimator node pairs ``odom`` and ``wrench_cmd`` (``estimator.input:
    measured``: the wrench of the rotors' speeds and tilts of ``t_k``, as it pairs ``odom`` and ``rotor_state``);
-4. the command held over ``[t_k, t_k+1]``, the plant stepped and the state ``t_k+1`` published by the
+4. the true state ``t_k`` checked against the reference answered for it (:func:`fsr_sim.core.control_loss.
+   control_loss`: attitude error against ``R_c`` or position error beyond the scenario's ``divergence`` bounds),
+   as the simulator node checks it: a flight that lost control ends there;
+5. the command held over ``[t_k, t_k+1]``, the plant stepped and the state ``t_k+1`` published by the
    simulator node's own step (:func:`fsr_sim.core.lockstep.advance`); a state that diverges ends the flight,
    as the simulator does.
 
@@ -24,16 +27,26 @@ applied. :func:`fly_steps` runs steps ``first..last`` and returns, so the Python
 from __future__ import annotations
 
 from fsr_control.core.allocation import TILTING, WRENCH
-from fsr_control.core.controller import FORCE, ROTOR_SPEEDS, TORQUE, ControllerParams, ControllerState, controller_tick
+from fsr_control.core.controller import (
+    COMMANDED_QUATERNION,
+    FORCE,
+    REFERENCE_POSITION,
+    ROTOR_SPEEDS,
+    TORQUE,
+    ControllerParams,
+    ControllerState,
+    controller_tick,
+)
 from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
+from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import actuator_row, advance, publish
 from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
 from fsr_sim.core.rotors import measured_rotor_wrench
 
-GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED = 0, 1, 2, 3  # outcomes of fly_steps
+GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly_steps
 
 
 @jit_inline
@@ -82,14 +95,17 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
               controller_state: ControllerState, with_estimator: bool, estimator_measured: bool,
               observer: ObserverParams,
               observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
-              states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
+              control_bounds: tuple, states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
     """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (the row of
     :mod:`fsr_sim.core.odometry`), ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``),
     ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published;
     ``estimator_measured``: the estimator takes the rotors' measured wrench (``estimator.input: measured``).
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
-    ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference)."""
+    ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference);
+    ``LOST_CONTROL`` with the :func:`fsr_sim.core.control_loss.control_loss` code of state ``k`` (``k < step_count``:
+    the simulator node does not check the final state either) against its answer, within ``control_bounds``
+    (:meth:`fsr_sim.model.control_loss.ControlBounds.pack`): row ``k`` is complete."""
     mode = controller.allocation.mode
     if first == 0:
         publish(plant, plant_state, published[0])
@@ -107,7 +123,13 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
             return CONTROLLER_FAILED, k, status
         if k == step_count:
             return FINISHED, k, 0
+        lost = control_loss(control_bounds, plant_state.x, row[REFERENCE_POSITION:REFERENCE_POSITION + 3],
+                            row[COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4], held_by_surface(plant_state))
+        if lost != IN_CONTROL:
+            return LOST_CONTROL, k, lost
         hold_command(plant, plant_state, mode, row, force, torque)
+        if k == 0:  # rotor_state of t_0: the rotors spin at the first command from the start, as the node publishes
+            actuator_row(plant_state, actuators[0])
         code = advance(plant, plant_state, published[k + 1])
         actuator_row(plant_state, actuators[k + 1])
         if code != RUNNING:

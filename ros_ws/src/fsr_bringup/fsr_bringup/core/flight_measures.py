@@ -37,9 +37,17 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_bringup.core.flight_loop import CONTROLLER_FAILED, DIVERGED, FINISHED, closed_loop_tick, hold_command
+from fsr_bringup.core.flight_loop import (
+    CONTROLLER_FAILED,
+    DIVERGED,
+    FINISHED,
+    LOST_CONTROL,
+    closed_loop_tick,
+    hold_command,
+)
 from fsr_control.core.allocation import WRENCH
 from fsr_control.core.controller import (
+    COMMANDED_QUATERNION,
     COMMANDED_ROTATION,
     REFERENCE_ACCELERATION,
     REFERENCE_POSITION,
@@ -51,6 +59,7 @@ from fsr_control.core.controller import (
 )
 from fsr_control.core.flatness import ATTITUDE_OK
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState
+from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import advance, publish
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
@@ -357,8 +366,8 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
                  controller_state: ControllerState, with_estimator: bool, estimator_measured: bool,
                  observer: ObserverParams,
                  observer_state: ObserverState, step_count: int, period_ns: int, measures: MeasureParams,
-                 actuator_plant: PlantParams, actuator_state: PlantState, states, published, row, estimate,
-                 rotor_rows, acc) -> tuple:  # noqa: ANN001
+                 actuator_plant: PlantParams, actuator_state: PlantState, control_bounds: tuple, states, published,
+                 row, estimate, rotor_rows, acc) -> tuple:  # noqa: ANN001
     """Steps ``0..step_count`` measured into ``acc`` (module docstring); ``states`` (13,) the state of ``t_k``,
     ``published`` (2, 19) the rows of ``t_k`` and ``t_k+1``, ``row`` the controller's output, ``estimate`` (7)
     the estimator's and ``rotor_rows`` (8, n) the rotors' (:data:`ACTUAL_SPEEDS` ...), all scratch.
@@ -392,6 +401,10 @@ def fly_measured(plant: PlantParams, plant_state: PlantState, controller: Contro
         measure_sample(measures, acc, k, states, rotation_k, row)
         if k == step_count:
             return FINISHED, k, 0
+        lost = control_loss(control_bounds, plant_state.x, row[REFERENCE_POSITION:REFERENCE_POSITION + 3],
+                            row[COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4], held_by_surface(plant_state))
+        if lost != IN_CONTROL:
+            return LOST_CONTROL, k, lost
         hold_command(plant, plant_state, mode, row, force, torque)
         if plant.wrench_lag:  # the applied wrench over the step (as the RK4 steps apply it, lagging the command)
             w = plant_state.body_wrench

@@ -3,7 +3,8 @@
 Per published state ``t_k`` the CDR bytes the node graph records, packed from the flight loop's arrays by
 the nodes' own templates (:meth:`fsr_sim.ros.cdr_pack.StampedDoubles.pack_rows`, many steps at once):
 
-* simulator: ``odom``, ``wrench_truth`` and, with an IMU, ``imu`` (the published rows,
+* simulator: ``odom``, ``wrench_truth``, with an IMU ``imu`` and with a measured ``odom`` ``odom_truth`` (the
+  published rows,
   :class:`fsr_sim.nodes.state_packets.StatePackets`' templates), ``rotor_state`` (with actuator dynamics: the
   rotors' actual speeds and tilts) and ``sim_status`` (running at the start, the final state at the end);
 * controller: ``rotor_cmd`` (rotor actuation), ``wrench_cmd``, ``wrench_shortfall``, ``reference``,
@@ -29,6 +30,7 @@ from fsr_sim.contract import (
     IMU,
     MASS_ESTIMATE,
     ODOM,
+    ODOM_TRUTH,
     ROTOR_STATE,
     SIM_STATUS,
     WRENCH_ESTIMATE,
@@ -51,11 +53,12 @@ class InProcessRecorder:
 
     def __init__(self, path: Path | None, scenario_yaml: str, rotors: bool, rotor_count: int = 0,
                  tilting: bool = False, topics: frozenset[str] | None = None, rotor_state: bool = False,
-                 imu: ImuParams | None = None, live: LiveServer | None = None) -> None:
+                 imu: ImuParams | None = None, live: LiveServer | None = None, odom_truth: bool = False) -> None:
         """``topics``: record only these (:func:`fsr_sim.contract.recording_selection`; None: all);
         ``rotor_state``: the plant has actuator dynamics (the simulator then publishes ``rotor_state``);
         ``imu``: the plant's IMU stage (enabled: the simulator publishes ``imu``); ``live``: also serve everything
-        written there (without ``path``: only serve it)."""
+        written there (without ``path``: only serve it); ``odom_truth``: ``odom`` is measured (a sensor stage on),
+        the true state is recorded beside it on ``odom_truth``."""
         from fsr_bringup.recording.derived import DerivedTopics
         from fsr_bringup.recording.metadata import scenario_from_text
         from fsr_control.nodes.packets import ControllerPackets
@@ -81,7 +84,8 @@ class InProcessRecorder:
         self.rotor_count = rotor_count
         self.tilting = tilting
         self.imu = imu is not None and imu.enabled
-        state_packets = StatePackets(rotor_count if rotor_state else 0, tilting, imu)
+        self.odom_truth = odom_truth
+        state_packets = StatePackets(rotor_count if rotor_state else 0, tilting, imu, odom_truth)
         self._templates = {"/" + topic: template for packets in (state_packets, self.controller_packets,
                                                                  EstimatePackets())
                            for topic, template in packets.templates.items()}
@@ -93,13 +97,15 @@ class InProcessRecorder:
         """Record everything published for the states stamped ``stamps_ns`` (K,): their published rows (K, width),
         the controller's output rows (K, width), the estimates (K, 7) or None (estimator off) and the rotors'
         actual speeds and tilts (K, 2n) (``rotor_state``, recorded with actuator dynamics)."""
-        from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, IMU_END, ODOM_SIZE, WRENCH_TRUTH_END
+        from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, IMU_END, ODOM_SIZE, TRUE_ODOM, WRENCH_TRUTH_END
         from fsr_sim.nodes.state_packets import joint_values
 
         for start in range(0, len(stamps_ns), BLOCK_STEPS):
             block = slice(start, start + BLOCK_STEPS)
             columns = [("/" + ODOM.name, published[block, :ODOM_SIZE]),
                        ("/" + WRENCH_TRUTH.name, published[block, ODOM_SIZE:WRENCH_TRUTH_END])]
+            if self.odom_truth:
+                columns.insert(1, ("/" + ODOM_TRUTH.name, published[block, TRUE_ODOM:TRUE_ODOM + ODOM_SIZE]))
             if self.rotor_state:
                 n = self.rotor_count
                 rows = actuators[block]

@@ -20,6 +20,7 @@ import numpy as np
 from fsr_bringup.core import flight_loop
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
+from fsr_control.core.controller import COMMANDED_QUATERNION, REFERENCE_POSITION
 from fsr_control.core.flatness import ATTITUDE_ERRORS
 from fsr_control.flight_controller import FlightController
 from fsr_control.planning.trajectory import mid_path, mid_path_note
@@ -29,10 +30,13 @@ from fsr_sim.core.odometry import (
     IMU_ANGULAR_VELOCITY,
     IMU_LINEAR_ACCELERATION,
     IMU_TRUE_LINEAR_ACCELERATION,
+    ODOM_SIZE,
     PUBLISHED_SIZE,
+    TRUE_ODOM,
     TRUTH_FORCE,
     TRUTH_TORQUE,
 )
+from fsr_sim.model.control_loss import loss_reason
 from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.ros.runtime import process_age
@@ -74,6 +78,11 @@ class FlightRun:
     imu_angular_velocity_measured, imu_specific_force_measured : numpy.ndarray, shape (K+1, 3), or None
         What ``imu`` carries (the IMU's noise, bias, delay and rate on the true values), body FRD [rad/s],
         [m/s^2]; None without an IMU (``sensors.imu``).
+    odometry_measured : numpy.ndarray, shape (K+1, 13), or None
+        What ``odom`` carries when it is a measurement (``sensors.odometry``): position world [m], quaternion
+        ``[x, y, z, w]``, velocity body [m/s], angular velocity body [rad/s]; None when ``odom`` is the true state
+        (``state`` is always the true state, what the tracking errors are taken on); ``odometry_true`` then the same
+        numbers of the true state (``odom_truth``'s).
     imu_specific_force_true : numpy.ndarray, shape (K+1, 3), or None
         The true specific force ``R^T (p_ddot - g e3)`` [m/s^2], body FRD, of each state (the true angular
         velocity is :attr:`angular_velocity`); None without an IMU.
@@ -129,6 +138,8 @@ class FlightRun:
     imu_angular_velocity_measured: np.ndarray | None = None  # (K+1, 3) imu's angular velocity [rad/s], body
     imu_specific_force_measured: np.ndarray | None = None  # (K+1, 3) imu's linear acceleration [m/s^2], body
     imu_specific_force_true: np.ndarray | None = None  # (K+1, 3) R^T (p_ddot - g e3) [m/s^2], body
+    odometry_measured: np.ndarray | None = None  # (K+1, 13) odom's numbers when it is measured (sensors.odometry)
+    odometry_true: np.ndarray | None = None  # (K+1, 13) odom_truth's numbers (the true state), beside a measured odom
     plan_kind: str = "waypoints"  # trajectory.kind
     plan_end_time: float | None = None  # [s] when the plan comes to rest (None: no plan)
     notes: list[str] = field(default_factory=list)
@@ -173,6 +184,15 @@ class FlightRun:
     @property
     def thrust(self) -> np.ndarray:
         return -self.force_cmd[:, 2]
+
+    def metrics(self, **options: Any) -> dict[str, Any]:
+        """The metrics of this flight, the ones its summary and ``fsr-sweep`` report
+        (:func:`fsr_bringup.analysis.metrics.flight_metrics` of the flight in memory; ``options``: its
+        ``settle_time``, ``settling``, ``after``). Tracking errors are on the true state."""
+        from fsr_bringup.analysis.in_memory import recorded_flight_of_run
+        from fsr_bringup.analysis.metrics import flight_metrics
+
+        return flight_metrics(recorded_flight_of_run(self), **options)
 
     def save_mcap(self, path: str | Path) -> Path:
         """Write this flight's recording, the file ``fsr-fly --in-process`` writes: the flight is flown again
@@ -226,20 +246,39 @@ class FlightSetup:
         """The vehicle has an IMU (the graph then publishes ``imu``)."""
         return self.simulation.imu.enabled
 
+    @property
+    def control_bounds(self) -> tuple[float, float]:
+        """The scenario's ``divergence`` bounds as the compiled check takes them."""
+        return self.simulation.divergence.pack()
+
+    @property
+    def odometry_measured(self) -> bool:
+        """``odom`` is a measurement (a sensor stage on), not the true state (the graph then publishes
+        ``odom_truth``)."""
+        return bool(self.plant.params.sensors.odometry.enabled)
+
     def fly(self, first: int, last: int) -> tuple[int, int, int]:
         """Steps ``first..last`` in the compiled loop: ``(outcome, k, detail)`` of ``fly_steps``."""
         a = self.arrays
         return flight_loop.fly_steps(
             self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
             self.estimation.enabled, self.estimation.rotor_state, self.observer.params, self.observer.state, first,
-            last, self.steps, self.period_ns, a.states, a.published, a.actuators, a.control, a.estimates)
+            last, self.steps, self.period_ns, self.control_bounds, a.states, a.published, a.actuators, a.control,
+            a.estimates)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""
         return k + 1 if outcome != flight_loop.CONTROLLER_FAILED else k
 
     def end(self, outcome: int, k: int, detail: int) -> tuple[str, str] | None:
-        """``(end_reason, reason)`` of a divergence or a failed law (``fly``'s outcome), None otherwise."""
+        """``(end_reason, reason)`` of a divergence, a loss of control or a failed law (``fly``'s outcome), None
+        otherwise."""
+        if outcome == flight_loop.LOST_CONTROL:
+            a = self.arrays
+            return DIVERGED, loss_reason(detail, self.simulation.divergence, a.states[k],
+                                         a.control[k, REFERENCE_POSITION:REFERENCE_POSITION + 3],
+                                         a.control[k, COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4],
+                                         k * self.period_ns * 1e-9)
         if outcome == flight_loop.DIVERGED:
             return DIVERGED, divergence_reason(detail, self.plant.params, self.plant.core_state)
         if outcome == flight_loop.CONTROLLER_FAILED:
@@ -322,7 +361,7 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
 
         recorder = InProcessRecorder(None if recording is None else Path(recording), setup.scenario.dump(),
                                      setup.rotors, n, sim.vehicle.has_servos, record_topics, setup.actuator_dynamics,
-                                     setup.plant.params.sensors.imu, live)
+                                     setup.plant.params.sensors.imu, live, setup.odometry_measured)
     end_reason, reason, interrupted = FINISHED, f"reached the scenario duration {sim.duration:g} s", False
     if steps < sim.step_count:
         reason = f"stopped after {steps} steps"
@@ -420,6 +459,9 @@ def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, co
         wrench_shortfall=columns(c.SHORTFALL, 6), simulation=setup.simulation, estimator=setup.estimation,
         actuator_dynamics=setup.actuator_dynamics, imu_angular_velocity_measured=imu(IMU_ANGULAR_VELOCITY),
         imu_specific_force_measured=imu(IMU_LINEAR_ACCELERATION),
-        imu_specific_force_true=imu(IMU_TRUE_LINEAR_ACCELERATION), plan_kind=controller.config.trajectory_kind,
+        imu_specific_force_true=imu(IMU_TRUE_LINEAR_ACCELERATION),
+        odometry_measured=own(published[:, :ODOM_SIZE]) if setup.odometry_measured else None,
+        odometry_true=own(published[:, TRUE_ODOM:TRUE_ODOM + ODOM_SIZE]) if setup.odometry_measured else None,
+        plan_kind=controller.config.trajectory_kind,
         plan_end_time=plan_end, notes=notes,
     )

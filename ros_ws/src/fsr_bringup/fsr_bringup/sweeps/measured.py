@@ -60,6 +60,7 @@ class LoopFlight:
     measures: core.MeasureParams
     actuator_params: Any  # the plant without actuator dynamics (the rotors' wrench of a command)
     actuator_state: Any  # its scratch state
+    control_bounds: tuple  # the scenario's divergence bounds (fsr_sim.model.control_loss.ControlBounds.pack)
 
     def replace(self, **changes: Any) -> LoopFlight:
         return replace(self, **changes)
@@ -97,7 +98,7 @@ def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSet
     return LoopFlight(setup.plant.params, setup.plant.core_state, setup.controller.params, setup.controller.state,
                       bool(estimation.enabled), bool(estimation.rotor_state), setup.observer.params,
                       setup.observer.state, setup.steps, setup.period_ns, sim.vehicle.rotor_count, measures,
-                      actuator.params, actuator.core_state)
+                      actuator.params, actuator.core_state, setup.control_bounds)
 
 
 def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
@@ -111,7 +112,8 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
         flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
         flight.with_estimator, flight.estimator_measured, flight.observer_params, flight.observer_state,
         flight.steps, flight.period_ns, flight.measures, flight.actuator_params, flight.actuator_state,
-        scratch.states, scratch.published, scratch.row, scratch.estimate, scratch.rotor_rows, scratch.acc)
+        flight.control_bounds, scratch.states, scratch.published, scratch.row, scratch.estimate, scratch.rotor_rows,
+        scratch.acc)
     if outcome != core.FINISHED or scratch.acc[core.TRUTH_UNDEFINED] > 0:
         return None
     return measured_row(flight, scratch.acc)

@@ -5,7 +5,9 @@
 A 3D panel in ``map`` (ENU: the vehicle upright; ``/tf``, ``/tf_static`` and ``markers`` of a recording) beside
 three plots against the messages' header stamps (simulated time): the position and its reference per axis,
 the estimated external force against the true one (``wrench_truth``: without a model mismatch the estimator's
-effective truth), and the rotor speeds. Topics are the root namespace's (a fleet's vehicles: edit the paths).
+effective truth), and the rotor speeds: commanded (``rotor_cmd``) and, where the rotors lag their commands,
+what they did (``rotor_state``, the same colour; empty without actuator dynamics). Topics are the root namespace's
+(a fleet's vehicles: edit the paths).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from fsr_sim.contract import (
     ODOM,
     REFERENCE,
     ROTOR_CMD,
+    ROTOR_STATE,
     TF,
     WORLD_FRAME,
     WRENCH_ESTIMATE,
@@ -31,8 +34,9 @@ COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e
 ROTORS_PLOTTED = 8  # rotor_cmd velocities plotted (a path past a quadrotor's four simply stays empty)
 
 
-def _series(path: str, label: str, colour: str) -> dict:
-    return {"value": path, "label": label, "color": colour, "enabled": True, "timestampMethod": "headerStamp"}
+def _series(path: str, label: str, colour: str, dashed: bool = False) -> dict:
+    series = {"value": path, "label": label, "color": colour, "enabled": True, "timestampMethod": "headerStamp"}
+    return {**series, "lineStyle": "dashed"} if dashed else series
 
 
 def _plot(title: str, series: list[dict]) -> dict:
@@ -51,6 +55,9 @@ def layout() -> dict:
     force = [_series(f"{estimate}.wrench.force.{a}", f"f_e,{a} estimate", COLOURS[i]) for i, a in enumerate(AXES)]
     force += [_series(f"{truth}.wrench.force.{a}", f"f_e,{a} true", COLOURS[3 + i]) for i, a in enumerate(AXES)]
     speeds = [_series(f"{rotors}.velocity[{i}]", f"w_{i + 1}", COLOURS[i]) for i in range(ROTORS_PLOTTED)]
+    actual = resolve(ROTOR_STATE.name)
+    speeds += [_series(f"{actual}.velocity[{i}]", f"w_{i + 1} measured", COLOURS[i], dashed=True)
+               for i in range(ROTORS_PLOTTED)]
     scene = {
         "cameraState": {"perspective": True, "distance": 8, "phi": 60, "thetaOffset": 45, "target": [0, 0, 0],
                         "targetOffset": [0, 0, 0], "targetOrientation": [0, 0, 0, 1], "fovy": 45, "near": 0.05,
@@ -66,7 +73,7 @@ def layout() -> dict:
     }
     config = {"3D!fsr": scene, "Plot!position": _plot(f"position and reference [m] ({WORLD_FRAME})", position),
               "Plot!force": _plot(f"external force [N] ({BODY_FRAME}): estimate and truth", force),
-              "Plot!rotors": _plot("rotor speeds [rad/s]", speeds)}
+              "Plot!rotors": _plot("rotor speeds [rad/s]: commanded, measured", speeds)}
     plots = {"direction": "column", "first": "Plot!position",
              "second": {"direction": "column", "first": "Plot!force", "second": "Plot!rotors", "splitPercentage": 50},
              "splitPercentage": 33}

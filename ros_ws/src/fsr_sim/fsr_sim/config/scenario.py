@@ -34,6 +34,7 @@ from fsr_sim.config.validation import (
 from fsr_sim.config.validation import yaml_value as parse_yaml_value
 from fsr_sim.config.vehicle_file import dynamics_and_drag, load_vehicle_file
 from fsr_sim.core.aerodynamics import has_aerodynamics
+from fsr_sim.model.control_loss import DEFAULT_ATTITUDE_ERROR_DEG, DEFAULT_POSITION_ERROR_M, ControlBounds
 from fsr_sim.model.disturbances import DisturbanceProfile
 from fsr_sim.model.environment import Environment
 from fsr_sim.model.plant import Plant, actuator_lags, pack_aerodynamics
@@ -45,7 +46,7 @@ from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle
 SECTION_GROUP = "fsr.scenario_sections"
 PLANT_KEYS = (
     "name", "description", "vehicle", "duration", "physics_dt", "physics_substeps", "actuation",
-    "initial_state", "plant", "environment", "disturbances", "lockstep", "sensors",
+    "initial_state", "plant", "environment", "disturbances", "lockstep", "sensors", "divergence",
 )
 
 
@@ -204,6 +205,7 @@ class SimulationConfig:
     real_time_factor: float = 1.0
     odometry_noise: OdometryNoise = field(default_factory=OdometryNoise)
     imu: ImuModel = field(default_factory=ImuModel)  # the vehicle's IMU (imu published when enabled)
+    divergence: ControlBounds = field(default_factory=ControlBounds)  # when the flight has lost control
 
     @property
     def control_period(self) -> float:
@@ -298,6 +300,12 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
     real_time_factor = lockstep.number("real_time_factor", 1.0, strictly_positive=True)
     lockstep.reject_unknown()
     odometry_noise, imu = sensors_from_section(root.section("sensors"), physics_dt * substeps)
+    divergence = root.section("divergence")
+    bounds = ControlBounds(
+        attitude_error_deg=divergence.number("attitude_error_deg", DEFAULT_ATTITUDE_ERROR_DEG, strictly_positive=True,
+                                             maximum=180.0),
+        position_error_m=divergence.number("position_error_m", DEFAULT_POSITION_ERROR_M, strictly_positive=True))
+    divergence.reject_unknown()
     root.reject_unknown(known=(*PLANT_KEYS, *registered_sections()))
 
     duration_steps = duration / (physics_dt * substeps)
@@ -321,6 +329,7 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
         real_time_factor=real_time_factor,
         odometry_noise=odometry_noise,
         imu=imu,
+        divergence=bounds,
     )
 
 

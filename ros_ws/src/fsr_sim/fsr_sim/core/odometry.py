@@ -10,7 +10,10 @@ same values:
 * ``wrench_truth``: the true external force in the body frame ``R^T f_ext,world`` [N] and torque [N m];
 * ``imu`` (with an IMU, :mod:`fsr_sim.core.imu`; else left as it is): the measured angular velocity [rad/s]
   and specific force ``R^T (p_ddot - g e3)`` [m/s^2], body FRD, then the same two true (not published: the
-  truth the logs compare the measurement with).
+  truth the logs compare the measurement with);
+* ``odom_truth``: ``odom``'s numbers of the true state (:data:`TRUE_ODOM`, the first 13 before the sensor stage
+  measures them): what the simulator publishes beside a measured ``odom`` (a sensor stage on), so that a
+  recording holds the state the tracking errors are taken on.
 
 Read back (:func:`read_odometry`): ``R`` from that quaternion and ``v_world = R v_body``.
 """
@@ -27,13 +30,14 @@ WRENCH_TRUTH_END = 19
 IMU_ANGULAR_VELOCITY, IMU_LINEAR_ACCELERATION = 19, 22  # imu as published (measured)
 IMU_TRUE_ANGULAR_VELOCITY, IMU_TRUE_LINEAR_ACCELERATION = 25, 28  # the true values (not published)
 IMU_END = 25
-PUBLISHED_SIZE = 31
+TRUE_ODOM = 31  # odom_truth: odom's 13 numbers of the true state
+PUBLISHED_SIZE = 44
 
 
 @jit
 def publish_state(x, external: tuple, out) -> None:  # noqa: ANN001
     """The ``odom`` and ``wrench_truth`` numbers (the first 19 of the published row) of a plant state ``x`` (13,)
-    with the true external wrench (force world [N], torque body [N m])."""
+    with the true external wrench (force world [N], torque body [N m]); ``odom``'s also at :data:`TRUE_ODOM`."""
     qx, qy, qz, qw = x[6], x[7], x[8], x[9]
     if qw < 0.0:
         qx, qy, qz, qw = -qx, -qy, -qz, -qw
@@ -47,6 +51,8 @@ def publish_state(x, external: tuple, out) -> None:  # noqa: ANN001
     fx, fy, fz = mat_t_vec3(rotation, force_world)
     out[13], out[14], out[15] = fx, fy, fz
     out[16], out[17], out[18] = torque_body
+    for i in range(ODOM_SIZE):  # the true odom, kept whatever the sensor stage makes of out[:ODOM_SIZE]
+        out[TRUE_ODOM + i] = out[i]
 
 
 @jit

@@ -1,7 +1,8 @@
 """Simulator node: steps the plant in lockstep with the controller and publishes the state (docs/model.md §4).
 
 Publishes ``/clock`` (if ``publish_clock``), ``odom``, ``wrench_truth``, with actuator dynamics ``rotor_state``,
-with an IMU (``sensors.imu``) ``imu``, and ``sim_status`` (a
+with an IMU (``sensors.imu``) ``imu``, with a measured ``odom`` (``sensors.odometry``) the true state on
+``odom_truth``, and ``sim_status`` (a
 :class:`fsr_sim.contract.SimStatus` as JSON: ``running``, then ``finished``, ``diverged`` or ``stopped``; also
 published when the controller stops answering and when it answers again), each with its QoS of
 :mod:`fsr_sim.contract`; subscribes ``rotor_cmd``
@@ -18,7 +19,11 @@ Lockstep (default):
    is asynchronous) still receives it from the writer's history.
 2. Step k: wait for the command stamped ``t_k`` (stale stamps ignored, NaN/inf dropped with a warning),
    apply it, run ``physics_substeps`` RK4 steps, publish the state ``t_{k+1}``. A missing command ->
-   failsafe (``hold`` the last command or ``cut`` thrust); see :mod:`fsr_sim.nodes.lockstep`.
+   failsafe (``hold`` the last command or ``cut`` thrust); see :mod:`fsr_sim.nodes.lockstep`. While the
+   controller publishes ``reference`` and ``attitude_cmd``, the state ``t_k`` is also checked against its answer
+   stamped ``t_k`` (waited for like the command): an attitude error against ``R_c`` or a position error against
+   ``p_d`` beyond the scenario's ``divergence`` bounds (:func:`fsr_sim.core.control_loss.control_loss`, what the
+   in-process loop calls) ends the flight as diverged at ``t_k``, exit 3.
 3. After ``duration``: publish the final state, ``sim_status`` finished, exit 0. Divergence (NaN state,
    speed/spin bounds, crash) -> ``sim_status`` diverged with the reason, exit 3. SIGINT/SIGTERM ->
    ``sim_status`` stopped, exit 0. A start-up handshake that does not complete -> exit 1.
@@ -49,11 +54,14 @@ from std_msgs.msg import String
 
 from fsr_sim.config.scenario import plant_from_config
 from fsr_sim.contract import (
+    ATTITUDE_CMD,
     CLOCK,
     DIVERGED,
     FINISHED,
     IMU,
     ODOM,
+    ODOM_TRUTH,
+    REFERENCE,
     ROTOR_CMD,
     ROTOR_STATE,
     RUNNING,
@@ -65,8 +73,10 @@ from fsr_sim.contract import (
     SimStatus,
 )
 from fsr_sim.core import lockstep
+from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.odometry import PUBLISHED_SIZE
 from fsr_sim.core.plant import RUNNING as PLANT_RUNNING
+from fsr_sim.model.control_loss import loss_reason
 from fsr_sim.model.plant import divergence_reason, has_actuator_dynamics
 from fsr_sim.nodes.commands import RotorCommandReader, wrench_command_raw
 from fsr_sim.nodes.lockstep import (
@@ -109,7 +119,9 @@ class SimulatorNode(Node):
         vehicle = self.config.plant_vehicle
         self.publish_rotor_state = has_actuator_dynamics(self.plant.params)
         imu = self.plant.params.sensors.imu
-        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos, imu)
+        truth = self.plant.params.sensors.odometry.enabled  # odom is measured: the true state beside it
+        self.messages = StatePackets(vehicle.rotor_count if self.publish_rotor_state else 0, vehicle.has_servos, imu,
+                                     truth)
         self.published = np.zeros(PUBLISHED_SIZE)  # the core's published row of the current state
         self.rotor_reader = RotorCommandReader(vehicle.rotor_count, vehicle.has_servos)
 
@@ -119,15 +131,22 @@ class SimulatorNode(Node):
         self.wrench_pub = publisher(self, WRENCH_TRUTH)
         self.rotor_state_pub = publisher(self, ROTOR_STATE) if self.publish_rotor_state else None
         self.imu_pub = publisher(self, IMU) if imu.enabled else None
+        self.truth_pub = publisher(self, ODOM_TRUTH) if truth else None
         self.clock_pub = publisher(self, CLOCK) if self.params.publish_clock else None
         self.progress_pub = publisher(self, SIM_PROGRESS)
         self.status_pub = publisher(self, SIM_STATUS)
         self.recorded_publishers = {topic.name: pub for topic, pub in (
             (ODOM, self.odom_pub), (WRENCH_TRUTH, self.wrench_pub), (ROTOR_STATE, self.rotor_state_pub),
-            (IMU, self.imu_pub), (CLOCK, self.clock_pub), (SIM_PROGRESS, self.progress_pub),
-            (SIM_STATUS, self.status_pub))}
+            (IMU, self.imu_pub), (ODOM_TRUTH, self.truth_pub), (CLOCK, self.clock_pub),
+            (SIM_PROGRESS, self.progress_pub), (SIM_STATUS, self.status_pub))}
         self.command_sub = subscription(self, command, _unused, raw=True)  # commands are read from their CDR bytes
-        self.wait_set = SubscriptionWaitSet(self, [self.command_sub])
+        # the controller's answer to each state beyond the command: what the loss-of-control check compares it with
+        self.reference_sub = subscription(self, REFERENCE, _unused, raw=True)
+        self.attitude_sub = subscription(self, ATTITUDE_CMD, _unused, raw=True)
+        self.wait_set = SubscriptionWaitSet(self, [self.command_sub, self.reference_sub, self.attitude_sub])
+        self.control_bounds = self.config.divergence.pack()
+        self.position_d, self.quaternion_c = np.zeros(3), np.zeros(4)  # p_d [m] and R_c (x y z w) of answer_ns
+        self.answer_ns: list[int | None] = [None, None]  # stamps of the reference and attitude_cmd held
 
         self.phase = HANDSHAKE
         self.exit_code = EXIT_OK
@@ -216,6 +235,9 @@ class SimulatorNode(Node):
         if self._take_commands(expected, WAIT_SLICE):
             self.have_command = True
             self.phase = STEPPING
+            if self.rotor_state_pub is not None:  # t_0's: the rotors spin at the first command from the start
+                state = self.plant.core_state
+                self.rotor_state_pub.publish(self.messages.rotor_state(expected, state.speeds, state.tilts))
             self.wall_start = time.monotonic()
             self._refresh_controller_name()
             self.get_logger().info(f"controller {self.controller_name} answered the initial state: stepping")
@@ -260,6 +282,8 @@ class SimulatorNode(Node):
                     self._publish_status(RUNNING, "controller back in the loop")
             else:
                 self._on_missed(self.command_sub.get_publisher_count())
+        if self._lost_control(self.messages.stamp_ns, stop):
+            return
         self._advance()
 
     def _await_command(self, expected_ns: int, stop: object) -> bool | None:
@@ -321,7 +345,31 @@ class SimulatorNode(Node):
             )
             if self.config.failsafe == "cut":
                 self.plant.cut_thrust()
+        if self._lost_control(None, stop):
+            return
         self._advance()
+
+    def _lost_control(self, expected_ns: int | None, stop: object) -> bool:
+        """Check the current state against the controller's answer stamped ``expected_ns`` (lockstep: waited for up to
+        the command's budget while it is published; free-running, ``None``: the latest answer); a loss of control
+        ends the flight as diverged. True when it did."""
+        if expected_ns is not None and self.answer_ns != [expected_ns, expected_ns] and (
+                self.reference_sub.get_publisher_count() and self.attitude_sub.get_publisher_count()):
+            deadline = time.monotonic() + self.command_wait.budget()
+            while self.answer_ns != [expected_ns, expected_ns] and not stop and time.monotonic() < deadline:
+                self._take_commands(expected_ns, max(0.0, min(deadline - time.monotonic(), WAIT_SLICE)))
+        if None in self.answer_ns or (expected_ns is not None and self.answer_ns != [expected_ns, expected_ns]):
+            return False
+        plant = self.plant
+        code = control_loss(self.control_bounds, plant.core_state.x, self.position_d, self.quaternion_c,
+                            held_by_surface(plant.core_state))
+        if code == IN_CONTROL:
+            return False
+        reason = loss_reason(code, self.config.divergence, plant.core_state.x, self.position_d, self.quaternion_c,
+                             plant.time)
+        self.get_logger().error(f"simulation diverged at t = {plant.time:.4f} s: {reason}")
+        self._finish(DIVERGED, reason, EXIT_DIVERGED)
+        return True
 
     def _advance(self) -> None:
         """Step the plant one control period, then publish the new state or end the run."""
@@ -360,7 +408,10 @@ class SimulatorNode(Node):
         """Wait up to ``wait`` s, take every queued command, apply the valid one answering ``expected_ns``
         (lockstep) or every valid one (free-running, ``expected_ns`` None); True if one was applied."""
         applied = False
-        for _, data, _info in self.wait_set.take_ready(int(wait * 1e9)):  # CDR bytes: read in place
+        for index, data, _info in self.wait_set.take_ready(int(wait * 1e9)):  # CDR bytes: read in place
+            if index:  # a reference or an attitude_cmd
+                self._take_answer(index - 1, data, expected_ns)
+                continue
             if expected_ns is not None:
                 try:
                     stamp_ns = cdr_read.stamp(data)
@@ -376,6 +427,21 @@ class SimulatorNode(Node):
         if applied and self.watchdog is not None and self.watchdog.feed(time.monotonic()):
             self.get_logger().info(f"{self.command_topic}: commands arrive again at {self._where()}")
         return applied
+
+    def _take_answer(self, which: int, data: bytes, expected_ns: int | None) -> None:
+        """Keep the reference's position (``which`` 0) or the commanded attitude (1) stamped ``expected_ns``
+        (free-running, None: the latest); others are dropped."""
+        try:
+            stamp_ns, values = cdr_read.reference_pose(data) if which == 0 else cdr_read.quaternion_stamped(data)
+        except ValueError as error:
+            self.warn_bad(f"dropped a {(REFERENCE, ATTITUDE_CMD)[which].name} at {self._where()}: {error}")
+            return
+        if expected_ns is None or stamp_ns == expected_ns:
+            if which == 0:
+                self.position_d[:] = values[:3]
+            else:
+                self.quaternion_c[:] = values
+            self.answer_ns[which] = stamp_ns
 
     def _on_off_stamp(self, verdict: str, stamp_ns: int, expected_ns: int) -> None:
         if verdict == AHEAD:
@@ -410,12 +476,14 @@ class SimulatorNode(Node):
 
     def _send_state(self) -> None:
         """Publish the published row of the current state (``odom``, ``wrench_truth``, ``/clock``; with an IMU,
-        ``imu``) and, with actuator dynamics, ``rotor_state``."""
+        ``imu``; with a measured ``odom``, ``odom_truth``) and, with actuator dynamics, ``rotor_state``."""
         messages, plant = self.messages, self.plant
         messages.fill_from_row(plant.stamp_ns, self.published)
         self.odom_pub.publish(messages.odom)  # first: it is what the controller waits for
+        if self.truth_pub is not None:
+            self.truth_pub.publish(messages.truth)
         self.wrench_pub.publish(messages.wrench)
-        if self.rotor_state_pub is not None:
+        if self.rotor_state_pub is not None and self.phase != HANDSHAKE:  # t_0's: once the first command came
             state = plant.core_state
             self.rotor_state_pub.publish(messages.rotor_state(plant.stamp_ns, state.speeds, state.tilts))
         if self.imu_pub is not None:

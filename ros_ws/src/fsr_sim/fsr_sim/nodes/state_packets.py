@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_sim.contract import IMU, ODOM, ROTOR_STATE, WRENCH_TRUTH, joint_names
-from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, IMU_END, ODOM_SIZE, WRENCH_TRUTH_END
+from fsr_sim.contract import IMU, ODOM, ODOM_TRUTH, ROTOR_STATE, WRENCH_TRUTH, joint_names
+from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, IMU_END, ODOM_SIZE, TRUE_ODOM, WRENCH_TRUTH_END
 from fsr_sim.core.sensors import ImuParams
 from fsr_sim.model.odometry import published_row
 from fsr_sim.ros import cdr_pack
@@ -44,12 +44,14 @@ def joint_values(speeds: np.ndarray, tilts: np.ndarray | None) -> np.ndarray:
 
 
 class StatePackets:
-    """Packs the state stamped ``stamp_ns``: after :meth:`fill_from_row`, ``odom``, ``wrench``, ``clock`` and
-    (with an IMU) ``imu`` hold the CDR payloads of ``odom``, ``wrench_truth``, ``/clock`` and ``imu``.
-    ``rotor_count`` > 0: ``rotor_state`` too (:meth:`rotor_state`); ``imu``: the IMU stage (None or disabled:
-    no ``imu``)."""
+    """Packs the state stamped ``stamp_ns``: after :meth:`fill_from_row`, ``odom``, ``wrench``, ``clock``,
+    (with an IMU) ``imu`` and (``odom_truth``) ``truth`` hold the CDR payloads of ``odom``, ``wrench_truth``,
+    ``/clock``, ``imu`` and ``odom_truth``. ``rotor_count`` > 0: ``rotor_state`` too (:meth:`rotor_state`);
+    ``imu``: the IMU stage (None or disabled: no ``imu``); ``odom_truth``: ``odom`` is measured (a sensor stage
+    on), the true state is published beside it."""
 
-    def __init__(self, rotor_count: int = 0, tilting: bool = False, imu: ImuParams | None = None) -> None:
+    def __init__(self, rotor_count: int = 0, tilting: bool = False, imu: ImuParams | None = None,
+                 odom_truth: bool = False) -> None:
         self._odom = cdr_pack.odometry(ODOM.frame, ODOM.child_frame)
         self._wrench = cdr_pack.wrench_stamped(WRENCH_TRUTH.frame)
         self._clock = cdr_pack.clock()
@@ -60,7 +62,10 @@ class StatePackets:
         self._imu = imu_template(imu) if imu is not None and imu.enabled else None
         if self._imu is not None:
             self.templates[IMU.name] = self._imu
-        self.odom = self.wrench = self.clock = self.imu = b""
+        self._truth = cdr_pack.odometry(ODOM_TRUTH.frame, ODOM_TRUTH.child_frame) if odom_truth else None
+        if self._truth is not None:
+            self.templates[ODOM_TRUTH.name] = self._truth
+        self.odom = self.wrench = self.clock = self.imu = self.truth = b""
         self.stamp_ns = -1
 
     def fill_from(self, stamp_ns: int, state_vector: np.ndarray,
@@ -76,6 +81,8 @@ class StatePackets:
         self.wrench = self._wrench.pack(stamp_ns, values[ODOM_SIZE:WRENCH_TRUTH_END])
         if self._imu is not None:
             self.imu = self._imu.pack(stamp_ns, values[IMU_ANGULAR_VELOCITY:IMU_END])
+        if self._truth is not None:
+            self.truth = self._truth.pack(stamp_ns, values[TRUE_ODOM:TRUE_ODOM + ODOM_SIZE])
         self.clock = self._clock.pack(stamp_ns, ())
         self.stamp_ns = stamp_ns
 

@@ -18,6 +18,7 @@ _UINT32 = struct.Struct("<I")
 _POSE = struct.Struct("<7d")
 _SIX = struct.Struct("<6d")  # a twist, a wrench
 _THREE = struct.Struct("<3d")  # a vector
+_QUATERNION = struct.Struct("<4d")
 _COVARIANCE_BYTES = 36 * 8
 NS_PER_S = 1_000_000_000
 
@@ -74,6 +75,40 @@ def imu(data: bytes) -> tuple[int, tuple[float, ...]]:
     except struct.error as error:
         raise ValueError(f"Imu message cut short: {error}") from None
     return stamp_ns, angular + linear
+
+
+def quaternion_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
+    """``geometry_msgs/QuaternionStamped``: (stamp [ns], (x, y, z, w))."""
+    _check(data)
+    try:
+        stamp_ns, offset = _after_header(data)
+        values = _QUATERNION.unpack_from(data, _align(offset, 8))
+    except struct.error as error:
+        raise ValueError(f"QuaternionStamped message cut short: {error}") from None
+    return stamp_ns, values
+
+
+def reference_pose(data: bytes) -> tuple[int, tuple[float, ...]]:
+    """``trajectory_msgs/MultiDOFJointTrajectory``: (stamp [ns], its first point's first transform: translation
+    x y z, rotation x y z w). ValueError for a message without a point or a transform."""
+    _check(data)
+    try:
+        stamp_ns, offset = _after_header(data)
+        offset = _align(offset, 4)
+        (names,) = _UINT32.unpack_from(data, offset)
+        offset += 4
+        for _ in range(names):  # joint_names: each a uint32 length and its bytes, 4-aligned
+            offset = _align(offset, 4)
+            (length,) = _UINT32.unpack_from(data, offset)
+            offset += 4 + length
+        offset = _align(offset, 4)
+        points, transforms = _UINT32.unpack_from(data, offset)[0], _UINT32.unpack_from(data, offset + 4)[0]
+        if not points or not transforms:
+            raise ValueError("MultiDOFJointTrajectory without a point or a transform")
+        pose = _POSE.unpack_from(data, _align(offset + 8, 8))
+    except struct.error as error:
+        raise ValueError(f"MultiDOFJointTrajectory message cut short: {error}") from None
+    return stamp_ns, pose
 
 
 def stamp(data: bytes) -> int:
