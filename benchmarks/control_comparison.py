@@ -5,12 +5,14 @@ diverged, with a figure of the median RMS.
 
     .venv/bin/python benchmarks/control_comparison.py --out runs/control_comparison          # 20 seeds
     .venv/bin/python benchmarks/control_comparison.py --seeds 2 --duration 3 --flights step_disturbance  # smoke
+    .venv/bin/python benchmarks/control_comparison.py --shipped   # the built-in rotor scenarios, onboard + 30 ms
 
 Laws: the geometric law with the report's profile (``report``: measured feed-forward, the report's gains), with
-the ``flight`` profile (reference feed-forward, designed gains, the aerodynamics model), the same with the
-observer's estimate compensated (``controller.compensation: estimate``, the estimator switched on where the
-scenario has none) and INDI (``flight`` profile gains). Conditions, cumulative as listed (:data:`CONDITIONS`),
-and one more for the targets: onboard sensors with the vehicle's own motor and Dryden turbulence.
+the ``flight`` profile (``flight``: reference feed-forward, designed gains, the aerodynamics model), the same with
+the observer's estimate compensated (``flight+comp``: ``controller.compensation: estimate``, the estimator
+switched on where the scenario has none) and INDI (``indi``, the ``flight`` profile's gains). Conditions,
+cumulative as listed (:data:`CONDITIONS`), and one more for the targets: onboard sensors with the vehicle's own
+motor and Dryden turbulence.
 
 Where a law needs what a condition lacks it gets it, and the table says so: INDI flies on an IMU, which the
 ``mocap`` preset has none of - it gets the ``onboard`` preset's BMI088 (a vehicle flown in a motion-capture hall
@@ -39,8 +41,9 @@ from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_bringup.sweeps.axes import flight_scenario
 from fsr_bringup.tuning.conditions import MAX_SEED, seed_keys
 from fsr_sim.config.scenario import Scenario, load_scenario, load_vehicle_for
-from fsr_sim.config.sensor_sections import PRESETS
+from fsr_sim.config.sensor_sections import IMU_SECTION, PRESETS
 from fsr_sim.config.validation import ConfigError, builtin_names
+from fsr_sim.contract import FINISHED
 
 FLIGHTS = {  # the flight and the values that make it the comparison's
     "step_disturbance": {},
@@ -50,8 +53,8 @@ FLIGHTS = {  # the flight and the values that make it the comparison's
 }
 LAWS = {
     "report": {"controller.type": "geometric", "controller.profile": "report"},
-    "reference": {"controller.type": "geometric", "controller.profile": "flight"},
-    "reference+comp": {"controller.type": "geometric", "controller.profile": "flight",
+    "flight": {"controller.type": "geometric", "controller.profile": "flight"},
+    "flight+comp": {"controller.type": "geometric", "controller.profile": "flight",
                        "controller.compensation": "estimate", "estimator.enabled": True},
     "indi": {"controller.type": "indi", "controller.profile": "flight"},
 }
@@ -92,8 +95,8 @@ def flight_values(flight: str, law: str, condition: Condition) -> tuple[dict[str
     vehicle = load_vehicle_for(base)
     values: dict[str, Any] = {**given, **LAWS.get(law, {}), "sensors.preset": condition.preset}
     notes = []
-    if LAWS.get(law, {}).get("controller.type") == "indi" and "imu" not in PRESETS[condition.preset]:
-        values["sensors.imu"] = dict(PRESETS["onboard"]["imu"])
+    if LAWS.get(law, {}).get("controller.type") == "indi" and IMU_SECTION not in PRESETS[condition.preset]:
+        values[f"sensors.{IMU_SECTION}"] = dict(PRESETS["onboard"][IMU_SECTION])
         notes.append("INDI under mocap: the onboard preset's IMU (BMI088)")
     if condition.motor:
         values["plant.rotor_time_constant"] = MOTOR_S
@@ -154,14 +157,14 @@ def measure(flight: str, law: str, condition: Condition, seeds: int, duration: f
     base = load_scenario(flight, values={**values, **dict.fromkeys(keys, 0)})
     table = sweep(base, sample=dict.fromkeys(keys, f"uniform:0:{MAX_SEED}"), n=seeds, seed=seed, duration=duration,
                   workers=workers)
-    finished = table[table["end_reason"] == "finished"]
+    finished = table[table["end_reason"] == FINISHED]
     invalid = table[table["end_reason"] == "invalid"]
     table.insert(0, "law", law)
     table.insert(0, "condition", condition.name)
     table.insert(0, "scenario", flight)
     if len(invalid):
         return Cell(skipped=str(invalid["end_detail"].iloc[0])), notes, table
-    cell = Cell(diverged=int((table["end_reason"] != "finished").sum()), flights=len(table))
+    cell = Cell(diverged=int((table["end_reason"] != FINISHED).sum()), flights=len(table))
     if len(finished):
         rms, peak = list(finished["position_error_rms_m"]), list(finished["position_error_peak_m"])
         cell.rms = (min(rms), statistics.median(rms))

@@ -7,7 +7,7 @@ run with ``bash -c`` in a scratch folder that links the repository's ``.venv``, 
 the commands as written, to keep the run short:
 
 * every ``fsr-fly`` flight gets ``--duration 0.5`` appended (argparse: the last ``--duration`` wins);
-* ``benchmarks/control_comparison.py`` (docs/control.md's comparison, an hour of flights) gets
+* ``benchmarks/control_comparison.py`` (docs/control.md's comparison, thousands of flights) gets
   ``--seeds 1 --duration 0.5`` appended: one seed of every law, condition and flight, 0.5 s each;
 * the by-hand block (``export ROS_DOMAIN_ID=42`` and one node per line) runs as one scripted graph: the
   nodes are started together in a leased ROS domain instead of 42 (localhost discovery), the simulator
