@@ -7,6 +7,8 @@ run with ``bash -c`` in a scratch folder that links the repository's ``.venv``, 
 the commands as written, to keep the run short:
 
 * every ``fsr-fly`` flight gets ``--duration 0.5`` appended (argparse: the last ``--duration`` wins);
+* ``benchmarks/control_comparison.py`` (docs/control.md's comparison, thousands of flights) gets
+  ``--seeds 1 --duration 0.5`` appended: one seed of every law, condition and flight, 0.5 s each;
 * the by-hand block (``export ROS_DOMAIN_ID=42`` and one node per line) runs as one scripted graph: the
   nodes are started together in a leased ROS domain instead of 42 (localhost discovery), the simulator
   line gets ``-p duration:=0.5``, and every node must end by itself (exit 0) with a complete recording;
@@ -40,6 +42,8 @@ README = ROOT / "README.md"
 DOCUMENTS = (README, *sorted((ROOT / "docs").glob("*.md")))
 LINKED = (".venv", "scripts", "requirements.txt", "ros_ws", "examples", "benchmarks")
 SHORT_FLIGHT = " --duration 0.5"
+COMPARISON = "benchmarks/control_comparison.py"
+SHORT_COMPARISON = " --seeds 1 --duration 0.5"
 SUITE_ITSELF = "python -m pytest"
 BY_HAND_MARK = "export ROS_DOMAIN_ID="
 COMPANION_MARK = "python3 -m venv companion"
@@ -90,6 +94,8 @@ def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def as_run(command: str) -> str:
+    if COMPARISON in command:
+        return command + SHORT_COMPARISON
     return command + SHORT_FLIGHT if "fsr-fly" in command else command
 
 
