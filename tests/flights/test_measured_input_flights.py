@@ -30,7 +30,7 @@ def test_wind_rejection_with_a_50ms_motor_holds_with_the_measured_input():
     """The report's law: the commanded input leaves the compensated loop unstable, the measured one holds."""
     flown = {source: fly("wind_rejection", "controller.profile=report", "duration=7.0", *FAST_OBSERVER,
                          f"estimator.input={source}") for source in ("commanded", "measured")}
-    assert final_error(flown["commanded"]) > 1.0
+    assert flown["commanded"].end_reason == "diverged"  # it loses control (divergence.attitude_error_deg)
     assert flown["measured"].end_reason == "finished"
     assert final_error(flown["measured"]) < 1e-3
 

@@ -113,17 +113,27 @@ def test_the_increment_meets_a_measured_force_at_once():
 
 def test_the_node_answers_a_stamp_once_all_its_inputs_have_arrived():
     """odom, imu and rotor_state of one stamp in any order: one answer, with each input; late ones dropped."""
-    from fsr_control.nodes.inputs import IMU_INPUT, ODOM_INPUT, ROTOR_STATE_INPUT, StampedInputs
+    from fsr_control.nodes.inputs import (
+        IMU_INPUT,
+        INITIAL_ROTOR_STATE,
+        ODOM_INPUT,
+        ROTOR_STATE_INPUT,
+        StampedInputs,
+    )
 
     inputs = StampedInputs(needs_imu=True, needs_rotor_state=True)
     assert inputs.kinds == (ODOM_INPUT, IMU_INPUT, ROTOR_STATE_INPUT)
+    # t_0: its rotor_state comes only after the first command: answered with the rotors' initial state
+    assert inputs.add(IMU_INPUT, 0, "imu 0") is None
+    assert inputs.add(ODOM_INPUT, 0, "odom 0") == ("odom 0", "imu 0", INITIAL_ROTOR_STATE)
+    assert inputs.add(ROTOR_STATE_INPUT, 0, "rotors 0") is None and inputs.dropped == 1
     assert inputs.add(IMU_INPUT, 1000, "imu 1") is None
     assert inputs.add(ODOM_INPUT, 2000, "odom 2") is None  # the next stamp's odom before this one completes
     assert inputs.add(ROTOR_STATE_INPUT, 1000, "rotors 1") is None
     assert inputs.add(ODOM_INPUT, 1000, "odom 1") == ("odom 1", "imu 1", "rotors 1")
-    assert inputs.add(IMU_INPUT, 1000, "imu 1 again") is None and inputs.dropped == 1  # answered already
+    assert inputs.add(IMU_INPUT, 1000, "imu 1 again") is None and inputs.dropped == 2  # answered already
     assert inputs.add(ROTOR_STATE_INPUT, 2000, "rotors 2") is None
     assert inputs.add(IMU_INPUT, 2000, "imu 2") == ("odom 2", "imu 2", "rotors 2")
     only_imu = StampedInputs(needs_imu=True, needs_rotor_state=False)
-    assert only_imu.add(ODOM_INPUT, 5, "odom") is None
+    assert only_imu.add(ODOM_INPUT, 5, "odom") is None  # the first stamp waits for everything but rotor_state
     assert only_imu.add(IMU_INPUT, 5, "imu") == ("odom", "imu")

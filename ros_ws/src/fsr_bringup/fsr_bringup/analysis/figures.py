@@ -706,6 +706,12 @@ def _worker_context() -> multiprocessing.context.BaseContext | None:
     return multiprocessing.get_context("spawn") if "spawn" in methods else None
 
 
+def _known_to_workers(name: str) -> bool:
+    """A worker imports the figures afresh: it draws ``name`` as this process would when its function comes from
+    fsr's own modules (one registered at run time from elsewhere, docs/extending.md, is drawn here)."""
+    return getattr(FIGURES[name], "__module__", "").startswith("fsr_bringup.")
+
+
 class FigureJob:
     """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by worker
     processes (one figure each, at most one per core; started by a fork server, :func:`_worker_context`: this
@@ -715,24 +721,28 @@ class FigureJob:
     def __init__(self, runs: list[Run], out_dir: Path, options: FigureOptions) -> None:
         self.job = (runs, out_dir, options)
         self.pool = self.pending = None
+        self.remote: list[str] = []
         workers = min(len(FIGURES), len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
         context = _worker_context() if workers > 1 else None
         if context is not None:
             job = ([_light(run) for run in runs], out_dir, options)
             with _main_left_out():
                 self.pool = context.Pool(workers, initializer=_start_worker, initargs=(job,))
-            self.pending = self.pool.map_async(_draw_in_worker, list(FIGURES), chunksize=1)
+            self.remote = [name for name in FIGURES if _known_to_workers(name)]
+            self.pending = self.pool.map_async(_draw_in_worker, self.remote, chunksize=1)
 
     def result(self) -> tuple[list[Path], list[str]]:
         """(written files, notes for skipped figures), in the order of :data:`FIGURES`."""
         if self.pool is None:
             results = [draw_and_save(name, *self.job) for name in FIGURES]
         else:
-            try:
-                results = self.pending.get()
+            try:  # a figure registered at run time is not in a fresh worker's FIGURES: drawn here
+                local = {name: draw_and_save(name, *self.job) for name in FIGURES if name not in self.remote}
+                drawn = dict(zip(self.remote, self.pending.get(), strict=True))
             finally:
                 self.pool.close()
                 self.pool.join()
+            results = [drawn[name] if name in drawn else local[name] for name in FIGURES]
         written = [path for paths, _ in results for path in paths]
         return written, [note for _, notes in results for note in notes]
 

@@ -5,6 +5,10 @@ The simulator publishes them together for each state; over DDS they arrive in an
 once every input it needs has arrived (still one answer per state: the lockstep), exactly with what the
 in-process loop hands the controller's tick. An input stamped at or before the last answered stamp can never
 be answered any more and is dropped; an answer drops every older unpaired input.
+
+The first state (t_0) is answered without ``rotor_state``: the simulator publishes t_0's only once the first
+command came (the rotors spin at it from the start), so the tick gets the rotors' initial state instead (None:
+zeros, the plant's speeds and tilts before any command), as the in-process loop hands it.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ from __future__ import annotations
 from typing import Any
 
 ODOM_INPUT, IMU_INPUT, ROTOR_STATE_INPUT = 0, 1, 2
+INITIAL_ROTOR_STATE = (None, None)  # (speeds, tilts) of t_0: the controller's zeros
 
 
 class StampedInputs:
@@ -32,9 +37,12 @@ class StampedInputs:
             self.dropped += 1
             return None
         self.pending[kind][stamp_ns] = value
-        if any(stamp_ns not in self.pending[other] for other in self.kinds):
+        first = self.answered_ns is None
+        needed = [other for other in self.kinds if not (first and other == ROTOR_STATE_INPUT)]
+        if any(stamp_ns not in self.pending[other] for other in needed):
             return None
-        values = tuple(self.pending[other].pop(stamp_ns) for other in self.kinds)
+        values = tuple(self.pending[other].pop(stamp_ns) if other in needed else INITIAL_ROTOR_STATE
+                       for other in self.kinds)
         self.answered_ns = stamp_ns
         for table in self.pending.values():
             for old in [stamp for stamp in table if stamp < stamp_ns]:

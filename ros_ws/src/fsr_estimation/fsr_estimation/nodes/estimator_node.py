@@ -82,6 +82,7 @@ class EstimatorNode(Node):
         else:  # the rotors' measured speeds and tilts
             allocation, _, tilting = self.rotor_allocation
             self.rotor_reader = RotorCommandReader(allocation.shape[1] // (2 if tilting else 1), tilting)
+            self.rotor_state_seen = False
             actuator = subscription(self, ROTOR_STATE, self._on_rotor_state, raw=True)
             self.hot_subscriptions = [(odom, self._on_odom), (actuator, self._on_rotor_state)]
         self.hot_gather_s = GATHER_S  # nobody waits for the estimates step by step: take them in batches
@@ -134,6 +135,9 @@ class EstimatorNode(Node):
         allocation, c_f, tilting = self.rotor_allocation
         force, torque = measured_rotor_wrench(allocation, c_f, tilting, speeds,
                                               speeds if tilts is None else tilts)
+        if not self.rotor_state_seen:  # t_0's: published once the first command came; the state of t_0 was
+            self.rotor_state_seen = True  # measured before it, with the rotors at rest (the in-process loop's)
+            force, torque = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
         self._publish(lambda: self.estimator.add_command(stamp, np.array(force), np.array(torque)))
 
     def _publish(self, add: Callable[[], Estimate | None]) -> None:
