@@ -53,15 +53,21 @@ def odometry(data: bytes) -> tuple[int, tuple[float, ...], tuple[float, ...]]:
     return stamp, pose, twist
 
 
-def wrench_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
-    """``geometry_msgs/WrenchStamped``: (stamp [ns], (force xyz, torque xyz))."""
+def _header_and_doubles(data: bytes, layout: struct.Struct, type_name: str) -> tuple[int, tuple[float, ...]]:
+    """(stamp [ns], the doubles of ``layout`` right after the header): a ``*Stamped`` message of one fixed-size
+    body; ValueError naming ``type_name`` when the bytes end early."""
     _check(data)
     try:
         stamp, offset = _after_header(data)
-        values = _SIX.unpack_from(data, _align(offset, 8))
+        values = layout.unpack_from(data, _align(offset, 8))
     except struct.error as error:
-        raise ValueError(f"WrenchStamped message cut short: {error}") from None
+        raise ValueError(f"{type_name} message cut short: {error}") from None
     return stamp, values
+
+
+def wrench_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
+    """``geometry_msgs/WrenchStamped``: (stamp [ns], (force xyz, torque xyz))."""
+    return _header_and_doubles(data, _SIX, "WrenchStamped")
 
 
 def imu(data: bytes) -> tuple[int, tuple[float, ...]]:
@@ -79,13 +85,7 @@ def imu(data: bytes) -> tuple[int, tuple[float, ...]]:
 
 def quaternion_stamped(data: bytes) -> tuple[int, tuple[float, ...]]:
     """``geometry_msgs/QuaternionStamped``: (stamp [ns], (x, y, z, w))."""
-    _check(data)
-    try:
-        stamp_ns, offset = _after_header(data)
-        values = _QUATERNION.unpack_from(data, _align(offset, 8))
-    except struct.error as error:
-        raise ValueError(f"QuaternionStamped message cut short: {error}") from None
-    return stamp_ns, values
+    return _header_and_doubles(data, _QUATERNION, "QuaternionStamped")
 
 
 def reference_pose(data: bytes) -> tuple[int, tuple[float, ...]]:
