@@ -145,6 +145,8 @@ def test_commands_read_from_cdr_bytes_equal_the_message_path(tilting):
         for data in (packed, serialize_message(msg)):
             got = reader.read_raw(data)
             assert np.array_equal(got[0], expected[0])
+            stamp_ns, *stamped = reader.read_stamped(data)
+            assert stamp_ns == 7_000_000 and np.array_equal(stamped[0], got[0])
             assert (got[1] is None) == (expected[1] is None) and (got[1] is None or np.array_equal(got[1], expected[1]))
         wrench = wrench_stamped(5, rng.normal(size=3), rng.normal(size=3))
         assert wrench_command_raw(serialize_message(wrench)).tolist() == wrench_command(wrench).tolist()

@@ -192,8 +192,7 @@ class ControllerNode(Node):
         start = time.perf_counter()
         self.flight_end.activity()
         try:
-            stamp_ns = cdr_read.stamp(data)
-            speeds, tilts = self.rotor_reader.read_raw(data)
+            stamp_ns, speeds, tilts = self.rotor_reader.read_stamped(data)
         except ValueError as error:
             self.warn(f"dropped a rotor_state: {error}")
             return

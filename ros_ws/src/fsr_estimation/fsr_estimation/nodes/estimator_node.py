@@ -127,8 +127,7 @@ class EstimatorNode(Node):
         """``rotor_state`` (``estimator.input: measured``): the wrench of the rotors' speeds and tilts through the
         nominal allocation, paired with the state of the same stamp as ``wrench_cmd`` would be."""
         try:
-            stamp = cdr_read.stamp(data)
-            speeds, tilts = self.rotor_reader.read_raw(data)
+            stamp, speeds, tilts = self.rotor_reader.read_stamped(data)
         except ValueError as error:
             self.warn_input(f"dropped a rotor_state that cannot be read: {error}")
             return

@@ -50,6 +50,10 @@ class RotorCommandReader:
             return self.read(deserialize_message(data, JointState))
         return _finite(speeds, tilts)
 
+    def read_stamped(self, data: bytes) -> tuple[int, np.ndarray, np.ndarray | None]:
+        """:meth:`read_raw` with the header's stamp [ns] (``rotor_state`` as the controller and estimator take it)."""
+        return (cdr_read.stamp(data), *self.read_raw(data))
+
     def read(self, msg: object) -> tuple[np.ndarray, np.ndarray | None]:
         n = self.rotor_count
         names = msg.name
