@@ -8,7 +8,7 @@ import pytest
 
 from fsr_sim.ros.runtime import FORBID_NODES_ENV
 
-pytest_plugins = ["fsr_bringup.testing.fixtures"]
+pytest_plugins = ["harness.fixtures"]  # tests/harness (tests/ is on pytest's pythonpath: pyproject.toml)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

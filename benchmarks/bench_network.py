@@ -5,7 +5,7 @@ Flies ``ex4_geometric`` with ``fsr-fly`` (simulator, controller, estimator, reco
 * ``one host``: every node on this host, fsr-fly's defaults (localhost discovery, shared memory);
 * ``one host, UDP only``: the same with ``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` (no shared memory);
 * ``3 hosts (netns)``: simulator + recorder, controller and estimator each in a network namespace of its own,
-  joined by a bridge (``fsr_bringup.testing.netns.NetLab``), ``fsr-fly --network --nodes ...`` on each;
+  joined by a bridge (``tests/harness/netns.py``'s ``NetLab``), ``fsr-fly --network --nodes ...`` on each;
 * ``3 hosts + X ms``: the same with ``tc netem`` delaying every packet leaving each host by X/2 ms (a link
   with round-trip time X ms), if ``--delay-ms`` is given and the kernel has netem.
 
@@ -31,7 +31,9 @@ import tempfile
 from pathlib import Path
 
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
-from fsr_bringup.testing.netns import NetLab, network_environment, unavailable_reason
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the network lab: tests/harness (not installed)
+from harness.netns import NetLab, network_environment, unavailable_reason  # noqa: E402
 
 FLY = str(Path(sys.executable).parent / "fsr-fly")
 FINISHED = re.compile(r"finished: .*\((\d+) steps, t = ([\d.]+) s in ([\d.]+) s wall")

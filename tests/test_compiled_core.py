@@ -101,13 +101,19 @@ def test_a_sweep_flight_measured_in_the_loop_is_the_same_compiled_and_under_cpyt
                 else value == python[key], key
 
 
+@pytest.fixture(scope="module")
+def compiled() -> None:
+    """``fsr-compile`` run once (scripts/setup.sh runs it) for the tests that check that nothing compiles after it
+    (a run with the cache filled still flies every built-in scenario: seconds, paid once here)."""
+    subprocess.run([str(Path(sys.executable).parent / "fsr-compile")], env={**os.environ, "MPLBACKEND": "Agg"},
+                   check=True, capture_output=True, timeout=280)
+
+
 @pytest.mark.slow
-def test_a_sweep_compiles_nothing_with_the_cache_filled(tmp_path):
+def test_a_sweep_compiles_nothing_with_the_cache_filled(tmp_path, compiled):
     """After fsr-compile, fsr-sweep's flights (measured in the loop, wrench actuation and rotors with the
     estimator) only load compiled code."""
     env = {**os.environ, "NUMBA_DEBUG_CACHE": "1", "MPLBACKEND": "Agg"}
-    subprocess.run([str(Path(sys.executable).parent / "fsr-compile")], env=env, check=True, capture_output=True,
-                   timeout=280)
     for scenario in ("ex4_geometric", "wind_rejection"):
         sweep = subprocess.run([str(Path(sys.executable).parent / "fsr-sweep"), scenario, "--sample",
                                 "plant.mass=uniform:1.2:1.4", "--n", "3", "--duration", "0.1", "--out", scenario],
@@ -118,12 +124,10 @@ def test_a_sweep_compiles_nothing_with_the_cache_filled(tmp_path):
 
 
 @pytest.mark.graph
-def test_no_flight_and_no_node_compiles_with_the_cache_filled(tmp_path):
+def test_no_flight_and_no_node_compiles_with_the_cache_filled(tmp_path, compiled):
     """After fsr-compile (scripts/setup.sh runs it) an in-process flight and every node of a graph flight only
     load compiled code: numba's cache reports loads, never a save."""
     env = {**os.environ, "NUMBA_DEBUG_CACHE": "1", "MPLBACKEND": "Agg"}
-    subprocess.run([str(Path(sys.executable).parent / "fsr-compile")], env=env, check=True, capture_output=True,
-                   timeout=280)
     in_process = subprocess.run([FLY, "ex5_voliro", "--in-process", "--duration", "0.1", "--out", "a.mcap"],
                                 cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
     assert in_process.returncode == 0, in_process.stderr
@@ -162,3 +166,30 @@ def test_unwritable_cache_base_falls_back_to_a_temporary_folder(tmp_path):
     blocked.write_text("not a folder")
     folder = jit.cache_folder(blocked)
     assert folder.is_dir() and blocked not in folder.parents
+
+
+@pytest.mark.parametrize("scenario", ["ex4_geometric", "wind_rejection"])  # wrench actuation; rotors that lag
+def test_a_flight_set_up_from_the_packed_sweep_is_the_compiled_loop_of_a_full_set_up(scenario):
+    """A sweep's flight set up from its packed scenario (fsr_bringup.sweeps.repack) hands the compiled loop
+    arguments of the numba types the full set-up hands it (read-only arrays where that packs the vehicle's
+    read-only ones): the loop fsr-compile compiled, never a second compilation of it (minutes) in a sweep."""
+    from dataclasses import fields
+
+    from numba import typeof
+
+    from fsr_bringup.runner.in_process_flight import prepare_flight
+    from fsr_bringup.sweeps.axes import flight_scenario
+    from fsr_bringup.sweeps.batch import packed_sweep
+    from fsr_bringup.sweeps.measured import loop_flight
+    from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
+    from fsr_sim.config.scenario import load_scenario
+
+    base = load_scenario(scenario, values={"duration": 0.1})
+    packed = packed_sweep(base, DEFAULT_BAND_M)
+    for values in ({"plant.mass": 1.3}, {"plant.inertia": [0.03, 0.03, 0.06]}, {"estimator.c0": 5.0},
+                   {"plant.mass": 1.4, "plant.inertia": [[0.03, 0.001, 0.0], [0.001, 0.03, 0.0], [0.0, 0.0, 0.06]]}):
+        flight = packed.flight_for(values)
+        assert flight is not None, values
+        full = loop_flight(prepare_flight(flight_scenario(base, values)), DEFAULT_BAND_M)
+        for field in fields(full):
+            assert typeof(getattr(flight, field.name)) == typeof(getattr(full, field.name)), (values, field.name)

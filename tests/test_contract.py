@@ -23,8 +23,10 @@ JOINT = re.compile(rf"({contract.ROTOR}|{contract.TILT})_\d*")
 
 
 def source_files() -> list[Path]:
-    """Every Python file of the packages, benchmarks and scripts, test files and the contract apart."""
-    files = [*ROOT.glob("ros_ws/src/*/*/**/*.py"), *ROOT.glob("benchmarks/**/*.py"), *ROOT.glob("scripts/**/*.py")]
+    """Every Python file of the packages, the test harness, benchmarks and scripts, test files and the contract
+    apart."""
+    files = [*ROOT.glob("ros_ws/src/*/*/**/*.py"), *ROOT.glob("tests/harness/**/*.py"),
+             *ROOT.glob("benchmarks/**/*.py"), *ROOT.glob("scripts/**/*.py")]
     return sorted(path for path in files if path != CONTRACT_FILE and "test" not in path.relative_to(ROOT).parts
                   and not path.name.startswith("test_") and path.name != "conftest.py")
 

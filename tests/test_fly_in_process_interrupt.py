@@ -18,6 +18,7 @@ from fsr_sim.recording.reader import open_recording
 FLY = str(Path(sys.executable).parent / "fsr-fly")
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_in_process_flight_exits_130_with_a_closed_recording_and_its_analysis(tmp_path, signum):
     out = tmp_path / "run.mcap"

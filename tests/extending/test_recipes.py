@@ -74,6 +74,7 @@ def test_the_hexacopter_flies_the_same_in_the_node_graph(tmp_path):
     assert_graph_equals_in_process(files["hover_tilted.yaml"], tmp_path, ("/odom", "/rotor_cmd", "/wrench_cmd"))
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_a_figure_registered_in_figures_is_drawn_by_the_analysis(tmp_path, monkeypatch):
     from fsr_bringup.analysis import figures
     from fsr_bringup.analysis.run import analyze_recording
@@ -170,6 +171,7 @@ print(json.dumps({"end": run.end_reason, "reason": run.reason, "steps": len(run.
 """
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_a_control_law_reading_the_reference_ahead_flies_the_tilting_quadrotor(tmp_path):
     """The recipe's preview PD, added as written, flies (under CPython: NUMBA_DISABLE_JIT runs the same source
     without compiling the edited core)."""

@@ -1,6 +1,7 @@
 """The flight profile (``controller.profile: flight``, the default of every scenario that names no profile): the
 geometric law's reference feed-forward with gains designed from the vehicle, its integral and anti-windup, and
-the flights of issue 42 it makes fly (numbers in docs/control.md)."""
+the flights that crashed with the report's law under motor lag and velocity noise, which it makes fly (numbers
+in docs/control.md)."""
 
 from __future__ import annotations
 
@@ -55,14 +56,14 @@ def test_the_reference_feedforward_follows_waypoint_legs_on_an_ideal_plant(vehic
 
 @pytest.mark.parametrize("time_constant", [0.02, 0.03, 0.05])
 def test_step_disturbance_flies_as_shipped_with_a_lagging_motor(time_constant):
-    """Issue 42: with the report's law a 20 ms motor crashed it at 8.1 s; the flight profile rides out the 2 N
+    """With the report's law a 20 ms motor crashed it at 8.1 s; the flight profile rides out the 2 N
     step (measured: peak 0.53 m at 20-50 ms) and its integral brings it back."""
     run = simulate("step_disturbance", set={"plant.rotor_time_constant": time_constant})
     assert_flies(run, peak=0.6, tilt=20.0)
     assert position_error(run)[-1] < 0.1
 
 
-def test_the_crashes_of_issue_42_fly_with_the_flight_profile():
+def test_the_crashes_under_motor_lag_and_velocity_noise_fly_with_the_flight_profile():
     """ex4 with rotors and 1 cm/s velocity noise (and a 20 ms motor) crashed at 4 s, ex3 with rotors at 7.2 s;
     with ``controller.profile=flight`` they fly (measured: ex4 peak 1.1 mm, ex3 peak 0.38 m, 0 m at the end)."""
     noisy = {"actuation": "rotors", "sensors.odometry.velocity_std": 0.01, "controller.acceleration_filter_hz": 2}

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from fsr_bringup.analysis.run import analyze_recording
-from fsr_bringup.testing.graph import wait_for_recorded, wait_for_text
 from fsr_sim.recording.reader import open_recording
+from harness.graph import wait_for_recorded, wait_for_text
 
 pytestmark = pytest.mark.graph
 

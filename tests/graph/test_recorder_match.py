@@ -10,10 +10,10 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
 from fsr_bringup.runner.processes import executable
-from fsr_bringup.testing.graph import stamp_ns
 from fsr_sim.contract import ODOM, ROTOR_CMD, WRENCH_CMD, WRENCH_SHORTFALL, WRENCH_TRUTH
 from fsr_sim.model.vehicle import load_vehicle
 from fsr_sim.ros.conversions import rotor_command
+from harness.graph import stamp_ns
 
 pytestmark = pytest.mark.graph
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from fsr_bringup import sweep
-from fsr_bringup.testing.netns import NetLab, unavailable_reason
+from harness.netns import NetLab, unavailable_reason
 
 pytestmark = pytest.mark.slow
 DASK = str(Path(sys.executable).with_name("dask"))

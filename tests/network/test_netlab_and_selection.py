@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from fsr_bringup.runner.remote import expected_node_paths, parse_node_selection
-from fsr_bringup.testing.netns import NetLab, unavailable_reason
+from harness.netns import NetLab, unavailable_reason
 
 FLEET = ["recorder", "uav1/estimator", "uav1/controller", "uav1/simulator", "uav2/controller", "uav2/simulator"]
 

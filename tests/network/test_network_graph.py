@@ -1,6 +1,6 @@
 """One flight over several hosts: ``fsr-fly --network --nodes ...`` in network namespaces joined by a bridge.
 
-Each test builds its own private network (:class:`fsr_bringup.testing.netns.NetLab`: a bridge namespace and
+Each test builds its own private network (:class:`harness.netns.NetLab`: a bridge namespace and
 one namespace per host, addresses only on those links, multicast routed only there) and deletes it at the
 end, also when the test fails. The simulator and the recorder run on host ``sim``, the controller on ``ctl``,
 the estimator on ``est``; DDS discovers across the bridge (SUBNET range, UDP only). Link faults unplug the
@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 from fsr_bringup.runner.domains import TEST_RANGE, acquire_domain
-from fsr_bringup.testing.graph import wait_for_recorded, wait_for_text
-from fsr_bringup.testing.netns import NetLab, network_environment, unavailable_reason
 from fsr_sim.recording.reader import RecordingError, open_recording
+from harness.graph import wait_for_recorded, wait_for_text
+from harness.netns import NetLab, network_environment, unavailable_reason
 
 pytestmark = pytest.mark.graph
 

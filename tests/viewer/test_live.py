@@ -307,6 +307,7 @@ def test_in_process_live_flight_runs_at_the_real_time_factor(tmp_path, decoders)
     assert 4.75 <= wall <= 5.25, output
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 @pytest.mark.parametrize("command", ["in-process", "graph", "fsr-record"])
 def test_a_bad_or_busy_port_is_one_line_exit_2_and_nothing_is_flown(tmp_path, command):
     with socket.socket() as busy:

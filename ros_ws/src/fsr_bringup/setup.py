@@ -17,7 +17,6 @@ setup(
         "foxglove-sdk~=0.30.3",  # --live; its server's logs and its stop are what fsr_bringup.live.server expects
         "fsr_sim", "fsr_control", "fsr_estimation",
     ],
-    extras_require={"test": ["pytest"]},  # fsr_bringup.testing (the graph-test pytest plugin)
     zip_safe=False,
     maintainer="fsr developers",
     maintainer_email="fsr@example.org",

@@ -69,6 +69,7 @@ def test_metrics_match_the_constructed_errors(synthetic_recording: Path, expecte
     json.dumps(m, allow_nan=False)  # JSON-ready
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_all_figures_and_files_are_written(synthetic_recording: Path, tmp_path: Path) -> None:
     result = analyze_recording(synthetic_recording, tmp_path)
     assert sorted(p.stem for p in result.figures) == sorted(FIGURES)
@@ -195,6 +196,7 @@ def test_a_wrench_actuated_flight_has_no_rotor_saturation_to_report(tmp_path: Pa
     assert result.metrics["saturation"] is None and "gave way" not in result.summary
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 @pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one core: the figures are drawn in this process")
 def test_the_figures_are_drawn_in_workers_that_were_not_forked_from_this_process(synthetic_recording: Path,
                                                                                  tmp_path: Path, monkeypatch) -> None:

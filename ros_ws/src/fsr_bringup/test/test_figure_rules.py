@@ -95,6 +95,7 @@ def _data_lines(ax: matplotlib.axes.Axes) -> list[matplotlib.lines.Line2D]:
     return [line for line in ax.get_lines() if line.get_transform() == ax.transData and len(line.get_xdata())]
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_labels_and_legends_are_mathtext(ex3_figures: dict) -> None:
     for name, fig in ex3_figures.items():
         labels = [ax.get_ylabel() for ax in fig.axes if ax.get_ylabel()]
@@ -127,6 +128,7 @@ def test_start_transient_rule() -> None:
     assert [nice_ceil(v) for v in (0.0139, 0.3, 0.71, 1.0, 1.07)] == pytest.approx([0.02, 0.5, 1.0, 1.0, 2.0])
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_a_short_estimator_transient_gets_a_zoom(ex3_figures: dict, ex4: Run) -> None:
     fig = ex3_figures["external_wrench"]
     zooms = _zooms(fig)
@@ -160,6 +162,7 @@ def test_no_panel_is_zero_by_construction(ex4: Run) -> None:
         assert len(wrench_command_figure([ex5], FigureOptions()).figure.axes) == 6
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_pose_draws_the_commanded_attitude(ex3: Run, ex3_figures: dict) -> None:
     fig = ex3_figures["pose"]
     roll = next(ax for ax in fig.axes if "roll" in ax.get_ylabel())
@@ -215,6 +218,7 @@ def test_an_octocopters_rotors_get_a_panel_per_pair_with_what_they_did_beside_th
     assert "rotor_state (measured)" in legend
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_disturbance_windows_are_shaded(step: Run, ex3_figures: dict) -> None:
     figures = _draw_all([step])
     for name in ("errors", "external_wrench", "pose", "wrench_cmd", "rotors"):
@@ -243,6 +247,7 @@ def test_disturbance_acting_intervals() -> None:
     assert disturbance_windows([ramp], 0.0, 5.0) == [(2.0, 5.0)]
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_legends_are_outside_the_axes(ex3_figures: dict, synthetic_recording: Path) -> None:
     figures = dict(ex3_figures)
     figures.update({f"synthetic {name}": fig for name, fig in

@@ -92,6 +92,7 @@ HUNG_WATCHER = textwrap.dedent('''
 ''')
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_a_watcher_stuck_at_exit_does_not_hold_the_run(tmp_path, monkeypatch):
     """Every node runs elsewhere (``--nodes`` selected none here): the flight ends with the watcher's final
     status; the watcher ignores SIGINT and SIGTERM and is killed; the run's result stands."""

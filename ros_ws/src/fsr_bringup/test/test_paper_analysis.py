@@ -170,6 +170,7 @@ def _texts(fig: matplotlib.figure.Figure) -> list[matplotlib.text.Text]:
     return [t for t in fig.findobj(matplotlib.text.Text) if t.get_visible() and t.get_text().strip()]
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_figures_for_a_journal(ex5: Path, tmp_path: Path) -> None:
     flight = load_flight(ex5)
     runs = [Run.of(flight)]
@@ -213,6 +214,7 @@ def test_figures_for_a_journal(ex5: Path, tmp_path: Path) -> None:
     assert FONT_PT == 8.0
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_overlay_of_two_runs(ex3: Path, ex3_slow_observer: Path, tmp_path: Path) -> None:
     out = tmp_path / "cmp"
     assert analyze_main([str(ex3), str(ex3_slow_observer), "--labels", "c0=10,c0=5", "--out", str(out)]) == 0

@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_simulate_and_fsr_fly_say_it(tmp_path):
     import subprocess
     import sys

@@ -102,6 +102,7 @@ def fsr_sweep(*args: str, cwd) -> subprocess.CompletedProcess:
     return subprocess.run(command, capture_output=True, text=True, cwd=cwd, timeout=240)
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 @pytest.mark.parametrize(("args", "message"), [
     (["--grid", "plant.mas=1,2"], "did you mean 'mass'"),
     (["--sample", "plant.mass=uniform:1.5:1.0", "--n", "3"], "LO > HI"),
@@ -116,6 +117,7 @@ def test_the_cli_exits_2_with_one_line_naming_the_key(tmp_path, args, message):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 @pytest.mark.parametrize("out", ["/proc/fsr_sweep_out", "/dev/null/sweep"])
 def test_an_unwritable_output_folder_is_refused_before_any_flight(tmp_path, out):
     result = fsr_sweep("ex4_geometric", "--duration", "60", "--sample", "plant.mass=uniform:1:2", "--n", "1000",
@@ -125,6 +127,7 @@ def test_an_unwritable_output_folder_is_refused_before_any_flight(tmp_path, out)
     assert len(lines) == 1 and lines[0].startswith(f"fsr-sweep: --out: cannot write to '{out}'"), result.stderr
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_the_cli_writes_the_table_summary_figures_and_recordings(tmp_path):
     import pandas as pd
 

@@ -83,6 +83,7 @@ def fsr_sweep(*args: str, cwd) -> subprocess.CompletedProcess:
                           cwd=cwd, timeout=240)
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_the_cli_refuses_an_unknown_metric_before_flying(tmp_path):
     result = fsr_sweep("ex3_estimation", "--grid", "estimator.c0=5,50", "--pareto", "settling,estimate_force_rms_N",
                        "--out", str(tmp_path / "out"), cwd=tmp_path)
@@ -91,6 +92,7 @@ def test_the_cli_refuses_an_unknown_metric_before_flying(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_the_cli_marks_the_front(tmp_path):
     out = tmp_path / "sweep"
     result = fsr_sweep("ex3_estimation", "--grid", "estimator.c0=2,10,50", "--grid", "estimator.r=1,2",

@@ -63,6 +63,7 @@ def test_standard_settling_values(ref, capsys):
     assert settle == [["10", "1", "1.750", "1.752", "0.544"]]
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_plots_and_json_without_truth(tmp_path, synthetic, capsys):
     log, _ = synthetic(n=1500)
     header = "time,roll,pitch,yaw,roll_rate,pitch_rate,yaw_rate,vx,vy,vz,fx,fy,fz,tx,ty,tz"

@@ -21,6 +21,7 @@ EXPECTED = {  # node -> parameters it must document, topics it reads
 }
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 @pytest.mark.parametrize("node", sorted(EXPECTED))
 @pytest.mark.parametrize("flag", ["--help", "-h"])
 def test_a_node_prints_its_usage(node, flag):

@@ -43,6 +43,7 @@ def test_the_intensities_and_scales_of_the_low_altitude_model():
     assert DrydenTurbulence(wind_speed=7.7, altitude=1.0).scales[2] == pytest.approx(3.048)
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
 def test_the_spectrum_of_a_long_seeded_sample_is_the_models():
     # 1 hour at 200 Hz, Welch (2^14-sample segments: 0.077 rad/s apart), in octave bands from 0.2 to 25.6 rad/s
     # (well below the Nyquist 628 rad/s): within 15 % per band (measured: 0.92 .. 1.14 on seeds 7 and 8), and

@@ -118,6 +118,8 @@ class PackedSweep:
                 return None
         flight = self.flight
         inertia = np.ascontiguousarray(inertia, dtype=float)  # as fsr_sim.model.plant.pack_plant packs them
+        if not flight.plant_params.inertia.flags.writeable:  # read-only there too (the vehicle's): the compiled
+            inertia.flags.writeable = False  # loop's signature is the full set-up's, not a second compilation
         params = flight.plant_params._replace(mass=float(mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia))
         _restore(flight.controller_state, self.controller_state)
         if observer is None:

@@ -2,7 +2,7 @@
 
 Graph tests start real node processes (console scripts) in a ROS domain of their own, taken with
 :func:`fsr_bringup.runner.domains.acquire_domain` from ``TEST_RANGE``, with discovery kept on localhost
-and the shipped Fast DDS profile (fast discovery). The fixtures in ``tests/graph/conftest.py`` wrap this
+and the shipped Fast DDS profile (fast discovery). The fixtures in ``harness/fixtures.py`` wrap this
 module (``ros_graph`` gives a :class:`GraphHarness`, ``scenario_file`` binds :func:`scenario_file` to the
 test's ``tmp_path``)::
 
