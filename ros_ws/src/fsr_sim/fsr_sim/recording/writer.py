@@ -4,7 +4,10 @@ Profile ``ros2``, one schema per message type with encoding ``ros2msg`` and the 
 (:func:`fsr_sim.ros.message_schema.message_definition`), message encoding ``cdr``, zstd-compressed chunks
 and a summary section. Chunks are kept small (256 KiB by default) and :meth:`RecordingWriter.flush` can
 be called periodically, so that a process killed with SIGKILL leaves a file whose complete chunks can
-still be read (:func:`fsr_sim.recording.reader.open_recording` reports it as truncated).
+still be read (:func:`fsr_sim.recording.reader.open_recording` reports it as truncated). A finished chunk is
+compressed and written on a writer thread while the caller fills the next one (:class:`_ChunkWriter`: the
+compression is about half of what recording an in-process step costs); :meth:`RecordingWriter.flush` and
+:meth:`RecordingWriter.close` wait for it, so a flight stopped by Ctrl-C or SIGTERM still closes a whole file.
 
 Raw CDR bytes (from a ``raw=True`` subscription) are written as they are; :meth:`write_message`
 serialises an rclpy message instance first.
@@ -12,13 +15,19 @@ serialises an rclpy message instance first.
 
 from __future__ import annotations
 
+import queue
 import struct
+import threading
+import zlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
-from mcap.writer import CompressionType, Writer
+import zstandard
+from mcap.data_stream import RecordBuilder
+from mcap.records import ChunkIndex
+from mcap.writer import CompressionType, IndexType, Writer
 
 from fsr_sim.ros.message_schema import type_definition
 
@@ -26,6 +35,12 @@ DEFAULT_CHUNK_SIZE = 256 * 1024
 _MESSAGE_OPCODE = 0x05
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")  # opcode, record length, channel, sequence, log time, publish time
 _MESSAGE_FIELDS = 2 + 4 + 8 + 8
+_CHUNK_OPCODE = 0x06
+_ZSTD = b"zstd"
+# opcode, record length, message start and end time, uncompressed size and CRC, compression, compressed size
+_CHUNK_HEAD = struct.Struct(f"<BQQQQII{len(_ZSTD)}sQ")
+_CHUNK_FIELDS = _CHUNK_HEAD.size - 9  # the record's length without its data
+ZSTD_LEVEL = 3  # what mcap's writer uses (zstandard's default)
 _MESSAGE_HEAD_DTYPE = np.dtype([("opcode", "u1"), ("length", "<u8"), ("channel", "<u2"), ("sequence", "<u4"),
                                 ("log_time", "<u8"), ("publish_time", "<u8")])  # packed: _MESSAGE_HEAD's bytes
 
@@ -39,9 +54,12 @@ class RecordingWriter:
         metadata: dict[str, dict[str, str]] | None = None,
         chunk_size: int = DEFAULT_CHUNK_SIZE,
         fast_path: bool = True,
+        background: bool = True,
     ) -> None:
-        """``fast_path``: write records straight into the open chunk where the installed mcap allows it (the
-        file is the same, byte for byte; False writes through mcap's own API, as with any other version)."""
+        """``fast_path``: write records straight into the open chunk where the installed mcap allows it, and
+        finish the chunks with :class:`_ChunkWriter` (the same records; False writes through mcap's own API, as
+        with any other version). ``background``: compress and write the finished chunks on a writer thread while
+        the caller goes on (fast path only; the file is the same, byte for byte)."""
         self.path = Path(path)
         try:
             self._file: IO[bytes] | None = open(self.path, "wb")  # noqa: SIM115 - closed in close()
@@ -55,7 +73,7 @@ class RecordingWriter:
         self.message_counts: dict[str, int] = {}
         for name, data in (metadata or {}).items():
             self._writer.add_metadata(name, dict(data))
-        self._fast = _FastMessages.attach(self._writer) if fast_path else None
+        self._fast = _FastMessages.attach(self._writer, background) if fast_path else None
 
     @property
     def fast_path(self) -> bool:
@@ -245,15 +263,29 @@ class RecordingWriter:
     def flush(self) -> None:
         """Close the current chunk and push it to the file (it survives a SIGKILL from now on)."""
         if self._file is not None:
+            if self._fast is not None:
+                self._fast.chunks.finish_chunk()
+                self._fast.chunks.wait()
             self._writer.flush()
 
     def close(self) -> None:
         """Write the summary and the footer and close the file; safe to call twice."""
         if self._file is None:
             return
+        interrupted: KeyboardInterrupt | None = None
         try:
+            if self._fast is not None:
+                self._fast.chunks.finish_chunk()
+                try:
+                    self._fast.chunks.close()  # every chunk in the file before the summary that indexes them
+                except KeyboardInterrupt as interrupt:  # raised once the file is whole
+                    interrupted = interrupt
             self._writer.finish()
+            if interrupted is not None:
+                raise interrupted
         finally:
+            if self._fast is not None:
+                self._fast.chunks.close()
             self._file.close()
             self._file = None
 
@@ -269,25 +301,35 @@ class _FastMessages:
     (same record bytes, chunk message index, chunk and file statistics), without a ``Message`` object and
     four small writes per message. Used only with the writer internals it was written against."""
 
-    def __init__(self, writer: Writer) -> None:
+    def __init__(self, writer: Writer, background: bool) -> None:
         self.writer = writer
         self.builder = writer._Writer__chunk_builder  # noqa: SLF001 - see attach()
         self.statistics = writer._Writer__statistics  # noqa: SLF001
         self.maybe_finalize = writer._Writer__maybe_finalize_chunk  # noqa: SLF001
         self.chunk_size = writer._Writer__chunk_size  # noqa: SLF001
+        self.chunks = _ChunkWriter(self.builder, self.statistics, writer._Writer__stream,  # noqa: SLF001
+                                   writer._Writer__chunk_indices, background)  # noqa: SLF001
 
     @classmethod
-    def attach(cls, writer: Writer) -> _FastMessages | None:
+    def attach(cls, writer: Writer, background: bool = True) -> _FastMessages | None:
         """The fast path for ``writer``, or None if its internals are not the expected ones (any other
-        ``mcap`` version: :meth:`RecordingWriter.write_batch` then calls ``add_message``)."""
+        ``mcap`` version: :meth:`RecordingWriter.write_batch` then calls ``add_message``). Its chunks are
+        finished by a :class:`_ChunkWriter` (mcap's ``__finalize_chunk`` replaced on this writer)."""
         try:
-            fast = cls(writer)
-            builder = fast.builder
+            builder = writer._Writer__chunk_builder  # noqa: SLF001
             ok = (builder is not None and hasattr(builder, "message_indices") and hasattr(builder, "num_messages")
-                  and hasattr(builder.record_writer, "_buffer") and hasattr(fast.statistics, "channel_message_counts"))
+                  and hasattr(builder.record_writer, "_buffer")
+                  and hasattr(writer._Writer__statistics, "channel_message_counts")  # noqa: SLF001
+                  and writer._Writer__compression == CompressionType.ZSTD  # noqa: SLF001
+                  and writer._Writer__enable_crcs and not writer._Writer__enable_data_crcs  # noqa: SLF001
+                  and writer._Writer__index_types & IndexType.MESSAGE  # noqa: SLF001
+                  and callable(getattr(writer, "_Writer__finalize_chunk", None)))
+            fast = cls(writer, background) if ok else None
         except AttributeError:
             return None
-        return fast if ok else None
+        if fast is not None:  # mcap's own calls (add_message's, flush's, finish's) finish chunks this way too
+            writer._Writer__finalize_chunk = fast.chunks.finish_chunk  # noqa: SLF001
+        return fast
 
     def add(self, batch: list[tuple[int, int, bytes, int, int]]) -> None:
         """Append (channel id, sequence, data, log time, publish time) records."""
@@ -358,6 +400,115 @@ class _FastMessages:
             buffer.write(block[base:int(ends[stop - 1])].data)
             self.maybe_finalize()
             start = stop
+
+
+class _ChunkWriter:
+    """Finishes the chunks of an ``mcap.writer.Writer`` as its ``__finalize_chunk`` does - the same records, byte
+    for byte: the chunk (zstd at mcap's level, CRC-32 of the uncompressed records), its message indexes and its
+    chunk index for the summary - on a writer thread (``background``) or in the caller's.
+
+    On the thread, the compression (about half of a recorded in-process step) runs while the flight goes on;
+    the caller hands over the finished chunk's records and indexes and goes on filling the next one. Until
+    :meth:`wait` returns, only the thread writes to the file (chunks in the order they were finished)."""
+
+    def __init__(self, builder: Any, statistics: Any, stream: IO[bytes], chunk_indices: list[Any],
+                 background: bool) -> None:
+        self.builder = builder
+        self.statistics = statistics
+        self.stream = stream
+        self.chunk_indices = chunk_indices
+        self.background = background
+        self.compressor = zstandard.ZstdCompressor(level=ZSTD_LEVEL)  # used by one thread only
+        self._jobs: queue.SimpleQueue[tuple[bytes, int, int, list[Any]] | None] = queue.SimpleQueue()
+        self._pending = 0  # chunks handed over and not yet written
+        self._done = threading.Condition()
+        self._thread: threading.Thread | None = None
+        self._error: BaseException | None = None
+
+    def finish_chunk(self) -> None:
+        """Close the open chunk (if it holds a message) and write it, or hand it to the writer thread."""
+        builder = self.builder
+        if builder.num_messages == 0:
+            return
+        self.statistics.chunk_count += 1
+        job = (builder.end(), builder.message_start_time, builder.message_end_time,
+               list(builder.message_indices.values()))
+        builder.reset()
+        if not self.background:
+            self._write(*job)
+            return
+        self._raise_error()
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._work, name="mcap-chunks", daemon=True)
+            self._thread.start()
+        with self._done:
+            self._pending += 1
+        self._jobs.put(job)  # never blocks (unbounded): a Ctrl-C cannot lose a chunk here
+
+    def wait(self) -> None:
+        """Return once every chunk handed over is in the file; re-raise the writer thread's error. A Ctrl-C
+        (KeyboardInterrupt) meanwhile is raised after the wait, so that the file keeps every chunk."""
+        interrupted: KeyboardInterrupt | None = None
+        while True:
+            try:
+                with self._done:
+                    while self._pending and self._error is None:
+                        self._done.wait()
+                break
+            except KeyboardInterrupt as interrupt:
+                interrupted = interrupt
+        self._raise_error()
+        if interrupted is not None:
+            raise interrupted
+
+    def close(self) -> None:
+        """Wait for the chunks handed over, then end the writer thread; safe to call twice."""
+        thread, self._thread = self._thread, None
+        if thread is None:
+            return
+        try:
+            self.wait()
+        finally:
+            self._jobs.put(None)
+            thread.join()
+
+    def _raise_error(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise OSError(f"cannot write the recording: {error}") from error
+
+    def _work(self) -> None:
+        while (job := self._jobs.get()) is not None:
+            try:
+                if self._error is None:
+                    self._write(*job)
+            except BaseException as error:  # noqa: BLE001 - handed to the caller by wait()
+                self._error = error
+            with self._done:
+                self._pending -= 1
+                self._done.notify_all()
+
+    def _write(self, data: bytes, start: int, end: int, indices: list[Any]) -> None:
+        """Write one chunk record (``data``: its uncompressed records), its message indexes, and note its
+        chunk index."""
+        compressed = self.compressor.compress(data)
+        stream = self.stream
+        chunk_start = stream.tell()
+        stream.write(_CHUNK_HEAD.pack(_CHUNK_OPCODE, _CHUNK_FIELDS + len(compressed), start, end, len(data),
+                                      zlib.crc32(data), len(_ZSTD), _ZSTD, len(compressed)))
+        stream.write(compressed)
+        index_start = stream.tell()
+        records = RecordBuilder()
+        offsets = {}
+        for index in indices:
+            offsets[index.channel_id] = index_start + records.count
+            index.write(records)
+        length = records.count
+        stream.write(records.end())
+        self.chunk_indices.append(ChunkIndex(
+            message_start_time=start, message_end_time=end, chunk_start_offset=chunk_start,
+            chunk_length=index_start - chunk_start, message_index_offsets=offsets, message_index_length=length,
+            compression=_ZSTD.decode(), compressed_size=len(compressed), uncompressed_size=len(data)))
 
 
 def _cover_times(record: Any, empty: bool, low: int, high: int) -> None:
