@@ -388,15 +388,20 @@ class _FastMessages:
             count = stop - start
             statistics.message_count += count
             builder.num_messages += count
-            present, first = np.unique(piece_channels, return_index=True)
-            for channel_id in present[np.argsort(first)].tolist():  # in order of appearance, as add() meets them
-                mine = piece_channels == channel_id
-                statistics.channel_message_counts[channel_id] += int(mine.sum())
+            present, first, slots = np.unique(piece_channels, return_index=True, return_inverse=True)
+            by_channel = np.argsort(slots, kind="stable")  # the records grouped by channel, each in written order
+            entries = np.column_stack((times, offsets))[by_channel]
+            counts = np.bincount(slots, minlength=len(present))
+            ends_of = np.cumsum(counts).tolist()
+            counts = counts.tolist()
+            for slot in np.argsort(first).tolist():  # channels in order of appearance, as add() meets them
+                channel_id = int(present[slot])
+                statistics.channel_message_counts[channel_id] += counts[slot]
                 index = builder.message_indices.get(channel_id)
                 if not index:
                     index = builder.message_indices[channel_id] = _message_index_class()(channel_id=channel_id,
                                                                                           records=[])
-                index.records.append(np.column_stack((times[mine], offsets[mine])))  # a block of entries
+                index.records.append(entries[ends_of[slot] - counts[slot]:ends_of[slot]])  # a block of entries
             buffer.write(block[base:int(ends[stop - 1])].data)
             self.maybe_finalize()
             start = stop
