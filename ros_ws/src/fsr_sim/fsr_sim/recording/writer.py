@@ -169,59 +169,103 @@ class RecordingWriter:
                 topic, _, payloads = entries[place]
                 self.write(topic, payloads[row].tobytes(), int(stamps[step]))
             return
-        records, step_keys, place_keys, channels = [], [], [], []
-        for place, (topic, steps, payloads) in enumerate(entries):
-            count = len(steps)
-            head = np.empty(count, dtype=_MESSAGE_HEAD_DTYPE)
-            head["opcode"] = _MESSAGE_OPCODE
-            head["length"] = _MESSAGE_FIELDS + payloads.shape[1]
-            head["channel"] = self._channels[topic]
-            head["sequence"] = self._sequence[topic] + np.arange(count)
-            head["log_time"] = head["publish_time"] = stamps[steps]
-            self._sequence[topic] += count
-            self.message_counts[topic] += count
-            records.append(np.concatenate((head.view(np.uint8).reshape(count, -1), payloads), axis=1))
-            step_keys.append(steps)
-            place_keys.append(np.full(count, place))
-            channels.append(np.full(count, self._channels[topic], dtype=np.int64))
-        if not records:
+        if not entries:
             return
-        if all(len(rows) == len(stamps) for rows in records):  # every topic in every step: rows side by side
-            block = np.concatenate(records, axis=1).reshape(-1)
-            ends = np.cumsum(np.tile([rows.shape[1] for rows in records], len(stamps)))
-            channel_order = np.stack(channels, axis=1).reshape(-1)
-            times = np.repeat(stamps, len(records))
+        dense = [len(steps) == len(stamps) for _, steps, _ in entries]
+        if dense[0] and dense == sorted(dense, reverse=True):  # the every-step topics first: no sort
+            self._fast.add_block(*self._dense_first(stamps, entries, dense.count(True)))
+            return
+        records, step_keys, place_keys, channels = [], [], [], []  # sparse topics before every-step ones
+        for place, (topic, steps, payloads) in enumerate(entries):
+            record = np.empty((len(steps), _MESSAGE_HEAD.size + payloads.shape[1]), dtype=np.uint8)
+            self._head(topic, stamps[steps], payloads, record[:, :_MESSAGE_HEAD.size])
+            record[:, _MESSAGE_HEAD.size:] = payloads
+            records.append(record)
+            step_keys.append(steps)
+            place_keys.append(np.full(len(steps), place))
+            channels.append(np.full(len(steps), self._channels[topic], dtype=np.int64))
+        sizes = np.concatenate([np.full(len(r), r.shape[1], dtype=np.int64) for r in records])
+        order = np.lexsort((np.concatenate(place_keys), np.concatenate(step_keys)))  # step, then topic order
+        self._sequence_in_order(records, channels, order)
+        ends = np.cumsum(sizes[order])
+        self._fast.add_block(self._interleaved(records, order, sizes, ends), ends, np.concatenate(channels)[order],
+                             stamps[np.concatenate(step_keys)][order])
+
+    def _head(self, topic: str, stamps: np.ndarray, payloads: np.ndarray, out: np.ndarray) -> None:
+        """Write the message record headers of ``payloads`` (rows) on ``topic`` stamped ``stamps`` into ``out``
+        (uint8 (count, head size)) and count them."""
+        count = len(payloads)
+        head = np.empty(count, _MESSAGE_HEAD_DTYPE)
+        head["opcode"] = _MESSAGE_OPCODE
+        head["length"] = _MESSAGE_FIELDS + payloads.shape[1]
+        head["channel"] = self._channels[topic]
+        head["sequence"] = self._sequence[topic] + np.arange(count)
+        head["log_time"] = head["publish_time"] = stamps
+        out[:] = head.view(np.uint8).reshape(count, -1)
+        self._sequence[topic] += count
+        self.message_counts[topic] += count
+
+    def _dense_first(self, stamps: np.ndarray, entries: list[tuple[str, np.ndarray, np.ndarray]], dense: int
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``add_block``'s arguments for a block whose first ``dense`` entries have a message in every step (a
+        flight's topics) and the others in some (markers, rotor frames on ``/tf``), in :meth:`write_block`'s
+        order (step, then entry). The every-step records of a step are one row of a (steps, width) matrix, filled
+        in place; the records go to the block in one copy: the runs of rows between two sparse records, and
+        these. Each record's place is computed, not sorted: step ``k``'s every-step record ``i`` comes after
+        ``k`` rows and the sparse records of earlier steps; the ``j``-th sparse record (by step, then entry) of
+        step ``k`` after ``k + 1`` rows and ``j`` sparse records."""
+        steps = len(stamps)
+        head_size = _MESSAGE_HEAD.size
+        widths = [head_size + payloads.shape[1] for _, _, payloads in entries]
+        rows = np.empty((steps, sum(widths[:dense])), dtype=np.uint8)
+        records, channels, step_keys = [], [], []
+        column = 0
+        for place, (topic, entry_steps, payloads) in enumerate(entries):
+            if place < dense:
+                record = rows[:, column:column + widths[place]]
+                column += widths[place]
+            else:
+                record = np.empty((len(payloads), widths[place]), dtype=np.uint8)
+            self._head(topic, stamps[entry_steps], payloads, record[:, :head_size])
+            record[:, head_size:] = payloads
+            records.append(record)
+            channels.append(np.full(len(payloads), self._channels[topic], dtype=np.int64))
+            step_keys.append(entry_steps)
+        sparse_steps = np.concatenate(step_keys[dense:]) if len(entries) > dense else np.zeros(0, dtype=np.int64)
+        sparse_places = np.concatenate([np.full(len(entry_steps), place) for place, entry_steps
+                                        in enumerate(step_keys) if place >= dense] or [np.zeros(0, dtype=np.int64)])
+        sparse_rank = np.empty(len(sparse_steps), dtype=np.int64)
+        sparse_rank[np.lexsort((sparse_places, sparse_steps))] = np.arange(len(sparse_steps))
+        earlier = np.searchsorted(np.sort(sparse_steps), np.arange(steps), side="left")  # sparse before step k
+        places = [np.arange(steps) * dense + place + earlier for place in range(dense)]
+        if len(sparse_steps):
+            places.append((sparse_steps + 1) * dense + sparse_rank)
+        order = np.empty(steps * dense + len(sparse_steps), dtype=np.int64)
+        order[np.concatenate(places)] = np.arange(len(order))  # record (entry-major) -> its place in the block
+        self._sequence_in_order(records, channels, order)
+        sizes = np.concatenate([np.full(len(record), record.shape[1], dtype=np.int64) for record in records])
+        ends = np.cumsum(sizes[order])
+        if not len(sparse_steps):
+            block = rows.reshape(-1)
         else:
-            sizes = np.concatenate([np.full(len(r), r.shape[1], dtype=np.int64) for r in records])
-            order = np.lexsort((np.concatenate(place_keys), np.concatenate(step_keys)))  # step, then topic order
-            self._sequence_in_order(records, channels, order)
-            ends = np.cumsum(sizes[order])
-            block = self._interleaved(records, step_keys, len(stamps), order, sizes, ends)
-            channel_order = np.concatenate(channels)[order]
-            times = stamps[np.concatenate(step_keys)][order]
-        self._fast.add_block(block, ends, channel_order, times)
+            block = np.empty(int(ends[-1]), dtype=np.uint8)
+            at = done = 0
+            for index in np.argsort(sparse_rank).tolist():  # the sparse records in block order
+                step, place = int(sparse_steps[index]), int(sparse_places[index])
+                if step >= done:
+                    run = rows[done:step + 1].reshape(-1)
+                    block[at:at + len(run)] = run
+                    at, done = at + len(run), step + 1
+                row = records[place][index - int(np.searchsorted(sparse_places, place))]  # its row in its entry
+                block[at:at + len(row)] = row
+                at += len(row)
+            block[at:] = rows[done:].reshape(-1)
+        return (block, ends, np.concatenate(channels)[order], stamps[np.concatenate(step_keys)][order])
 
     @staticmethod
-    def _interleaved(records: list[np.ndarray], step_keys: list[np.ndarray], steps: int, order: np.ndarray,
-                     sizes: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        """The records of a block back to back in ``order`` (step, then entry). When the entries of every step
-        come first (a flight's topics, then sparse ones such as markers), each run of steps between two sparse
-        records is one slice of the every-step rows side by side; otherwise each record is scattered to its
-        place."""
-        dense = [place for place, rows in enumerate(records) if len(rows) == steps]
-        sparse = [place for place, rows in enumerate(records) if len(rows) != steps]
-        if dense and sparse and max(dense) < min(sparse):
-            side_by_side = np.concatenate([records[place] for place in dense], axis=1)
-            keyed = sorted((int(step), place, row) for place in sparse
-                           for row, step in enumerate(step_keys[place].tolist()))
-            pieces, done = [], 0
-            for step, place, row in keyed:
-                if step >= done:
-                    pieces.append(side_by_side[done:step + 1].reshape(-1))
-                    done = step + 1
-                pieces.append(records[place][row])
-            pieces.append(side_by_side[done:].reshape(-1))
-            return np.concatenate(pieces)
+    def _interleaved(records: list[np.ndarray], order: np.ndarray, sizes: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """The records of a block back to back in ``order`` (step, then entry): each record scattered to its place
+        (blocks whose every-step entries come first take :meth:`_dense_first`)."""
         starts = np.empty_like(sizes)
         starts[order] = ends - sizes[order]  # each record's place in the block
         block = np.empty(int(ends[-1]), dtype=np.uint8)
