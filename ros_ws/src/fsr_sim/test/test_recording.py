@@ -282,3 +282,37 @@ def test_chunks_finished_on_the_writer_thread_give_mcaps_file(tmp_path):
         files.append(path.read_bytes())
     assert files[0] == files[1] == files[2]
     assert sum(1 for m in read_ros2_messages(str(path)) if m.channel.topic == "/odom") == steps
+
+
+def test_a_chunk_the_writer_thread_cannot_write_is_reported_with_the_file(tmp_path):
+    """An error writing a chunk on the writer thread (a full disk) is raised to the caller by flush or close, one
+    line naming the file."""
+    import errno
+
+    import numpy as np
+
+    from fsr_sim.ros import cdr_pack
+
+    path = tmp_path / "full.mcap"
+    writer = RecordingWriter(path, chunk_size=4096)
+    assert writer.fast_path
+    writer.add_topic("/odom", "nav_msgs/msg/Odometry")
+    stream = writer._fast.chunks.stream  # noqa: SLF001 - the file the writer thread writes
+
+    class Full:
+        name = stream.name
+
+        def tell(self) -> int:
+            return stream.tell()
+
+        def write(self, _data: bytes) -> int:
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    writer._fast.chunks.stream = Full()  # noqa: SLF001
+    stamps = np.arange(200, dtype=np.int64) * 1_000_000
+    odom = cdr_pack.odometry("world_ned", "base_link_frd")
+    writer.write_block(stamps, [("/odom", None, odom.pack_rows(stamps, np.zeros((200, 13))))])
+    with pytest.raises(OSError, match=f"cannot write recording '{path}': No space left on device"):
+        writer.flush()
+    writer._fast.chunks.stream = stream  # noqa: SLF001
+    writer.close()

@@ -524,7 +524,8 @@ class _ChunkWriter:
     def _raise_error(self) -> None:
         if self._error is not None:
             error, self._error = self._error, None
-            raise OSError(f"cannot write the recording: {error}") from error
+            name = getattr(self.stream, "name", "the recording")
+            raise OSError(f"cannot write recording '{name}': {getattr(error, 'strerror', None) or error}") from error
 
     def _work(self) -> None:
         while (job := self._jobs.get()) is not None:
