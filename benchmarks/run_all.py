@@ -9,7 +9,8 @@ Rows:
 
 * in-process loop [us per step, CPU]: ``fly_in_process`` of ex4, ex5 and the octocopter with ground effect,
   without and with its recording (``process_time`` over the flight / steps); ex5 and the octocopter also as
-  a ratio to ex4;
+  a ratio to ex4; for ex4 with its recording also the flight's own thread (``thread_time``: the recording's
+  chunks are compressed on a writer thread, which another core runs meanwhile);
 * in-process command [s, wall and CPU]: ``fsr-fly ex4_geometric --in-process`` (30 s flight, recording and
   analysis) as a child process; its start-up to the first step (fsr-fly prints it);
 * graph real-time factor (as fsr-fly reports it: the whole flight, and the stepping phase alone), CPU per
@@ -61,15 +62,18 @@ def in_process_loop(repeat: int, seconds: float | None) -> None:
         overrides = [] if seconds is None else [f"duration={seconds}"]
         scenario = load_scenario(name, overrides)
         for recorded in (False, True):
-            values = []
+            values, flight_thread = [], []
             with tempfile.TemporaryDirectory() as tmp:
                 fly_in_process(scenario, Path(tmp) / "warm.mcap", max_steps=20)
                 for _ in range(repeat):
-                    start = time.process_time()
+                    start, start_thread = time.process_time(), time.thread_time()
                     run = fly_in_process(scenario, Path(tmp) / "run.mcap" if recorded else None)
                     values.append(1e6 * (time.process_time() - start) / len(run.time))
+                    flight_thread.append(1e6 * (time.thread_time() - start_thread) / len(run.time))
             what = "loop + recording" if recorded else "loop"
             add(f"in-process {what}, {name}", target if name == "ex4_geometric" else "", values, "us/step CPU")
+            if recorded and name == "ex4_geometric":  # without the chunks compressed on the writer thread
+                add(f"in-process {what}, {name}: the flight's thread", "", flight_thread, "us/step CPU")
             medians[(name, recorded)] = statistics.median(values)
             if ratio_target:
                 ROWS.append((f"in-process {what}, {name} / ex4", ratio_target,

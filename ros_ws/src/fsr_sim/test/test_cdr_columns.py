@@ -88,3 +88,20 @@ def test_stamped_columns_sorts_by_stamp_and_decodes_many_layouts_message_by_mess
     np.testing.assert_array_equal(columns.get("wrench.force.y"), -np.arange(count, dtype=float))
     np.testing.assert_array_equal(columns.get("wrench.torque.z"), np.arange(count, dtype=float))
     assert [len(s) for s in columns.strings["header.frame_id"]] == list(range(1, count + 1))
+
+
+def test_a_layout_walked_before_is_reused_only_for_the_same_key_bytes_and_fields_select_paths() -> None:
+    """Blocks of the same size whose frame ids differ (same length) get their own layout, not the one walked
+    first; ``fields`` keeps only the paths under the prefixes given."""
+    from fsr_sim.ros import cdr_pack
+
+    values = np.random.default_rng(5).normal(size=(6, 13))
+    stamps = np.arange(6, dtype=np.int64) * 1_000_000
+    for frame in ("world_aa", "world_bb", "world_aa"):
+        rows = cdr_pack.odometry(frame, "base_link_frd").pack_rows(stamps, values)
+        columns = decode_columns(rows, "nav_msgs/msg/Odometry", ("pose.pose.position.", "header.stamp."))
+        assert set(columns.strings["header.frame_id"]) == {frame}
+        assert sorted(columns.numbers) == ["header.stamp.nanosec", "header.stamp.sec", "pose.pose.position.x",
+                                           "pose.pose.position.y", "pose.pose.position.z"]
+        assert np.array_equal(columns.get("pose.pose.position.y"), values[:, 1])
+        assert np.array_equal(columns.get("header.stamp.nanosec"), stamps)

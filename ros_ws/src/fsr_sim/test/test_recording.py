@@ -252,3 +252,67 @@ def test_block_with_sparse_topics_after_the_dense_ones_is_the_step_by_step_file(
         writer.close()
         files.append(path.read_bytes())
     assert files[0] == files[1]
+
+
+def test_chunks_finished_on_the_writer_thread_give_mcaps_file(tmp_path):
+    """The fast path's chunks, compressed and written on the writer thread or inline, are the ones mcap's own
+    writer makes (its API path), byte for byte, also across a flush; and the file survives a flush alone."""
+    import numpy as np
+
+    from fsr_sim.ros import cdr_pack
+
+    odom = cdr_pack.odometry("world_ned", "base_link_frd")
+    steps = 3000
+    stamps = np.arange(steps, dtype=np.int64) * 1_000_000
+    values = np.random.default_rng(3).normal(size=(steps, 13))
+    files = []
+    for fast, background in ((False, False), (True, False), (True, True)):
+        path = tmp_path / f"run_{fast}_{background}.mcap"
+        writer = RecordingWriter(path, {"fsr_scenario": {"yaml": "name: test\n"}}, chunk_size=16 * 1024,
+                                 fast_path=fast, background=background)
+        writer.add_topic("/odom", "nav_msgs/msg/Odometry")
+        for low in range(0, steps, 700):
+            window = slice(low, low + 700)
+            writer.write_block(stamps[window], [("/odom", None, odom.pack_rows(stamps[window], values[window]))])
+            if low == 1400:
+                writer.flush()
+                flushed = open_recording(path)  # every chunk so far is in the file
+                assert flushed.truncated and flushed.count("/odom") == 2100
+        writer.close()
+        files.append(path.read_bytes())
+    assert files[0] == files[1] == files[2]
+    assert sum(1 for m in read_ros2_messages(str(path)) if m.channel.topic == "/odom") == steps
+
+
+def test_a_chunk_the_writer_thread_cannot_write_is_reported_with_the_file(tmp_path):
+    """An error writing a chunk on the writer thread (a full disk) is raised to the caller by flush or close, one
+    line naming the file."""
+    import errno
+
+    import numpy as np
+
+    from fsr_sim.ros import cdr_pack
+
+    path = tmp_path / "full.mcap"
+    writer = RecordingWriter(path, chunk_size=4096)
+    assert writer.fast_path
+    writer.add_topic("/odom", "nav_msgs/msg/Odometry")
+    stream = writer._fast.chunks.stream  # noqa: SLF001 - the file the writer thread writes
+
+    class Full:
+        name = stream.name
+
+        def tell(self) -> int:
+            return stream.tell()
+
+        def write(self, _data: bytes) -> int:
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    writer._fast.chunks.stream = Full()  # noqa: SLF001
+    stamps = np.arange(200, dtype=np.int64) * 1_000_000
+    odom = cdr_pack.odometry("world_ned", "base_link_frd")
+    writer.write_block(stamps, [("/odom", None, odom.pack_rows(stamps, np.zeros((200, 13))))])
+    with pytest.raises(OSError, match=f"cannot write recording '{path}': No space left on device"):
+        writer.flush()
+    writer._fast.chunks.stream = stream  # noqa: SLF001
+    writer.close()

@@ -51,6 +51,10 @@ from fsr_sim.recording.cdr_columns import Columns, LayoutError, decode_columns
 PATH_POINTS = 200  # samples of the planned path
 DERIVED_SOURCES = frozenset((ODOM.name, GOAL.name, WRENCH_TRUTH.name, REFERENCE.name, ROTOR_CMD.name, ROTOR_STATE.name,
                              WRENCH_ESTIMATE.name))  # the topics derived ones are drawn from
+POSE_FIELDS = ("pose.pose.position.", "pose.pose.orientation.")
+FIELDS = {ODOM.name: POSE_FIELDS, GOAL.name: ("pose.position.",), WRENCH_TRUTH.name: ("wrench.force.",),
+          WRENCH_ESTIMATE.name: ("wrench.force.",), REFERENCE.name: ("points.0.transforms.0.translation.",),
+          ROTOR_CMD.name: ("position", "velocity"), ROTOR_STATE.name: ("position", "velocity")}  # what is drawn
 POSITION = ("x", "y", "z")
 QUATERNION = ("x", "y", "z", "w")
 
@@ -166,13 +170,13 @@ class DerivedTopics:
         if not len(stamps):
             return out
         if topic == ODOM.name and self.tf:
-            columns = self._decode(payloads, ODOM.type)
+            columns = self._decode(payloads, ODOM.type, FIELDS[ODOM.name])
             if columns is not None:
                 pose = np.column_stack((_xyz(columns, "pose.pose.position"),
                                         _xyz(columns, "pose.pose.orientation", QUATERNION)))
                 out.append((TF.name, stamps, self.body_tf.pack_rows(stamps, pose)))
         if topic == GOAL.name and self.markers:
-            columns = self._decode(payloads, GOAL.type)
+            columns = self._decode(payloads, GOAL.type, FIELDS[GOAL.name])
             if columns is not None:
                 self.goal = _xyz(columns, "pose.position")[-1]
         if topic in self.sources:
@@ -184,10 +188,12 @@ class DerivedTopics:
                 out += self._markers(complete)
         return out
 
-    def _decode(self, payloads: Sequence[bytes] | np.ndarray, type_name: str) -> Columns | None:
+    def _decode(self, payloads: Sequence[bytes] | np.ndarray, type_name: str, fields: tuple[str, ...]
+                ) -> Columns | None:
+        """The ``fields`` (path prefixes) of ``payloads``, or None (with a warning) if they cannot be decoded."""
         try:
             return decode_columns(payloads if isinstance(payloads, np.ndarray) else [bytes(p) for p in payloads],
-                                  type_name)
+                                  type_name, fields)
         except (LayoutError, KeyError) as error:
             _warn(f"cannot draw from {type_name}: {error}")
             return None
@@ -197,7 +203,7 @@ class DerivedTopics:
         stamps = np.array(complete, dtype=np.int64)
         decoded = {}
         for topic in self.sources:
-            columns = self._decode([one[topic] for one in held], BY_NAME[topic].type)
+            columns = self._decode([one[topic] for one in held], BY_NAME[topic].type, FIELDS[topic])
             if columns is None:
                 return []
             decoded[topic] = columns

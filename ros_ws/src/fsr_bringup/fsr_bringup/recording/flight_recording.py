@@ -45,6 +45,9 @@ if TYPE_CHECKING:
 
 TOPIC_TYPES = {"/" + name: type_name for name, type_name in recorded_topics().items()}
 BLOCK_STEPS = 1000  # steps packed and written at once
+# Bigger chunks than the recorder node's, which a SIGKILL may cut: close() always finishes this file, and each chunk
+# costs a fixed share (compression, index records; ex4: 1 MiB instead of 256 KiB, 1 us per step less, 5 % smaller).
+CHUNK_SIZE = 1024 * 1024
 
 
 class InProcessRecorder:
@@ -70,7 +73,8 @@ class InProcessRecorder:
         self.writer = live
         if path is not None:
             path = Path(path)
-            self.writer = RecordingWriter(path, metadata={SCENARIO_METADATA: {"yaml": scenario_yaml}})
+            self.writer = RecordingWriter(path, metadata={SCENARIO_METADATA: {"yaml": scenario_yaml}},
+                                          chunk_size=CHUNK_SIZE)
             self.writer = self.writer if live is None else live.tee(self.writer)
         scenario, _ = scenario_from_text(scenario_yaml, "/", f"{path or 'the flight'} ({SCENARIO_METADATA} metadata)",
                                          Path.cwd() if path is None else path.parent)

@@ -21,7 +21,7 @@ the ROS message definitions (``rosidl_parser`` and the message packages), not a 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, cached_property
 from typing import Any
 
 import numpy as np
@@ -58,6 +58,13 @@ class Layout:
     numbers: dict[str, tuple[int, str, int | None]] = field(default_factory=dict)  # path -> (offset, dtype, count)
     strings: dict[str, str] = field(default_factory=dict)  # path -> value
     key_spans: list[tuple[int, int]] = field(default_factory=list)  # (offset, length) of counts and string bytes
+
+    @cached_property
+    def key_columns(self) -> np.ndarray:
+        """The byte positions of the key spans (int64 (k,)): what a message must share with this one to share its
+        layout."""
+        return np.concatenate([np.arange(offset, offset + size) for offset, size in self.key_spans] or [[]]
+                              ).astype(np.int64)
 
 
 @cache
@@ -142,6 +149,26 @@ def message_layout(data: bytes, cls: type) -> Layout:
     return walker.layout
 
 
+_LAYOUTS: dict[tuple[type, int], list[tuple[Layout, bytes]]] = {}  # (class, size) -> layouts and their key bytes
+_LAYOUTS_KEPT = 256
+
+
+def _layout_of(message: np.ndarray, cls: type) -> Layout:
+    """:func:`message_layout` of ``message`` (uint8 row), from the layouts already walked where one fits: a
+    layout is fixed by the bytes of its key spans (counts, string bytes), so a message of the same size with
+    the same bytes there has it exactly (a block of an in-process recording: one walk per topic and flight)."""
+    known = _LAYOUTS.setdefault((cls, len(message)), [])
+    for layout, key in known:
+        if message[layout.key_columns].tobytes() == key:
+            return layout
+    layout = message_layout(message.tobytes(), cls)
+    if sum(len(layouts) for layouts in _LAYOUTS.values()) >= _LAYOUTS_KEPT:
+        _LAYOUTS.clear()
+        known = _LAYOUTS.setdefault((cls, len(message)), [])
+    known.append((layout, message[layout.key_columns].tobytes()))
+    return layout
+
+
 @dataclass
 class Columns:
     """Decoded fields of ``n`` messages: numeric columns (NaN where a message lacks the field) and strings."""
@@ -156,13 +183,15 @@ class Columns:
         return self.numbers[path]
 
 
-def decode_columns(payloads: list[bytes] | np.ndarray, type_name: str) -> Columns:
+def decode_columns(payloads: list[bytes] | np.ndarray, type_name: str, fields: tuple[str, ...] | None = None
+                   ) -> Columns:
     """Decode every message of one topic into columns; raises :class:`LayoutError` if it cannot.
 
     payloads: CDR bytes of ``n`` messages of ``type_name`` (``nav_msgs/msg/Odometry``), or a uint8 array (n, size)
     of messages of one length (an in-process block). Returns
     ``numbers[path]`` of shape (n,) for scalars and (n, k) for arrays/sequences (float64; integers that
-    fit exactly, e.g. stamps, are kept as int64), and ``strings[path]`` of shape (n,).
+    fit exactly, e.g. stamps, are kept as int64), and ``strings[path]`` of shape (n,). ``fields``: only the
+    numeric paths that start with one of these (``("pose.pose.position.",)``; None: all).
     """
     cls = message_class(type_name)
     n = len(payloads)
@@ -182,21 +211,23 @@ def decode_columns(payloads: list[bytes] | np.ndarray, type_name: str) -> Column
             if len(groups) >= MAX_LAYOUTS:
                 raise LayoutError(f"more than {MAX_LAYOUTS} message layouts on one topic")
             first = matrix[remaining[0]]
-            layout = message_layout(first.tobytes(), cls)
-            same = np.ones(remaining.size, dtype=bool)
-            for offset, size in layout.key_spans:
-                block = matrix[remaining, offset : offset + size]
-                same &= np.all(block == first[offset : offset + size], axis=1)
+            layout = _layout_of(first, cls)
+            keys = layout.key_columns
+            rows = matrix[:, keys] if remaining.size == len(matrix) else matrix[np.ix_(remaining, keys)]
+            same = np.all(rows == first[keys], axis=1)
             groups.append((index[remaining[same]], layout, matrix[remaining[same]]))
             remaining = remaining[~same]
-    return _assemble(n, groups)
+    return _assemble(n, groups, fields)
 
 
-def _assemble(n: int, groups: list[tuple[np.ndarray, Layout, np.ndarray]]) -> Columns:
+def _assemble(n: int, groups: list[tuple[np.ndarray, Layout, np.ndarray]], fields: tuple[str, ...] | None = None
+              ) -> Columns:
     widths: dict[str, int | None] = {}
     kinds: dict[str, str] = {}
     for _, layout, _ in groups:
         for path, (_, dtype, count) in layout.numbers.items():
+            if fields is not None and not path.startswith(fields):
+                continue
             widths[path] = count if widths.get(path) is None else max(widths[path], count or 0)
             kinds.setdefault(path, dtype)
     integer_ok = len(groups) == 1  # a missing value in some group forces NaN (float)
