@@ -174,8 +174,8 @@ def test_gains_and_seeds_are_packed_anew_into_the_arrays_of_a_full_set_up(scenar
     base = load_scenario(scenario, values=fixed)
     packed = packed_sweep(base, 0.01)
     keys = seed_keys(base.data, lambda key: True)
-    for condition in range(3):  # one after the other: each starts from the initial states again
-        flight = {**condition_values(0, condition, keys, []), **values}
+    for condition in (0, 1, 0, 2, 1):  # one after the other: each from the initial states again, a condition
+        flight = {**condition_values(0, condition, keys, []), **values}  # flown again from what was kept of it
         fast = packed.flight_for(flight)
         assert fast is not None
         full = loop_flight(prepare_flight(flight_scenario(base, flight)), 0.01)

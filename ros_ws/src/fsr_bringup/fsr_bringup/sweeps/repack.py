@@ -30,19 +30,20 @@ The fast path's flight equals the full set-up's, array for array (``test_sweep_f
 
 from __future__ import annotations
 
+import copy
 import math
+from collections.abc import Callable
 from dataclasses import fields, is_dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from fsr_bringup.sweeps.axes import flight_scenario
 from fsr_bringup.sweeps.measured import LoopFlight, loop_flight
 from fsr_control.config.controller_config import controller_settings
 from fsr_control.flight_controller import make_control_law
 from fsr_estimation.config.estimator_config import estimator_config
 from fsr_estimation.core.observer import MomentumObserver
-from fsr_sim.config.scenario import disturbances_from_section, plant_vehicle_from_section
+from fsr_sim.config.scenario import Scenario, disturbances_from_section, plant_vehicle_from_section, set_value
 from fsr_sim.config.sensor_sections import sensors_from_section
 from fsr_sim.config.validation import ConfigError, Section
 from fsr_sim.model.disturbances import pack_disturbances
@@ -51,6 +52,8 @@ from fsr_sim.model.sensors import pack_sensors
 from fsr_sim.model.turbulence import pack_turbulence
 
 FAST_SECTIONS = ("plant", "sensors", "disturbances", "controller", "estimator")  # top-level scenario sections
+PLANT_SECTIONS = ("plant", "sensors", "disturbances")  # of them, the plant side's
+CACHE_SIZE = 1024  # validated and packed sections kept (a study's conditions, a generation's trials)
 
 def _sensors(sim: Any) -> dict[str, Any]:
     """The plant's sensor stages, packed as pack_plant packs them."""
@@ -157,6 +160,7 @@ class PackedSweep:
         # the observer's filter is read by nothing but the observer, unless the controller compensates with an
         # observer of its own (its config holds the filter too)
         self.observer_alone = self.estimation.enabled and self.config.compensation is None
+        self.cache: dict[tuple, Any] = {}
 
     def flight_for(self, values: dict[str, Any]) -> LoopFlight | None:
         """The flight with ``values`` set, ready to fly (its states at their initial values), or None when it
@@ -165,15 +169,59 @@ class PackedSweep:
         if not sections <= set(FAST_SECTIONS):
             return None
         try:
-            scenario = flight_scenario(self.scenario, values)
-            sim = self._simulation(scenario, sections)
+            scenario = self._scenario(values, sections)
+            data = scenario.data
+            plant = sections & set(PLANT_SECTIONS)
+            sim, packed = self._cached(("plant", *(repr(data.get(name)) for name in sorted(plant))),
+                                       lambda: self._plant(scenario, plant)) if plant else (self.simulation, {})
             switched = (sim.odometry_noise.enabled != self.simulation.odometry_noise.enabled
                         or sim.imu.enabled != self.simulation.imu.enabled)  # the controller's checks read them
-            law = self._law(scenario, sim) if "controller" in sections or switched else None
-            observer = self._observer(scenario) if "estimator" in sections else None
+            law = None
+            if "controller" in sections or switched:
+                key = ("controller", repr(data.get("controller")), repr(data.get("estimator")),
+                       sim.odometry_noise.enabled, sim.imu.enabled)
+                law = self._cached(key, lambda: self._law(scenario, sim))
+            observer = (self._cached(("estimator", repr(data.get("estimator"))), lambda: self._observer(scenario))
+                        if "estimator" in sections else None)
         except (ConfigError, ValueError, _FullSetUp):  # the full set-up names a refused value
             return None
-        return self._flight(sim, law, observer)
+        return self._flight(packed, law, observer)
+
+    def _scenario(self, values: dict[str, Any], sections: set[str]) -> Scenario:
+        """The flight's scenario (as :func:`fsr_bringup.sweeps.axes.flight_scenario` makes it, only its changed
+        sections copied)."""
+        base = self.scenario
+        data = dict(base.data)
+        for name in sections:
+            data[name] = copy.deepcopy(data.get(name))
+        for key, value in values.items():
+            set_value(data, str(key), copy.deepcopy(value), base.source)
+        return Scenario(data=data, source=base.source, base_dir=base.base_dir)
+
+    def _cached(self, key: tuple, make: Callable[[], Any]) -> Any:
+        """``make()``, kept by ``key`` (the raw sections it validates: a study's conditions and a trial's gains
+        recur from flight to flight)."""
+        if key not in self.cache:
+            if len(self.cache) >= CACHE_SIZE:
+                self.cache.clear()
+            self.cache[key] = make()
+        return self.cache[key]
+
+    def _plant(self, scenario: Scenario, sections: set[str]) -> tuple[Any, dict[str, Any]]:
+        """The flight's plant side and the PlantParams fields packed anew for it (_FullSetUp: a change no
+        packing here covers)."""
+        base = self.simulation
+        sim = self._simulation(scenario, sections)
+        changed = changed_fields(sim, base)
+        if not changed <= set(PLANT_PACKING):
+            raise _FullSetUp
+        if "plant_vehicle" in changed and not changed_fields(sim.plant_vehicle, base.plant_vehicle) <= set(
+                MASS_PROPERTIES):
+            raise _FullSetUp
+        packed: dict[str, Any] = {}
+        for name in sorted(changed):
+            packed.update(PLANT_PACKING[name](sim))
+        return sim, packed
 
     def _simulation(self, scenario: Any, sections: set[str]) -> Any:
         """The flight's plant side: the sweep's, with its changed sections validated anew."""
@@ -201,29 +249,22 @@ class PackedSweep:
             raise _FullSetUp
         return make_control_law(config, sim.vehicle).params
 
-    def _observer(self, scenario: Any) -> MomentumObserver | None:
-        """The flight's observer, made anew as the full set-up makes it when its config changed (None: the
-        sweep's)."""
+    def _observer(self, scenario: Any) -> tuple[Any, Any] | None:
+        """The flight's observer's params and initial state, made anew as the full set-up makes them when its
+        config changed (None: the sweep's)."""
         estimation = estimator_config(scenario)
         changed = changed_fields(estimation, self.estimation)
         if not changed:
             return None
         if not (self.observer_alone and changed <= {"c0", "r"}):
             raise _FullSetUp
-        return MomentumObserver(estimation.mass, estimation.inertia, estimation.c0, estimation.r,
-                                self.simulation.control_period)
+        observer = MomentumObserver(estimation.mass, estimation.inertia, estimation.c0, estimation.r,
+                                    self.simulation.control_period)
+        return observer.params, _snapshot(observer.state)
 
-    def _flight(self, sim: Any, law: Any, observer: MomentumObserver | None) -> LoopFlight | None:
-        base = self.simulation
-        changed = changed_fields(sim, base) if sim is not base else set()
-        if not changed <= set(PLANT_PACKING):
-            return None
-        if "plant_vehicle" in changed and not changed_fields(sim.plant_vehicle, base.plant_vehicle) <= set(
-                MASS_PROPERTIES):
-            return None
-        packed: dict[str, Any] = {}
-        for name in sorted(changed):
-            packed.update(PLANT_PACKING[name](sim))
+    def _flight(self, packed: dict[str, Any], law: Any, observer: tuple[Any, Any] | None) -> LoopFlight:
+        """The sweep's flight with ``packed`` PlantParams fields, ``law`` params and ``observer`` (params, initial
+        state) put in (None: the sweep's), every state at its initial values."""
         flight = self.flight
         changes: dict[str, Any] = {}
         _restore(flight.controller_state, self.controller_state)
@@ -232,7 +273,7 @@ class PackedSweep:
         if observer is None:
             _restore(flight.observer_state, self.observer_state)
         else:
-            changes.update(observer_params=observer.params, observer_state=observer.state)
+            changes.update(observer_params=observer[0], observer_state=_snapshot(observer[1]))
         params = flight.plant_params._replace(**packed)
         state = new_plant_state(params, self.initial_x)
         changes.update(plant_params=params, plant_state=state)
@@ -241,7 +282,7 @@ class PackedSweep:
             changes.update(actuator_params=actuator, actuator_state=new_plant_state(actuator, self.initial_x))
         else:
             changes.update(actuator_params=params, actuator_state=state)
-        if "plant_vehicle" in changed:  # the truth the estimate is measured against
+        if "mass" in packed:  # the truth the estimate is measured against
             measures = flight.measures
             changes["measures"] = measures._replace(
                 mass=params.mass, inertia=params.inertia,
