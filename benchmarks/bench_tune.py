@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -46,6 +47,12 @@ TARGET_FLIGHT_SECONDS = 400 * 10 * 15.0  # its trials x seeds x duration [s]
 def target(args: argparse.Namespace) -> float:
     """The target wall time [s] of a study of ``args``' size (the full-size target scaled by its flight-seconds)."""
     return TARGET_S * args.budget * args.seeds * args.duration / TARGET_FLIGHT_SECONDS
+
+
+def cpu_seconds() -> float:
+    """CPU time [s] of this process and its finished children (a study's workers end with it)."""
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
 def study(method: str, seed: int, args: argparse.Namespace, **extra: object) -> object:
@@ -90,18 +97,22 @@ def main() -> None:
     parser.add_argument("--dask", action="store_true", help="also the first seed's study on a loopback cluster")
     parser.add_argument("--speed", action="store_true", help="the CMA-ES study's wall time only (no random search)")
     args = parser.parse_args()
-    walls, rates, ratios = [], [], []
+    walls, rates, ratios, cpus = [], [], [], []
     goal = target(args)
     print(f"{SCENARIO}: {args.budget} trials x {args.seeds} seeds of {args.duration:g} s, {len(PARAMS)} gains "
           f"(x, y tied), {CONDITIONS}, {SAMPLE}; held out: {args.holdout} conditions; {os.cpu_count()} cores; "
           f"target {goal:.1f} s")
     for seed in range(args.repeat):
+        cpu = cpu_seconds()
         cma = study("cma", seed, args)
+        cpu = cpu_seconds() - cpu
         walls.append(cma.wall_s)
         rates.append(cma.flights / cma.wall_s)
+        cpus.append(cpu)
         held, own = cma.validation["best"], cma.validation["scenario"]
         line = (f"seed {seed}: cma {cma.wall_s:.1f} s ({cma.flights} flights, {rates[-1]:.1f} flights/s, "
-                f"{cma.wall_s / goal:.2f} x the target); best {cma.best_objective:.4g} training, {held.objective:.4g} "
+                f"{cma.wall_s / goal:.2f} x the target; CPU {cpu:.1f} s, {1e3 * cpu / cma.flights:.1f} ms a flight, "
+                f"load average {os.getloadavg()[0]:.1f}); best {cma.best_objective:.4g} training, {held.objective:.4g} "
                 f"held out ({held.lost} lost); scenario's own {own.objective:.4g} ({own.lost} lost)")
         if not args.speed:
             blind = study("random", seed, args).validation["best"]
@@ -110,7 +121,8 @@ def main() -> None:
         print(line, flush=True)
     print(f"study wall [s] min / median: {min(walls):.1f} / {statistics.median(walls):.1f} (target {goal:.1f}: "
           f"{min(walls) / goal:.2f} / {statistics.median(walls) / goal:.2f} x); flights/s max / median: "
-          f"{max(rates):.1f} / {statistics.median(rates):.1f}")
+          f"{max(rates):.1f} / {statistics.median(rates):.1f}; CPU [s] min / median: {min(cpus):.1f} / "
+          f"{statistics.median(cpus):.1f} (half of it: the wall time on two free cores at best)")
     if ratios:
         print(f"held-out objective cma / random min / median: {min(ratios):.3f} / {statistics.median(ratios):.3f}")
     if args.dask:
