@@ -10,12 +10,13 @@ The optimiser is optuna's (CMA-ES, TPE or random search, :data:`METHODS`), its s
 completed are kept, none is flown again; one in flight when it stopped is marked failed and asked anew.
 
 Trials are asked :data:`GENERATION` at a time, their flights (each trial: ``seeds`` conditions,
-:mod:`fsr_bringup.tuning.conditions`) flown in parallel - one batch per trial over the local worker processes, or
-as Dask tasks (a worker lost mid-task has its batch flown again by the scheduler) - and told back in trial order,
-so a study is the same study wherever and in whatever order its flights ran: one seed gives the same trials and
-the same best on one core, on two, or on a cluster. A diverged flight is a penalty (:mod:`fsr_bringup.tuning.
-objective`), never an error. The best candidate and the scenario's own parameters are then flown on ``holdout``
-conditions the optimiser never saw (:attr:`TuneResult.validation`).
+:mod:`fsr_bringup.tuning.conditions`) flown in parallel - in batches over the local worker processes, or as
+Dask tasks (a worker lost mid-task has its batch flown again by the scheduler) - and told back in trial order, so a
+study is the same study wherever and in whatever order its flights ran: one seed gives the same trials and the same
+best on one core, on two, or on a cluster. A diverged flight is a penalty (:mod:`fsr_bringup.tuning.objective`),
+never an error; a trial's lost flight is not flown again for its metrics (the penalty needs none of them:
+:func:`fsr_bringup.sweeps.batch.fly_one`'s ``lost_detail``). The best candidate and the scenario's own parameters
+are then flown on ``holdout`` conditions the optimiser never saw (:attr:`TuneResult.validation`).
 """
 
 from __future__ import annotations
