@@ -11,7 +11,7 @@ import pytest
 
 from fsr_bringup.runner.in_process_flight import prepare_flight
 from fsr_bringup.sweeps.axes import flight_scenario
-from fsr_bringup.sweeps.batch import fly_one, packed_sweep
+from fsr_bringup.sweeps.batch import TRUTH_COLUMNS, fly_one, packed_sweep
 from fsr_bringup.sweeps.measured import loop_flight
 from fsr_bringup.sweeps.metrics import METRIC_COLUMNS
 from fsr_bringup.tuning.conditions import condition_values, seed_keys
@@ -194,3 +194,27 @@ def test_a_sensor_switched_off_under_a_law_that_needs_it_is_refused_as_the_full_
     refused, _ = fly_one(base, {"sensors.imu.enabled": False}, packed=packed)
     assert refused["end_reason"] == "invalid" and "controller.type" in refused["end_detail"]
     assert packed.flight_for({"sensors.imu.seed": 5}) is not None
+
+
+@pytest.mark.parametrize("values", [GAINS, {"plant.mass": 1.4}])
+def test_a_flight_for_one_metric_has_the_columns_of_the_whole_row_but_the_estimators(values):
+    base = load_scenario("step_disturbance", values={"duration": 6.0, "sensors.preset": "onboard",
+                                                     "plant.rotor_time_constant": 0.03})
+    packed = packed_sweep(base, 0.01)
+    flight = {**condition_values(0, 1, seed_keys(base.data, lambda key: True), []), **values}
+    whole, steps = fly_one(base, flight)
+    assert whole["end_reason"] == "finished" and math.isfinite(whole["estimate_force_rms_N"])
+    one, one_steps = fly_one(base, flight, packed=packed, metric="position_error_rms_m")
+    assert one_steps == steps
+    for column in METRIC_COLUMNS:  # without the estimator (the controller does not read it), the same flight
+        assert math.isnan(one[column]) if column in TRUTH_COLUMNS else one[column] == whole[column], column
+    assert fly_one(base, flight, packed=packed, metric="estimate_force_rms_N") == (whole, steps)
+
+
+def test_a_lost_flight_for_one_metric_is_its_end_alone():
+    base = load_scenario("ex4_geometric", values={"duration": 2.0, "actuation": "rotors", "estimator.enabled": False})
+    packed = packed_sweep(base, 0.01)
+    whole, steps = fly_one(base, {"plant.mass": 30.0})
+    lost, lost_steps = fly_one(base, {"plant.mass": 30.0}, packed=packed, metric="position_error_rms_m")
+    assert whole["end_reason"] == lost["end_reason"] == "diverged" and lost_steps == steps < 2000
+    assert lost["flown_s"] == whole["flown_s"] and math.isnan(lost["position_error_rms_m"])

@@ -15,7 +15,7 @@ Dask tasks (a worker lost mid-task has its batch flown again by the scheduler) -
 study is the same study wherever and in whatever order its flights ran: one seed gives the same trials and the same
 best on one core, on two, or on a cluster. A diverged flight is a penalty (:mod:`fsr_bringup.tuning.objective`),
 never an error; a trial's lost flight is not flown again for its metrics (the penalty needs none of them:
-:func:`fsr_bringup.sweeps.batch.fly_one`'s ``lost_detail``). The best candidate and the scenario's own parameters
+:func:`fsr_bringup.sweeps.batch.fly_one`'s ``metric``). The best candidate and the scenario's own parameters
 are then flown on ``holdout`` conditions the optimiser never saw (:attr:`TuneResult.validation`).
 """
 
@@ -76,13 +76,15 @@ class TunePlan:
         """The scenario values (dotted key -> value) of the optimiser's ``params``."""
         return {key.key: key.value(params) for key in self.keys}
 
-    def batch(self, values: dict[str, Any], first: int, count: int, lost_detail: bool = True) -> Batch:
+    def batch(self, values: dict[str, Any], first: int, count: int, objective_only: bool = False) -> Batch:
         """The flights of conditions ``first .. first+count-1`` with ``values`` (numbered by condition);
-        ``lost_detail=False``: a lost flight's row is its end alone (:func:`fsr_bringup.sweeps.batch.fly_one`)."""
+        ``objective_only``: their rows need only the objective's metric (:func:`fsr_bringup.sweeps.batch.fly_one`'s
+        ``metric``)."""
         flights = [(c, {**condition_values(self.seed, c, self.seed_keys, self.sample), **values})
                    for c in range(first, first + count)]
         s = self.scenario
-        return Batch(s.data, s.source, str(s.base_dir), flights, self.band, lost_detail)
+        return Batch(s.data, s.source, str(s.base_dir), flights, self.band,
+                     self.objective.metric if objective_only else None)
 
     def spec(self) -> dict[str, Any]:
         """What makes the study this study (kept with it: a resumed study must have the same)."""
@@ -240,17 +242,17 @@ class Flyer:
 
 
 def evaluate(plan: TunePlan, flyer: Flyer, candidates: list[dict[str, Any]], first: int, count: int,
-             lost_detail: bool = True) -> list[Evaluation]:
+             objective_only: bool = False) -> list[Evaluation]:
     """Each candidate's values flown over conditions ``first .. first+count-1``, in batches small enough that
     every worker has :data:`BATCHES_PER_WORKER` of them (the last ones balance the load before the next
-    generation is asked); ``lost_detail=False``: the rows of lost flights are their end alone (an objective needs
-    no more of them)."""
+    generation is asked); ``objective_only``: the rows need only the objective's metric (a lost flight's row is its
+    end alone: an objective needs no more of it)."""
     batches_per_candidate = max(1, math.ceil(flyer.workers * BATCHES_PER_WORKER / max(1, len(candidates))))
     per = max(1, math.ceil(count / batches_per_candidate))
     batches, owner = [], []
     for index, values in enumerate(candidates):
         for start in range(first, first + count, per):
-            batches.append(plan.batch(values, start, min(per, first + count - start), lost_detail))
+            batches.append(plan.batch(values, start, min(per, first + count - start), objective_only))
             owner.append(index)
     rows: list[list[dict[str, Any]]] = [[] for _ in candidates]
     for index, result in zip(owner, flyer.fly(batches), strict=True):
@@ -372,7 +374,7 @@ def tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str, Any
                 asked = [study.ask(distributions) for _ in range(min(GENERATION, budget - done))]
                 try:
                     results = evaluate(plan, flyer, [plan.values(t.params) for t in asked], 0, plan.seeds,
-                                       lost_detail=False)
+                                       objective_only=True)
                 except BaseException:
                     for trial in asked:
                         study.tell(trial, state=optuna.trial.TrialState.FAIL)
