@@ -14,7 +14,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from fsr_bringup.runner.processes import executable
-from fsr_sim.model.frames import GRAVITY
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.vehicle import load_vehicle
 from fsr_sim.ros.conversions import rotor_command, wrench_stamped
 from fsr_sim.ros.qos import CLOCK_QOS

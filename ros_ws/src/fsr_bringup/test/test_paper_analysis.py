@@ -33,7 +33,7 @@ from fsr_bringup.cli.fly_cli import parse_args as fly_args
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_estimation.core.metrics import max_error_after, mean_absolute_error, settling_time
 from fsr_sim.config.scenario import load_scenario
-from fsr_sim.model.vehicle import GRAVITY
+from fsr_sim.core.rigid_body import GRAVITY
 
 EX3_YAW_GAIN = 100.0  # k_R,z of ex3's geometric controller (report gains)
 EX3_YAW_TORQUE = 0.4  # N m, the unopposed external yaw torque

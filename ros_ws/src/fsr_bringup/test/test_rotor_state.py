@@ -90,7 +90,7 @@ def test_a_lagging_wrench_is_in_the_effective_truth(tmp_path):
     # estimate converges to); taking the command for the applied wrench misses the lag.
     from dataclasses import replace
 
-    from fsr_sim.model.frames import GRAVITY
+    from fsr_sim.core.rigid_body import GRAVITY
 
     fly_in_process(load_scenario("ex3_estimation", ["plant.rotor_time_constant=0.03", "duration=6.0"]),
                    tmp_path / "lag.mcap")

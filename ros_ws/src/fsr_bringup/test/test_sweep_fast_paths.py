@@ -6,10 +6,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
-from fsr_bringup.sweeps.batch import fly_one, packed_sweep
+from fsr_bringup.runner.in_process_flight import prepare_flight
+from fsr_bringup.sweeps.axes import flight_scenario
+from fsr_bringup.sweeps.batch import TRUTH_COLUMNS, fly_one, packed_sweep
+from fsr_bringup.sweeps.measured import loop_flight
 from fsr_bringup.sweeps.metrics import METRIC_COLUMNS
+from fsr_bringup.tuning.conditions import condition_values, seed_keys
 from fsr_sim.config.scenario import load_scenario
 
 TEXT_COLUMNS = ("end_reason", "end_detail", "gave_way")
@@ -81,7 +86,10 @@ def test_flights_set_up_from_the_packed_sweep_have_the_rows_of_a_full_set_up(sce
 
 
 @pytest.mark.parametrize("values", [
-    {"controller.gains.k_p": [7, 7, 40]}, {"plant.mass": 1.2, "estimator.mass": 1.3},  # keys it does not re-pack
+    {"plant.mass": 1.2, "estimator.mass": 1.3}, {"controller.allocation": "clamp"},  # what it does not re-pack:
+    {"controller.type": "indi"}, {"plant.rotor_time_constant": 0.02}, {"duration": 0.2},  # the model, the plan,
+    {"trajectory.goal_duration": 2.0}, {"sensors.imu.rate_hz": -1.0},  # the layout; refused values:
+    {"controller.gains.k_p": [7, -7, 40]}, {"controller.gains.k_i": [1, 1, 1], "controller.integral_limit": -1},
     {"plant.mass": -1.0}, {"plant.mass": True}, {"plant.mass": math.nan},  # values the full set-up refuses
     {"plant.inertia": [0.03, -0.03, 0.06]}, {"plant.inertia": [[0.03, 0.01, 0.0], [0.0, 0.03, 0.0], [0, 0, 0.06]]},
     {"plant.inertia.0": 0.03},
@@ -129,3 +137,84 @@ def test_the_observer_filter_is_set_up_in_full_where_more_than_the_observer_read
     packed = packed_sweep(base, 0.01)
     assert packed.flight_for(values) is None and packed.flight_for({"plant.mass": 1.3}) is not None
     assert fly_one(base, values, packed=packed) == fly_one(base, values)
+
+
+def assert_packed_equal(got, want, where: str = "") -> None:
+    """Two packed objects (NamedTuples of arrays and numbers, nested) equal to the bit."""
+    if isinstance(want, np.ndarray):
+        assert got.dtype == want.dtype and got.shape == want.shape, where
+        assert np.array_equal(got, want, equal_nan=True), where
+    elif isinstance(want, tuple):
+        assert type(got) is type(want) and len(got) == len(want), where
+        names = getattr(want, "_fields", range(len(want)))
+        for name, a, b in zip(names, got, want, strict=True):
+            assert_packed_equal(a, b, f"{where}.{name}")
+    elif isinstance(want, float) and math.isnan(want):
+        assert math.isnan(got), where
+    else:
+        assert type(got) is type(want) and got == want, where
+
+
+GAINS = {"controller.gains.k_p": [3.0, 3.0, 20.0], "controller.gains.k_v": [4.0, 4.0, 9.0],
+         "controller.gains.k_r": [12.0, 12.0, 3.0], "controller.gains.k_w": [2.5, 2.5, 1.5]}
+
+
+@pytest.mark.parametrize(("scenario", "fixed", "values"), [
+    ("step_disturbance", {"duration": 1.0, "sensors.preset": "onboard", "plant.rotor_time_constant": 0.03},
+     {"plant.mass": 1.3, **GAINS}),  # fsr-tune's walk-through: gains, seeds, a mass
+    ("wind_rejection_turbulent", {"duration": 1.0, "sensors.preset": "onboard"},
+     {"controller.gains.k_i": [0.5, 0.5, 1.0], "controller.integral_limit": 2.0}),  # the Dryden wind's seed too
+    ("ex3_estimation", {"duration": 1.0}, {"estimator.c0": 7.0, "controller.gains.k_r": [9, 9, 90],
+                                           "controller.acceleration_filter_hz": 20.0}),  # the report's law
+    ("ex5_voliro", {"duration": 0.5}, {"controller.gains.k_p": [9, 9, 30], "plant.inertia": [0.03, 0.03, 0.06]}),
+    ("ex4_geometric", {"duration": 0.5, "actuation": "rotors", "controller.type": "indi",
+                       "sensors.preset": "ideal"}, {"controller.filter_hz": 40.0, **GAINS}),
+])
+def test_gains_and_seeds_are_packed_anew_into_the_arrays_of_a_full_set_up(scenario, fixed, values):
+    base = load_scenario(scenario, values=fixed)
+    packed = packed_sweep(base, 0.01)
+    keys = seed_keys(base.data, lambda key: True)
+    for condition in (0, 1, 0, 2, 1):  # one after the other: each from the initial states again, a condition
+        flight = {**condition_values(0, condition, keys, []), **values}  # flown again from what was kept of it
+        fast = packed.flight_for(flight)
+        assert fast is not None
+        full = loop_flight(prepare_flight(flight_scenario(base, flight)), 0.01)
+        for name in ("plant_params", "plant_state", "controller_params", "controller_state", "observer_params",
+                     "observer_state", "measures", "actuator_params", "actuator_state", "steps", "control_bounds"):
+            assert_packed_equal(getattr(fast, name), getattr(full, name), name)
+        row, steps = fly_one(base, flight, packed=packed)
+        assert (row, steps) == fly_one(base, flight)
+
+
+def test_a_sensor_switched_off_under_a_law_that_needs_it_is_refused_as_the_full_set_up_refuses_it():
+    base = load_scenario("ex4_geometric", values={"duration": 0.3, "actuation": "rotors", "controller.type": "indi",
+                                                  "sensors.preset": "ideal"})
+    packed = packed_sweep(base, 0.01)
+    assert packed.flight_for({"sensors.imu.enabled": False}) is None
+    refused, _ = fly_one(base, {"sensors.imu.enabled": False}, packed=packed)
+    assert refused["end_reason"] == "invalid" and "controller.type" in refused["end_detail"]
+    assert packed.flight_for({"sensors.imu.seed": 5}) is not None
+
+
+@pytest.mark.parametrize("values", [GAINS, {"plant.mass": 1.4}])
+def test_a_flight_for_one_metric_has_the_columns_of_the_whole_row_but_the_estimators(values):
+    base = load_scenario("step_disturbance", values={"duration": 6.0, "sensors.preset": "onboard",
+                                                     "plant.rotor_time_constant": 0.03})
+    packed = packed_sweep(base, 0.01)
+    flight = {**condition_values(0, 1, seed_keys(base.data, lambda key: True), []), **values}
+    whole, steps = fly_one(base, flight)
+    assert whole["end_reason"] == "finished" and math.isfinite(whole["estimate_force_rms_N"])
+    one, one_steps = fly_one(base, flight, packed=packed, metric="position_error_rms_m")
+    assert one_steps == steps
+    for column in METRIC_COLUMNS:  # without the estimator (the controller does not read it), the same flight
+        assert math.isnan(one[column]) if column in TRUTH_COLUMNS else one[column] == whole[column], column
+    assert fly_one(base, flight, packed=packed, metric="estimate_force_rms_N") == (whole, steps)
+
+
+def test_a_lost_flight_for_one_metric_is_its_end_alone():
+    base = load_scenario("ex4_geometric", values={"duration": 2.0, "actuation": "rotors", "estimator.enabled": False})
+    packed = packed_sweep(base, 0.01)
+    whole, steps = fly_one(base, {"plant.mass": 30.0})
+    lost, lost_steps = fly_one(base, {"plant.mass": 30.0}, packed=packed, metric="position_error_rms_m")
+    assert whole["end_reason"] == lost["end_reason"] == "diverged" and lost_steps == steps < 2000
+    assert lost["flown_s"] == whole["flown_s"] and math.isnan(lost["position_error_rms_m"])

@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.allocation import wrench_from_rotor_speed_sq
 from fsr_sim.model.authority import authority, force_directions, force_set, largest_along, rotor_inputs
-from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.vehicle import load_vehicle
 
 TORQUES = ("roll_torque", "pitch_torque", "yaw_torque")

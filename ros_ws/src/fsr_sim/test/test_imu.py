@@ -18,10 +18,10 @@ from fsr_sim.core.odometry import (
     IMU_TRUE_LINEAR_ACCELERATION,
     PUBLISHED_SIZE,
 )
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.core.sensors import IMU_HISTORY, IMU_SIZE, measure_imu
 from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
 from fsr_sim.model.checks import InvalidValueError
-from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.sensors import ImuModel
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 

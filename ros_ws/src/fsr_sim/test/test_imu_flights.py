@@ -12,7 +12,7 @@ import pytest
 from fsr_bringup.analysis.load import load_flight
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_sim.config.scenario import load_scenario
-from fsr_sim.model.frames import GRAVITY
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.recording.reader import open_recording
 
 HOVER = ["trajectory.waypoints=[]", "duration=20.0"]  # ex4 holding [0, 0, -1]

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import yaml
 
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
-from fsr_sim.model.frames import GRAVITY
 
 
 def make_plant(vehicle="quadrotor_ex4", actuation="wrench", **values):

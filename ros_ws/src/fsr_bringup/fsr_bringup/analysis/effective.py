@@ -49,8 +49,9 @@ import numpy as np
 from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
 from fsr_sim.config.scenario import SimulationConfig, plant_from_config
 from fsr_sim.core.plant import actuator_wrench_log, applied_wrench_log
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.environment import contact_mask, pack_surfaces, thrust_ratio_log
-from fsr_sim.model.frames import E3, GRAVITY
+from fsr_sim.model.frames import E3
 
 
 @dataclass

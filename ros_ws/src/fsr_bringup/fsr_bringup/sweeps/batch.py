@@ -16,14 +16,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from fsr_bringup.core.flight_loop import CONTROLLER_FAILED
+from fsr_bringup.core.flight_measures import FINISHED as FINISHED_OUTCOME
+from fsr_bringup.core.flight_measures import TRUTH_UNDEFINED
 from fsr_bringup.runner.in_process_flight import FlightArrays, prepare_flight
 from fsr_bringup.sweeps.axes import flight_scenario
-from fsr_bringup.sweeps.measured import fly_measured, loop_flight
-from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, flight_row, invalid_row
+from fsr_bringup.sweeps.measured import fly_accumulated, fly_measured, loop_flight, measured_row
+from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS, flight_row, invalid_row
 from fsr_bringup.sweeps.repack import PackedSweep
 from fsr_sim.config.scenario import Scenario
 from fsr_sim.config.validation import ConfigError
-from fsr_sim.contract import FINISHED
+from fsr_sim.contract import DIVERGED, FINISHED
 
 
 @dataclass
@@ -35,6 +38,7 @@ class Batch:
     base_dir: str
     flights: list[tuple[int, dict[str, Any]]]
     band: float = DEFAULT_BAND_M
+    metric: str | None = None  # the one metric its caller needs (fly_one); None: the whole row
 
 
 @dataclass
@@ -45,6 +49,7 @@ class BatchResult:
     worker: str  # host:pid that flew it
 
 
+TRUTH_COLUMNS = tuple(c for c in METRIC_COLUMNS if c.startswith("estimate_"))  # the estimate against the truth
 _ARRAYS: list[FlightArrays] = []  # this process' arrays, reused by its next flights
 
 
@@ -66,16 +71,27 @@ _PACKED: list[tuple[tuple, PackedSweep | None]] = []
 
 
 def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M, measured: bool = True,
-            packed: PackedSweep | None = None) -> tuple[dict[str, Any], int]:
+            packed: PackedSweep | None = None, metric: str | None = None) -> tuple[dict[str, Any], int]:
     """The metrics row of one flight and the steps it flew: measured in the loop where it can be
     (:mod:`fsr_bringup.sweeps.measured`; ``measured=False``: always from the flight's arrays), set up from
-    ``packed`` where it can be (:mod:`fsr_bringup.sweeps.repack`)."""
+    ``packed`` where it can be (:mod:`fsr_bringup.sweeps.repack`).
+
+    ``metric``: the one column the caller needs (fsr-tune's trials: their objective's), for a flight set up from
+    ``packed``: a flight that is lost (it ends early) is not flown again into arrays for its metrics and the reason
+    of its end - its row is :func:`lost_row` (a lost flight counts as a penalty whatever its metrics) -, and unless
+    ``metric`` is one of :data:`TRUTH_COLUMNS` the estimator is neither flown nor measured against the effective
+    truth (the flight is the same: the controller does not read that estimator); the row's other columns are
+    those of the whole row, the estimator's NaN."""
     repacked = packed.flight_for(values) if packed is not None and measured else None
     if repacked is not None:
-        row = fly_measured(repacked)
-        if row is not None:
-            return row, repacked.steps
-        measured = False  # it ended early: flown again in full, into arrays
+        if metric is not None and metric not in TRUTH_COLUMNS:
+            repacked = repacked.replace(with_estimator=False, measures=repacked.measures._replace(truth=False))
+        outcome, k, acc = fly_accumulated(repacked)
+        if outcome == FINISHED_OUTCOME and acc[TRUTH_UNDEFINED] <= 0:
+            return measured_row(repacked, acc), repacked.steps
+        if outcome != FINISHED_OUTCOME and metric is not None:
+            return lost_row(k, repacked.period_ns), k - (outcome == CONTROLLER_FAILED)
+        measured = False  # it ended early, or a truth is not finite: flown again in full, into arrays
     try:
         scenario = flight_scenario(base, values)
     except ConfigError as error:
@@ -104,6 +120,13 @@ def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M
     return flight_row(run, band), count - 1
 
 
+def lost_row(k: int, period_ns: int) -> dict[str, Any]:
+    """The row of a flight lost at step ``k`` whose metrics and reason were not taken (``fly_one``)."""
+    row = invalid_row(f"lost at t = {k * period_ns * 1e-9:.4f} s (not flown again for its metrics and reason)")
+    row.update(end_reason=DIVERGED, flown_s=(k * period_ns) * 1e-9)
+    return row
+
+
 def fly_batch(batch: Batch) -> BatchResult:
     """Fly every flight of ``batch`` (module docstring)."""
     import os
@@ -114,7 +137,7 @@ def fly_batch(batch: Batch) -> BatchResult:
     packed = packed_sweep(base, batch.band)
     rows, steps = [], 0
     for number, values in batch.flights:
-        row, flown = fly_one(base, values, batch.band, packed=packed)
+        row, flown = fly_one(base, values, batch.band, packed=packed, metric=batch.metric)
         rows.append((number, row))
         steps += flown
     return BatchResult(rows, steps, time.perf_counter() - start, f"{socket.gethostname()}:{os.getpid()}")

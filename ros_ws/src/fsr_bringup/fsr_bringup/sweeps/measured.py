@@ -22,8 +22,8 @@ from fsr_estimation.core.metrics import TOLERANCE, smoothing_gain
 from fsr_sim.config.scenario import plant_from_config
 from fsr_sim.contract import FINISHED
 from fsr_sim.core.odometry import PUBLISHED_SIZE
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE
-from fsr_sim.model.frames import GRAVITY
 
 
 class _Scratch:
@@ -104,19 +104,26 @@ def loop_flight(setup, band: float) -> LoopFlight:  # noqa: ANN001 - a FlightSet
 def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
     """Fly ``flight`` whole, measured in the loop: its row, or None when the loop could not measure it (module
     docstring: the flight is then to be flown again from its arrays)."""
+    outcome, _, acc = fly_accumulated(flight)
+    if outcome != core.FINISHED or acc[core.TRUTH_UNDEFINED] > 0:
+        return None
+    return measured_row(flight, acc)
+
+
+def fly_accumulated(flight: LoopFlight) -> tuple[int, int, np.ndarray]:
+    """Fly ``flight`` whole in the measuring loop: its outcome (``flight_loop``'s), last step and accumulators
+    (this process' scratch row, overwritten by its next flight)."""
     n = flight.rotor_count
     scratch = _SCRATCH.get(n)
     if scratch is None:
         scratch = _SCRATCH[n] = _Scratch(n)
-    outcome, _, _ = core.fly_measured(
+    outcome, k, _ = core.fly_measured(
         flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
         flight.with_estimator, flight.estimator_measured, flight.observer_params, flight.observer_state,
         flight.steps, flight.period_ns, flight.measures, flight.actuator_params, flight.actuator_state,
         flight.control_bounds, scratch.states, scratch.published, scratch.row, scratch.estimate, scratch.rotor_rows,
         scratch.acc)
-    if outcome != core.FINISHED or scratch.acc[core.TRUTH_UNDEFINED] > 0:
-        return None
-    return measured_row(flight, scratch.acc)
+    return outcome, k, scratch.acc
 
 
 def _degrees(acc: np.ndarray, at: int) -> float:

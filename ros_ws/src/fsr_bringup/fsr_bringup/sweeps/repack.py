@@ -1,37 +1,131 @@
-"""A sweep's flights set up from its scenario packed once: per flight only the swept values are packed anew.
+"""A sweep's flights set up from its scenario packed once: per flight only what the swept values change is
+validated and packed anew, by the functions the full set-up uses.
 
-Setting a flight up from its scenario (validating every section into configs, then packing the plant, the
-controller and the observer: :func:`fsr_bringup.runner.in_process_flight.prepare_flight`) takes 3-4 ms for
-ex4, about what its 5 s flight takes. Most of it is the same for every flight of a sweep, so :class:`PackedSweep` sets
-the sweep's scenario up once and keeps the packed objects and a copy of their initial states; a flight whose
-swept keys are all in :data:`REPACKED_KEYS` then only has those values checked and packed (exactly as the
-full set-up packs them) and every state put back to its initial values. Any other key, or a value the quick
-check does not take, gives None: the flight is set up in full (which also names a refused value).
+Setting a flight up from its scenario (:func:`fsr_bringup.runner.in_process_flight.prepare_flight`: every section
+validated into configs, the trajectory planned, then the plant, the controller and the observer packed) takes
+15-30 ms, about what a 15 s flight takes. Most of it is the same for every flight of a sweep, so
+:class:`PackedSweep` sets the sweep's scenario up once and keeps its configs, its packed objects and a copy of their
+initial states. A flight is then set up from them in three steps:
 
-:data:`REPACKED_KEYS`:
+1. Validate. The sections its keys are in (:data:`FAST_SECTIONS`; a key elsewhere - the trajectory, the
+   duration, the vehicle - sets the flight up in full) are validated by the start-up's own section validators
+   (:func:`fsr_sim.config.scenario.plant_vehicle_from_section`, :func:`~fsr_sim.config.scenario.
+   disturbances_from_section`, :func:`~fsr_sim.config.sensor_sections.sensors_from_section`,
+   :func:`fsr_control.config.controller_config.controller_settings`, :func:`fsr_estimation.config.
+   estimator_config.estimator_config`), on the flight's own scenario mapping: a value they refuse is refused
+   by the full set-up too, which names it (the flight is set up in full).
+2. Compare. What changed is found by comparing the flight's configs with the sweep's, field by field - no list
+   of scenario keys is kept here: a key's effect is whatever its section's validator makes of it.
+3. Pack. Each changed config field is packed by the start-up's packing function of the arrays it is packed into
+   (:data:`PLANT_PACKING`: the plant's mass properties, sensors, disturbances and turbulence; the controller's
+   law, :func:`fsr_control.flight_controller.make_control_law`, for a change among the config fields that law's
+   packing reads - traced once per sweep, not listed; the observer, :class:`fsr_estimation.core.observer.
+   MomentumObserver`); every state is put back to its initial values (the plant's made anew from its params).
+   A change no packing here covers (another vehicle property, the allocation, an estimator filter the
+   controller's own observer has too) sets the flight up in full. A sensor stage switched on or off has the
+   controller section validated again too (a law may need the IMU). The truth the estimate is measured against
+   takes the plant's new mass properties as :func:`fsr_bringup.sweeps.measured.loop_flight` takes them.
 
-* ``plant.mass`` and ``plant.inertia``: the true plant's mass properties, read by nothing but the plant's packed
-  ``mass``, ``inertia`` and ``inertia_inv`` (the controller and the observer know the nominal vehicle) and by
-  the effective truth the estimate is measured against;
-* ``estimator.c0`` and ``estimator.r``: the observer's filter, read by nothing but the observer (a new one is
-  made, as the full set-up makes it) - unless the controller compensates with the estimate (its own observer
-  then has them too: set up in full), or the estimator is off.
+What steps 1-3 make of a section is kept by its raw values (:data:`CACHE_SIZE` of them): a study's conditions
+recur in every trial, a trial's gains in each of its conditions, so a flight's set-up is mostly a copy of the
+touched sections and the states put back (about 0.5 ms).
+
+The fast path's flight equals the full set-up's, array for array (``test_sweep_fast_paths.py``).
 """
 
 from __future__ import annotations
 
+import copy
 import math
+from collections.abc import Callable
+from dataclasses import fields, is_dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from fsr_bringup.sweeps.measured import LoopFlight, loop_flight
+from fsr_control.config.controller_config import controller_settings
+from fsr_control.flight_controller import make_control_law
+from fsr_estimation.config.estimator_config import estimator_config
 from fsr_estimation.core.observer import MomentumObserver
-from fsr_sim.model.checks import InvalidValueError, symmetric_positive_definite
-from fsr_sim.model.plant import new_plant_state
+from fsr_sim.config.scenario import Scenario, disturbances_from_section, plant_vehicle_from_section, set_value
+from fsr_sim.config.sensor_sections import sensors_from_section
+from fsr_sim.config.validation import ConfigError, Section
+from fsr_sim.model.disturbances import pack_disturbances
+from fsr_sim.model.plant import new_plant_state, pack_mass_properties
+from fsr_sim.model.sensors import pack_sensors
+from fsr_sim.model.turbulence import pack_turbulence
 
-REPACKED_KEYS = ("plant.mass", "plant.inertia", "estimator.c0", "estimator.r")
-PLANT_KEYS = ("plant.mass", "plant.inertia")
+FAST_SECTIONS = ("plant", "sensors", "disturbances", "controller", "estimator")  # top-level scenario sections
+PLANT_SECTIONS = ("plant", "sensors", "disturbances")  # of them, the plant side's
+CACHE_SIZE = 1024  # validated and packed sections kept (a study's conditions, a generation's trials)
+
+
+def _sensors(sim: Any) -> dict[str, Any]:
+    """The plant's sensor stages, packed as pack_plant packs them."""
+    return {"sensors": pack_sensors(sim.odometry_noise, sim.imu, sim.control_period)}
+
+
+# A config field of the plant side -> the PlantParams fields it is packed into, by pack_plant's own functions.
+PLANT_PACKING = dict(  # noqa: C408 - keywords: the config's field names
+    plant_vehicle=lambda sim: dict(zip(("mass", "inertia", "inertia_inv"), pack_mass_properties(sim.plant_vehicle),
+                                       strict=True)),
+    odometry_noise=_sensors,
+    imu=_sensors,
+    disturbances=lambda sim: dict(zip(("disturbances", "disturbance_knots"), pack_disturbances(list(sim.disturbances)),
+                                      strict=True)),
+    turbulence=lambda sim: {"turbulence": pack_turbulence(sim.turbulence, sim.physics_dt)},
+)
+MASS_PROPERTIES = ("mass", "inertia")  # the plant vehicle's fields PLANT_PACKING["plant_vehicle"] packs
+
+
+def same(a: Any, b: Any) -> bool:
+    """Whether two validated values are equal (arrays, dataclasses, lists and mappings compared item by item,
+    NaN equal to NaN); anything it cannot compare counts as changed."""
+    if a is b:
+        return True
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, np.ndarray):
+        return a.shape == b.shape and a.dtype == b.dtype and bool(np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
+    if is_dataclass(a):
+        return all(same(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+    if isinstance(a, (list, tuple)):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(same(a[key], b[key]) for key in a)
+    if isinstance(a, float):
+        return a == b or (math.isnan(a) and math.isnan(b))
+    try:
+        return bool(a == b)
+    except (TypeError, ValueError):
+        return False
+
+
+def changed_fields(new: Any, old: Any, names: Any = None) -> set[str]:
+    """The fields (of ``names``; default: all) of dataclass ``new`` that differ from ``old``'s."""
+    names = [f.name for f in fields(new)] if names is None else names
+    return {name for name in names if not same(getattr(new, name), getattr(old, name))}
+
+
+class _Reads:
+    """A config whose attribute reads are recorded (which fields a packing function reads)."""
+
+    def __init__(self, config: Any) -> None:
+        object.__setattr__(self, "config", config)
+        object.__setattr__(self, "names", set())
+
+    def __getattr__(self, name: str) -> Any:
+        self.names.add(name)
+        return getattr(self.config, name)
+
+
+def law_fields(config: Any, vehicle: Any) -> frozenset[str]:
+    """The controller config fields the packing of its law reads (:func:`make_control_law`), but its type (which
+    changes the controller's layout, not only its law's numbers)."""
+    reads = _Reads(config)
+    make_control_law(reads, vehicle)  # type: ignore[arg-type] - read like the config it wraps
+    return frozenset(reads.names - {"type"})
 
 
 def _snapshot(value: Any) -> Any:
@@ -52,85 +146,152 @@ def _restore(target: Any, snapshot: Any) -> None:
             _restore(item, saved)
 
 
-def _positive(value: Any) -> float | None:
-    """``plant.mass`` or ``estimator.c0`` as the scenario's validation takes it (a finite number > 0), or None."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    value = float(value)
-    return value if math.isfinite(value) and value > 0.0 else None
-
-
-def _r(value: Any) -> int | None:
-    """``estimator.r`` as the scenario's validation takes it (an integer >= 1), or None."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        return None
-    return int(value)
-
-
-def _inertia(value: Any) -> np.ndarray | None:
-    """``plant.inertia`` as the scenario's validation takes it (3 numbers or a 3x3, SPD), or None."""
-    try:
-        return np.array(symmetric_positive_definite(value, "plant.inertia"), dtype=float)
-    except (InvalidValueError, TypeError, ValueError):
-        return None
+class _FullSetUp(Exception):  # noqa: N818 - not an error: the flight is set up in full
+    """The flight's values need the full set-up (module docstring)."""
 
 
 class PackedSweep:
     """The flights of one sweep's scenario, set up from one packed flight (module docstring)."""
 
     def __init__(self, setup, band: float) -> None:  # noqa: ANN001 - a FlightSetup, not flown yet
+        self.scenario = setup.scenario
         self.flight = loop_flight(setup, band)
-        self.plant_vehicle = setup.simulation.plant_vehicle
+        self.simulation = setup.simulation
+        self.config = setup.controller.config
+        self.estimation = setup.estimation
         self.initial_x = setup.plant.core_state.x.copy()
         self.controller_state = _snapshot(setup.controller.state)
         self.observer_state = _snapshot(setup.observer.state)
-        self.model_inertia = np.asarray(setup.estimation.inertia, dtype=float)
-        self.estimation = setup.estimation
-        self.control_period = setup.simulation.control_period
-        self.filter_keys = setup.estimation.enabled and not setup.controller.params.compensation.enabled
+        self.law_fields = law_fields(self.config, self.simulation.vehicle)
+        # the observer's filter is read by nothing but the observer, unless the controller compensates with an
+        # observer of its own (its config holds the filter too)
+        self.observer_alone = self.estimation.enabled and self.config.compensation is None
+        self.cache: dict[tuple, Any] = {}
 
     def flight_for(self, values: dict[str, Any]) -> LoopFlight | None:
-        """The flight with ``values`` set, ready to fly (its states at their initial values), or None when
-        it must be set up in full (module docstring)."""
-        keys = set(values)
-        if not keys <= set(REPACKED_KEYS):
+        """The flight with ``values`` set, ready to fly (its states at their initial values), or None when it
+        must be set up in full (module docstring)."""
+        sections = {str(key).partition(".")[0] for key in values}
+        if not sections <= set(FAST_SECTIONS):
             return None
-        if keys - set(PLANT_KEYS) and not self.filter_keys:
+        try:
+            scenario = self._scenario(values, sections)
+            data = scenario.data
+            plant = sections & set(PLANT_SECTIONS)
+            sim, packed = self._cached(("plant", *(repr(data.get(name)) for name in sorted(plant))),
+                                       lambda: self._plant(scenario, plant)) if plant else (self.simulation, {})
+            switched = (sim.odometry_noise.enabled != self.simulation.odometry_noise.enabled
+                        or sim.imu.enabled != self.simulation.imu.enabled)  # the controller's checks read them
+            law = None
+            if "controller" in sections or switched:
+                key = ("controller", repr(data.get("controller")), repr(data.get("estimator")),
+                       sim.odometry_noise.enabled, sim.imu.enabled)
+                law = self._cached(key, lambda: self._law(scenario, sim))
+            observer = (self._cached(("estimator", repr(data.get("estimator"))), lambda: self._observer(scenario))
+                        if "estimator" in sections else None)
+        except (ConfigError, ValueError, _FullSetUp):  # the full set-up names a refused value
             return None
-        mass, inertia = self.plant_vehicle.mass, self.plant_vehicle.inertia
-        if "plant.mass" in values:
-            mass = _positive(values["plant.mass"])
-            if mass is None:
-                return None
-        if "plant.inertia" in values:
-            inertia = _inertia(values["plant.inertia"])
-            if inertia is None:
-                return None
-        observer = None
-        if keys & {"estimator.c0", "estimator.r"}:
-            c0 = _positive(values.get("estimator.c0", self.estimation.c0))
-            r = _r(values.get("estimator.r", self.estimation.r))
-            if c0 is None or r is None:
-                return None
-            try:  # as prepare_flight makes it
-                observer = MomentumObserver(self.estimation.mass, self.estimation.inertia, c0, r, self.control_period)
-            except ValueError:  # the full set-up names the refused value
-                return None
+        return self._flight(packed, law, observer)
+
+    def _scenario(self, values: dict[str, Any], sections: set[str]) -> Scenario:
+        """The flight's scenario (as :func:`fsr_bringup.sweeps.axes.flight_scenario` makes it, only its changed
+        sections copied)."""
+        base = self.scenario
+        data = dict(base.data)
+        for name in sections:
+            data[name] = copy.deepcopy(data.get(name))
+        for key, value in values.items():
+            set_value(data, str(key), copy.deepcopy(value), base.source)
+        return Scenario(data=data, source=base.source, base_dir=base.base_dir)
+
+    def _cached(self, key: tuple, make: Callable[[], Any]) -> Any:
+        """``make()``, kept by ``key`` (the raw sections it validates: a study's conditions and a trial's gains
+        recur from flight to flight)."""
+        if key not in self.cache:
+            if len(self.cache) >= CACHE_SIZE:
+                self.cache.clear()
+            self.cache[key] = make()
+        return self.cache[key]
+
+    def _plant(self, scenario: Scenario, sections: set[str]) -> tuple[Any, dict[str, Any]]:
+        """The flight's plant side and the PlantParams fields packed anew for it (_FullSetUp: a change no
+        packing here covers)."""
+        base = self.simulation
+        sim = self._simulation(scenario, sections)
+        changed = changed_fields(sim, base)
+        if not changed <= set(PLANT_PACKING):
+            raise _FullSetUp
+        if "plant_vehicle" in changed and not changed_fields(sim.plant_vehicle, base.plant_vehicle) <= set(
+                MASS_PROPERTIES):
+            raise _FullSetUp
+        packed: dict[str, Any] = {}
+        for name in sorted(changed):
+            packed.update(PLANT_PACKING[name](sim))
+        return sim, packed
+
+    def _simulation(self, scenario: Any, sections: set[str]) -> Any:
+        """The flight's plant side: the sweep's, with its changed sections validated anew."""
+        base = self.simulation
+        root = Section(scenario.data, "", scenario.source)
+        changes: dict[str, Any] = {}
+        if "plant" in sections:
+            changes["plant_vehicle"] = plant_vehicle_from_section(root.section("plant"), base.vehicle)
+        if sections & {"plant", "disturbances"}:
+            changes["disturbances"], changes["turbulence"] = disturbances_from_section(
+                root, changes.get("plant_vehicle", base.plant_vehicle), base.actuation)
+        if "sensors" in sections:
+            odometry, imu = sensors_from_section(root.section("sensors"), base.control_period)
+            changes.update(odometry_noise=odometry, imu=imu)
+        return replace(base, **changes) if changes else base
+
+    def _law(self, scenario: Any, sim: Any) -> Any:
+        """The flight's law params, packed anew when its config changed (None: the sweep's)."""
+        settings = controller_settings(scenario, sim.vehicle, sim)
+        config = replace(self.config, **settings)
+        changed = changed_fields(config, self.config, settings)
+        if not changed:
+            return None
+        if not changed <= self.law_fields:
+            raise _FullSetUp
+        return make_control_law(config, sim.vehicle).params
+
+    def _observer(self, scenario: Any) -> tuple[Any, Any] | None:
+        """The flight's observer's params and initial state, made anew as the full set-up makes them when its
+        config changed (None: the sweep's)."""
+        estimation = estimator_config(scenario)
+        changed = changed_fields(estimation, self.estimation)
+        if not changed:
+            return None
+        if not (self.observer_alone and changed <= {"c0", "r"}):
+            raise _FullSetUp
+        observer = MomentumObserver(estimation.mass, estimation.inertia, estimation.c0, estimation.r,
+                                    self.simulation.control_period)
+        return observer.params, _snapshot(observer.state)
+
+    def _flight(self, packed: dict[str, Any], law: Any, observer: tuple[Any, Any] | None) -> LoopFlight:
+        """The sweep's flight with ``packed`` PlantParams fields, ``law`` params and ``observer`` (params, initial
+        state) put in (None: the sweep's), every state at its initial values."""
         flight = self.flight
-        inertia = np.ascontiguousarray(inertia, dtype=float)  # as fsr_sim.model.plant.pack_plant packs them
-        if not flight.plant_params.inertia.flags.writeable:  # read-only there too (the vehicle's): the compiled
-            inertia.flags.writeable = False  # loop's signature is the full set-up's, not a second compilation
-        params = flight.plant_params._replace(mass=float(mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia))
+        changes: dict[str, Any] = {}
         _restore(flight.controller_state, self.controller_state)
+        if law is not None:
+            changes["controller_params"] = flight.controller_params._replace(law=law)
         if observer is None:
             _restore(flight.observer_state, self.observer_state)
         else:
-            flight = flight.replace(observer_params=observer.params, observer_state=observer.state)
-        measures = flight.measures._replace(mass=float(mass), inertia=inertia,
-                                            inertia_delta=np.ascontiguousarray(self.model_inertia - inertia))
+            changes.update(observer_params=observer[0], observer_state=_snapshot(observer[1]))
+        params = flight.plant_params._replace(**packed)
         state = new_plant_state(params, self.initial_x)
-        rotor_truth = flight.actuator_params is not flight.plant_params  # else the plant's own (unused)
-        actuator = flight.actuator_params._replace(mass=params.mass, inertia=inertia, inertia_inv=params.inertia_inv)
-        return flight.replace(plant_params=params, plant_state=state, measures=measures,
-                              actuator_params=actuator if rotor_truth else params,
-                              actuator_state=flight.actuator_state if rotor_truth else state)
+        changes.update(plant_params=params, plant_state=state)
+        if flight.actuator_params is not flight.plant_params:  # the rotors' effective truth: the same packing
+            actuator = flight.actuator_params._replace(**packed)
+            changes.update(actuator_params=actuator, actuator_state=new_plant_state(actuator, self.initial_x))
+        else:
+            changes.update(actuator_params=params, actuator_state=state)
+        if "mass" in packed:  # the truth the estimate is measured against
+            measures = flight.measures
+            changes["measures"] = measures._replace(
+                mass=params.mass, inertia=params.inertia,
+                inertia_delta=np.ascontiguousarray(np.asarray(self.estimation.inertia, float) - params.inertia))
+        return flight.replace(**changes)
+

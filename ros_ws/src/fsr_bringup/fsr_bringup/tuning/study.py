@@ -10,12 +10,13 @@ The optimiser is optuna's (CMA-ES, TPE or random search, :data:`METHODS`), its s
 completed are kept, none is flown again; one in flight when it stopped is marked failed and asked anew.
 
 Trials are asked :data:`GENERATION` at a time, their flights (each trial: ``seeds`` conditions,
-:mod:`fsr_bringup.tuning.conditions`) flown in parallel - one batch per trial over the local worker processes, or
-as Dask tasks (a worker lost mid-task has its batch flown again by the scheduler) - and told back in trial order,
-so a study is the same study wherever and in whatever order its flights ran: one seed gives the same trials and
-the same best on one core, on two, or on a cluster. A diverged flight is a penalty (:mod:`fsr_bringup.tuning.
-objective`), never an error. The best candidate and the scenario's own parameters are then flown on ``holdout``
-conditions the optimiser never saw (:attr:`TuneResult.validation`).
+:mod:`fsr_bringup.tuning.conditions`) flown in parallel - in batches over the local worker processes, or as
+Dask tasks (a worker lost mid-task has its batch flown again by the scheduler) - and told back in trial order, so a
+study is the same study wherever and in whatever order its flights ran: one seed gives the same trials and the same
+best on one core, on two, or on a cluster. A diverged flight is a penalty (:mod:`fsr_bringup.tuning.objective`),
+never an error; a trial's lost flight is not flown again for its metrics (the penalty needs none of them:
+:func:`fsr_bringup.sweeps.batch.fly_one`'s ``metric``). The best candidate and the scenario's own parameters
+are then flown on ``holdout`` conditions the optimiser never saw (:attr:`TuneResult.validation`).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ DEFAULT_SEEDS = 10
 DEFAULT_HOLDOUT = 50
 DEFAULT_BUDGET = 200
 STUDY_FILE = "study.db"
+BATCHES_PER_WORKER = 8  # per generation, at least (flights that are lost early make batches uneven)
 STRUCTURAL = ("unknown key", "out of range", "cannot hold", "has no item")  # a key the scenario cannot take
 
 
@@ -74,12 +76,15 @@ class TunePlan:
         """The scenario values (dotted key -> value) of the optimiser's ``params``."""
         return {key.key: key.value(params) for key in self.keys}
 
-    def batch(self, values: dict[str, Any], first: int, count: int) -> Batch:
-        """The flights of conditions ``first .. first+count-1`` with ``values`` (numbered by condition)."""
+    def batch(self, values: dict[str, Any], first: int, count: int, objective_only: bool = False) -> Batch:
+        """The flights of conditions ``first .. first+count-1`` with ``values`` (numbered by condition);
+        ``objective_only``: their rows need only the objective's metric (:func:`fsr_bringup.sweeps.batch.fly_one`'s
+        ``metric``)."""
         flights = [(c, {**condition_values(self.seed, c, self.seed_keys, self.sample), **values})
                    for c in range(first, first + count)]
         s = self.scenario
-        return Batch(s.data, s.source, str(s.base_dir), flights, self.band)
+        return Batch(s.data, s.source, str(s.base_dir), flights, self.band,
+                     self.objective.metric if objective_only else None)
 
     def spec(self) -> dict[str, Any]:
         """What makes the study this study (kept with it: a resumed study must have the same)."""
@@ -236,15 +241,18 @@ class Flyer:
             self.client.close()
 
 
-def evaluate(plan: TunePlan, flyer: Flyer, candidates: list[dict[str, Any]], first: int, count: int
-             ) -> list[Evaluation]:
-    """Each candidate's values flown over conditions ``first .. first+count-1``, as one batch per candidate split
-    so that every worker has work."""
-    per = max(1, math.ceil(count / max(1, math.ceil(flyer.workers / max(1, len(candidates))))))
+def evaluate(plan: TunePlan, flyer: Flyer, candidates: list[dict[str, Any]], first: int, count: int,
+             objective_only: bool = False) -> list[Evaluation]:
+    """Each candidate's values flown over conditions ``first .. first+count-1``, in batches small enough that
+    every worker has :data:`BATCHES_PER_WORKER` of them (the last ones balance the load before the next
+    generation is asked); ``objective_only``: the rows need only the objective's metric (a lost flight's row is its
+    end alone: an objective needs no more of it)."""
+    batches_per_candidate = max(1, math.ceil(flyer.workers * BATCHES_PER_WORKER / max(1, len(candidates))))
+    per = max(1, math.ceil(count / batches_per_candidate))
     batches, owner = [], []
     for index, values in enumerate(candidates):
         for start in range(first, first + count, per):
-            batches.append(plan.batch(values, start, min(per, first + count - start)))
+            batches.append(plan.batch(values, start, min(per, first + count - start), objective_only))
             owner.append(index)
     rows: list[list[dict[str, Any]]] = [[] for _ in candidates]
     for index, result in zip(owner, flyer.fly(batches), strict=True):
@@ -365,7 +373,8 @@ def tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str, Any
             while done < budget:
                 asked = [study.ask(distributions) for _ in range(min(GENERATION, budget - done))]
                 try:
-                    results = evaluate(plan, flyer, [plan.values(t.params) for t in asked], 0, plan.seeds)
+                    results = evaluate(plan, flyer, [plan.values(t.params) for t in asked], 0, plan.seeds,
+                                       objective_only=True)
                 except BaseException:
                     for trial in asked:
                         study.tell(trial, state=optuna.trial.TrialState.FAIL)

@@ -43,6 +43,7 @@ geometric law's gains and needs the vehicle's IMU (``sensors.imu``).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -63,7 +64,7 @@ from fsr_control.planning.feasibility import (
 )
 from fsr_control.planning.paths import PathError, PathSpec
 from fsr_control.planning.trajectory import Trajectory, Waypoint
-from fsr_sim.config.scenario import Scenario, load_vehicle_for, simulation_config
+from fsr_sim.config.scenario import Scenario, SimulationConfig, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import ConfigError, Section, checked_spd
 from fsr_sim.model.environment import pack_surfaces
 from fsr_sim.model.gain_design import INTEGRAL_LIMIT_SHARE
@@ -169,10 +170,10 @@ def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> 
     return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces, estimation.rotor_state)
 
 
-def controller_config(scenario: Scenario) -> ControllerConfig:
-    """Validate ``controller`` and ``trajectory`` of ``scenario``; :class:`ConfigError` names file and key."""
-    vehicle = load_vehicle_for(scenario)
-    actuation = scenario.data.get("actuation", "rotors")
+def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationConfig) -> dict[str, Any]:
+    """The ``controller`` section of ``scenario`` validated for its nominal ``vehicle`` and plant side ``sim``: the
+    :class:`ControllerConfig` fields it sets (the others are the trajectory's and the plant's)."""
+    actuation = sim.actuation
     controller = scenario.section("controller")
     default_type = "voliro" if vehicle.fully_actuated else "geometric"
     controller_type = controller.string("type", default_type, choices=tuple(LAWS))
@@ -197,7 +198,6 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
     air_mode = controller.boolean("air_mode", True)
     acceleration_filter_hz = controller.number("acceleration_filter_hz", 0.0, minimum=0.0)
     feedforward, integral_limit, filter_hz = PROFILE_FEEDFORWARD[profile], 0.0, 0.0
-    sim = simulation_config(scenario)
     if controller_type == "geometric":
         feedforward = controller.string("feedforward", feedforward, choices=geometric.FEEDFORWARDS)
     elif controller.has("feedforward"):
@@ -246,15 +246,24 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
         raise controller.error("aerodynamics", f"{controller_type} measures the aerodynamics with the rest of the "
                                                "external wrench: use controller.aerodynamics: none")
     controller.reject_unknown()
+    return {"type": controller_type, "gains": gains, "angular_feedforward": angular_feedforward, "profile": profile,
+            "feedforward": feedforward, "integral_limit": integral_limit, "secondary_objective": secondary,
+            "allocation": allocation, "compensation": compensation, "air_mode": air_mode,
+            "acceleration_filter_hz": acceleration_filter_hz, "aerodynamics": aerodynamics, "filter_hz": filter_hz}
 
+
+def controller_config(scenario: Scenario) -> ControllerConfig:
+    """Validate ``controller`` and ``trajectory`` of ``scenario``; :class:`ConfigError` names file and key."""
+    vehicle = load_vehicle_for(scenario)
+    actuation = scenario.data.get("actuation", "rotors")
+    sim = simulation_config(scenario)
+    settings = controller_settings(scenario, vehicle, sim)
     section = scenario.section("trajectory")
     trajectory = trajectory_config(section, vehicle, sim.initial.position)
-    config = ControllerConfig(controller_type, gains, trajectory.waypoints, angular_feedforward, profile, feedforward,
-                              integral_limit, secondary, trajectory.goal_duration, scenario.source, allocation,
-                              compensation, air_mode, trajectory.authority_margin,
-                              acceleration_filter_hz=acceleration_filter_hz, feasibility=trajectory.feasibility,
-                              path=trajectory.path, trajectory_kind=trajectory.kind, aerodynamics=aerodynamics,
-                              filter_hz=filter_hz, control_period=sim.control_period,
+    config = ControllerConfig(**settings, waypoints=trajectory.waypoints, goal_duration=trajectory.goal_duration,
+                              source=scenario.source, authority_margin=trajectory.authority_margin,
+                              feasibility=trajectory.feasibility, path=trajectory.path,
+                              trajectory_kind=trajectory.kind, control_period=sim.control_period,
                               rotor_state=sim.publishes_rotor_state)
     # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     try:

@@ -45,9 +45,9 @@ import numpy as np
 
 from fsr_control.core import reference as core
 from fsr_control.core.flatness import ATTITUDE_OK, attitude_from_thrust_vector
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.authority import Authority, ForceSet
 from fsr_sim.model.authority_cache import model_authority, model_force_set
-from fsr_sim.model.frames import GRAVITY
 from fsr_sim.model.vehicle import Vehicle
 
 FEASIBILITY_MODES = ("stretch", "warn", "refuse")  # trajectory.feasibility

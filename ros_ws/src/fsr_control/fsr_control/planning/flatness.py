@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsr_control.core import flatness as core
-from fsr_sim.model.frames import GRAVITY
+from fsr_sim.core.rigid_body import GRAVITY
 
 
 def _vector(values: tuple[float, float, float] | np.ndarray) -> tuple[float, float, float]:

@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fsr_sim.model.frames import E3, GRAVITY
+from fsr_sim.core.rigid_body import GRAVITY
+from fsr_sim.model.frames import E3
 from fsr_sim.model.so3 import (
     euler_coriolis_matrix,
     euler_mass_matrix,

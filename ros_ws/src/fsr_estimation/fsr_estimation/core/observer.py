@@ -26,7 +26,8 @@ from numpy.typing import ArrayLike
 
 from fsr_estimation.core import observer_step as core
 from fsr_estimation.core.filter_design import cascade_sections, check_filter_parameters, gain_chain
-from fsr_estimation.core.momentum import GRAVITY, observer_input
+from fsr_estimation.core.momentum import observer_input
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.checks import symmetric_positive_definite
 from fsr_sim.model.so3 import euler_rate_matrix, rotation_from_euler_zyx
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsr_sim.config.scenario import SimulationConfig
-from fsr_sim.model.frames import GRAVITY
+from fsr_sim.core.rigid_body import GRAVITY
 
 MASS_FACTOR = 3.0  # the true mass or inertia beyond this factor of the vehicle's: a warning
 MAX_TIME_CONSTANT_S = 0.5  # s: a rotor or servo lag beyond this

@@ -270,28 +270,9 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
     angular_velocity = initial.vector("angular_velocity", 3, [0.0, 0.0, 0.0])
     initial.reject_unknown()
 
-    plant = root.section("plant")
-    mass = plant.number("mass", vehicle.mass, strictly_positive=True)
-    inertia = checked_spd(plant.raw("inertia", vehicle.inertia), "plant.inertia", source)
-    # actuator dynamics and drag of the true plant (the controller knows none of them)
-    plant_overrides = dynamics_and_drag(plant, {name: getattr(vehicle, name) for name in (
-        "rotor_time_constant", "tilt_time_constant", "tilt_rate_max", "drag_coefficients", *ROTOR_AERODYNAMICS)})
-    plant.reject_unknown()
-
+    plant_vehicle = plant_vehicle_from_section(root.section("plant"), vehicle)
     environment = environment_from_section(root.section("environment"))
-    disturbance_list = root.raw("disturbances", [])
-    if not isinstance(disturbance_list, list):
-        raise root.error("disturbances", f"must be a list, got {type(disturbance_list).__name__}")
-    parsed = [disturbance_from_section(Section(item, f"disturbances.{i}", source))
-              for i, item in enumerate(disturbance_list)]
-    disturbances = [item for item in parsed if isinstance(item, DisturbanceProfile)]
-    turbulence = [item for item in parsed if isinstance(item, DrydenTurbulence)]
-    plant_vehicle = replace(vehicle.with_mass_properties(mass, inertia), **plant_overrides)
-    if turbulence and not has_aerodynamics(pack_aerodynamics(plant_vehicle, actuation)):
-        index = next(i for i, item in enumerate(parsed) if isinstance(item, DrydenTurbulence))
-        raise root.error(f"disturbances.{index}", "a dryden wind pushes through the vehicle's aerodynamics, and "
-                         "they are all zero: set plant.drag_coefficients (or the vehicle file's aerodynamic "
-                         "coefficients)")
+    disturbances, turbulence = disturbances_from_section(root, plant_vehicle, actuation)
 
     lockstep = root.section("lockstep")
     lockstep_enabled = lockstep.boolean("enabled", True)
@@ -331,6 +312,36 @@ def _simulation_config(scenario: Scenario) -> SimulationConfig:
         imu=imu,
         divergence=bounds,
     )
+
+
+def plant_vehicle_from_section(plant: Section, vehicle: Vehicle) -> Vehicle:
+    """The true plant of the ``plant`` section over the nominal ``vehicle``: its mass [kg], inertia [kg m^2],
+    actuator dynamics and drag (the controller knows none of them)."""
+    mass = plant.number("mass", vehicle.mass, strictly_positive=True)
+    inertia = checked_spd(plant.raw("inertia", vehicle.inertia), plant.key("inertia"), plant.source)
+    plant_overrides = dynamics_and_drag(plant, {name: getattr(vehicle, name) for name in (
+        "rotor_time_constant", "tilt_time_constant", "tilt_rate_max", "drag_coefficients", *ROTOR_AERODYNAMICS)})
+    plant.reject_unknown()
+    return replace(vehicle.with_mass_properties(mass, inertia), **plant_overrides)
+
+
+def disturbances_from_section(root: Section, plant_vehicle: Vehicle, actuation: str
+                              ) -> tuple[list[DisturbanceProfile], list[DrydenTurbulence]]:
+    """The scenario's ``disturbances`` (``root``: the whole scenario): the profiles and the Dryden winds, each
+    wind checked to push through ``plant_vehicle``'s aerodynamics."""
+    disturbance_list = root.raw("disturbances", [])
+    if not isinstance(disturbance_list, list):
+        raise root.error("disturbances", f"must be a list, got {type(disturbance_list).__name__}")
+    parsed = [disturbance_from_section(Section(item, f"disturbances.{i}", root.source))
+              for i, item in enumerate(disturbance_list)]
+    disturbances = [item for item in parsed if isinstance(item, DisturbanceProfile)]
+    turbulence = [item for item in parsed if isinstance(item, DrydenTurbulence)]
+    if turbulence and not has_aerodynamics(pack_aerodynamics(plant_vehicle, actuation)):
+        index = next(i for i, item in enumerate(parsed) if isinstance(item, DrydenTurbulence))
+        raise root.error(f"disturbances.{index}", "a dryden wind pushes through the vehicle's aerodynamics, and "
+                         "they are all zero: set plant.drag_coefficients (or the vehicle file's aerodynamic "
+                         "coefficients)")
+    return disturbances, turbulence
 
 
 def plant_from_config(config: SimulationConfig) -> Plant:

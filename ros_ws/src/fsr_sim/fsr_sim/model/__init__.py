@@ -6,7 +6,7 @@
     plant.step()
     plant.state.position, plant.state.rotation
 
-Modules: :mod:`~fsr_sim.model.frames` (NED/FRD, gravity), :mod:`~fsr_sim.model.so3` (rotations),
+Modules: :mod:`~fsr_sim.model.frames` (NED/FRD), :mod:`~fsr_sim.model.so3` (rotations),
 :mod:`~fsr_sim.model.vehicle`, :mod:`~fsr_sim.model.allocation`, :mod:`~fsr_sim.model.environment`,
 :mod:`~fsr_sim.model.disturbances`, :mod:`~fsr_sim.model.rigid_body`, :mod:`~fsr_sim.model.plant`,
 :mod:`~fsr_sim.model.authority` (what the rotors give at hover; imports scipy, so not imported here).
@@ -16,10 +16,10 @@ per-step models are the compiled core of :mod:`fsr_sim.core`.
 
 from fsr_sim.model import disturbances
 from fsr_sim.model.environment import Environment, Surface
-from fsr_sim.model.frames import E3, GRAVITY
+from fsr_sim.model.frames import E3
 from fsr_sim.model.plant import Plant
 from fsr_sim.model.rigid_body import RigidBodyState
 from fsr_sim.model.vehicle import Vehicle, load_vehicle
 
-__all__ = ["E3", "GRAVITY", "Environment", "Plant", "RigidBodyState", "Surface", "Vehicle", "disturbances",
+__all__ = ["E3", "Environment", "Plant", "RigidBodyState", "Surface", "Vehicle", "disturbances",
            "load_vehicle"]

@@ -80,9 +80,9 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
     else:
         vertical, lateral = rotor_columns(vehicle, rotor_axes(vehicle)), np.zeros((n, core_rotors.COLUMN_WIDTH))
     table, knots = pack_disturbances(list(disturbances))
-    inertia = np.ascontiguousarray(vehicle.inertia, dtype=float)
+    mass, inertia, inertia_inv = pack_mass_properties(vehicle)
     return core.PlantParams(
-        mass=float(vehicle.mass), inertia=inertia, inertia_inv=np.linalg.inv(inertia), dt=float(dt),
+        mass=mass, inertia=inertia, inertia_inv=inertia_inv, dt=float(dt),
         substeps=int(substeps), period=float(dt) * int(substeps), wrench_actuation=actuation == "wrench",
         speed_min=float(vehicle.rotor_speed_min), speed_max=float(vehicle.rotor_speed_max),
         tilting=vehicle.has_servos, tilt_max=float(vehicle.tilt_angle_max), vertical_columns=vertical,
@@ -103,6 +103,12 @@ def pack_plant(vehicle: Vehicle, dt: float, substeps: int, actuation: str, envir
         turbulence=pack_turbulence(turbulence, dt),
         aero=pack_aerodynamics(vehicle, actuation),
     )
+
+
+def pack_mass_properties(vehicle: Vehicle) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(m, I, I^-1)`` of a vehicle as the core reads them: mass [kg], inertia and its inverse (3, 3) [kg m^2]."""
+    inertia = np.ascontiguousarray(vehicle.inertia, dtype=float)
+    return float(vehicle.mass), inertia, np.linalg.inv(inertia)
 
 
 STAGE_TIMES = np.array((0.0, 0.5, 1.0))  # RK4's stage times in the step, in steps (the middle two share dt/2)

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.checks import InvalidValueError, finite_array, symmetric_positive_definite
-from fsr_sim.model.frames import GRAVITY
 
 UNCANTED_THRUST_AXIS = (0.0, 0.0, -1.0)  # body FRD: thrust along -z_b
 ROTOR_AERODYNAMICS = ("rotor_drag_coefficient", "induced_inflow_coefficient", "translational_lift_coefficient",
