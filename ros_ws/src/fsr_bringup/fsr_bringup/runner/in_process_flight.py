@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fsr_bringup.core import flight_loop
+from fsr_bringup.core.flight_measures import ROTOR_ROWS, SIZE, unmeasured
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
 from fsr_control.core.controller import COMMANDED_QUATERNION, REFERENCE_POSITION
@@ -220,7 +221,7 @@ class _Stopped(KeyboardInterrupt):
 @dataclass
 class FlightSetup:
     """A flight ready to fly: its validated configs, the packed objects the compiled loop steps, and the arrays
-    it writes (row ``k`` = step ``k``; :func:`fsr_bringup.core.flight_loop.fly_steps`)."""
+    it writes (row ``k`` = step ``k``; :func:`fsr_bringup.core.flight_loop.fly`)."""
 
     scenario: Scenario
     simulation: Any  # fsr_sim.config.scenario.SimulationConfig
@@ -258,13 +259,15 @@ class FlightSetup:
         return bool(self.plant.params.sensors.odometry.enabled)
 
     def fly(self, first: int, last: int) -> tuple[int, int, int]:
-        """Steps ``first..last`` in the compiled loop: ``(outcome, k, detail)`` of ``fly_steps``."""
+        """Steps ``first..last`` in the compiled loop, written into the arrays: ``(outcome, k, detail)`` of
+        :func:`fsr_bringup.core.flight_loop.fly`."""
         a = self.arrays
-        return flight_loop.fly_steps(
+        return flight_loop.fly(
             self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
             self.estimation.enabled, self.estimation.rotor_state, self.observer.params, self.observer.state, first,
-            last, self.steps, self.period_ns, self.control_bounds, a.states, a.published, a.actuators, a.control,
-            a.estimates)
+            last, self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, a.states, a.published,
+            a.actuators, a.control, a.estimates, unmeasured(self.plant.params.surfaces), self.plant.params,
+            self.plant.core_state, a.rotor_rows, a.acc)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""
@@ -304,11 +307,14 @@ class FlightArrays:
     actuators: np.ndarray  # (size, 2 rotors): the rotors' actual speeds and tilts (rotor_state)
     control: np.ndarray  # (size, controller output): the controller's output row
     estimates: np.ndarray  # (size, 7)
+    rotor_rows: np.ndarray  # (ROTOR_ROWS, rotors), acc (SIZE): the loop's measurement scratch (unused here)
+    acc: np.ndarray
 
     @classmethod
     def make(cls, size: int, rotors: int) -> FlightArrays:
         return cls(np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE)), np.zeros((size, 2 * rotors)),
-                   np.zeros((size, control_layout.output_size(rotors))), np.zeros((size, 7)))
+                   np.zeros((size, control_layout.output_size(rotors))), np.zeros((size, 7)),
+                   np.zeros((ROTOR_ROWS, rotors)), np.zeros(SIZE))
 
     def fits(self, size: int, rotors: int) -> bool:
         return len(self.states) >= size and self.actuators.shape[1] == 2 * rotors
