@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -144,6 +145,7 @@ class FlightRun:
     plan_kind: str = "waypoints"  # trajectory.kind
     plan_end_time: float | None = None  # [s] when the plan comes to rest (None: no plan)
     notes: list[str] = field(default_factory=list)
+    recording: Path | None = None  # the file the flight was recorded into (None: not recorded)
 
     @property
     def sim_time(self) -> float:
@@ -186,14 +188,23 @@ class FlightRun:
     def thrust(self) -> np.ndarray:
         return -self.force_cmd[:, 2]
 
+    @cached_property
+    def trace(self) -> Any:
+        """This flight's time series as the analysis takes them: the
+        :class:`fsr_bringup.analysis.load.RecordedFlight` that ``load_flight`` reads from its recording, made
+        from these arrays (``odom`` what is published - the measurement when a sensor stage is on, with the
+        true state on ``odom_truth`` beside it -, every topic at the states' stamps)."""
+        from fsr_bringup.analysis.in_memory import recorded_flight_of_run
+
+        return recorded_flight_of_run(self, self.recording)
+
     def metrics(self, **options: Any) -> dict[str, Any]:
         """The metrics of this flight, the ones its summary and ``fsr-sweep`` report
-        (:func:`fsr_bringup.analysis.metrics.flight_metrics` of the flight in memory; ``options``: its
+        (:func:`fsr_bringup.analysis.metrics.flight_metrics` of :attr:`trace`; ``options``: its
         ``settle_time``, ``settling``, ``after``). Tracking errors are on the true state."""
-        from fsr_bringup.analysis.in_memory import recorded_flight_of_run
         from fsr_bringup.analysis.metrics import flight_metrics
 
-        return flight_metrics(recorded_flight_of_run(self), **options)
+        return flight_metrics(self.trace, **options)
 
     def save_mcap(self, path: str | Path) -> Path:
         """Write this flight's recording, the file ``fsr-fly --in-process`` writes: the flight is flown again
@@ -410,7 +421,9 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
                 recorder.status(max(count - 1, 0) * period_ns, end_reason, reason, max(count - 1, 0))
             finally:
                 recorder.close()
-    return setup.run(count, end_reason, reason, time.perf_counter() - start, interrupted, startup)
+    run = setup.run(count, end_reason, reason, time.perf_counter() - start, interrupted, startup)
+    run.recording = None if recording is None else Path(recording)
+    return run
 
 
 def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, control: np.ndarray,

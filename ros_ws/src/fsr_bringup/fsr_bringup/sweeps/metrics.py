@@ -34,7 +34,6 @@ from typing import Any
 import numpy as np
 
 from fsr_bringup.analysis.effective import effective_wrench
-from fsr_bringup.analysis.in_memory import recorded_flight_of_run
 from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, LIMIT_TOLERANCE, MEAN_WINDOW_S, WRENCH_AXES
 from fsr_bringup.core import flight_measures as core
@@ -213,4 +212,4 @@ def recorded_row(flight: RecordedFlight, band: float = DEFAULT_BAND_M, end_reaso
 
 def flight_row(run, band: float = DEFAULT_BAND_M) -> dict[str, Any]:  # noqa: ANN001 - a FlightRun
     """The row of one flight flown in this process (module docstring), in :data:`METRIC_COLUMNS` order."""
-    return recorded_row(recorded_flight_of_run(run), band, run.end_reason, run.reason if run.failures else "")
+    return recorded_row(run.trace, band, run.end_reason, run.reason if run.failures else "")
