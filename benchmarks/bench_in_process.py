@@ -8,7 +8,7 @@ For ex4 (geometric, wrench actuation), ex5 (Voliro, rotor actuation, with and wi
 objective, and with a noisy IMU: its specific force and stage per step) and the octocopter with ground effect.
 The parts are timed by a compiled loop calling each one on the flight's first state (what it costs inside the
 loop, without Python); "loop" is the time spent in the compiled flight loop
-(:func:`fsr_bringup.core.flight_loop.fly_steps`), "+ recording" the whole ``fly_in_process`` with its
+(:func:`fsr_bringup.core.flight_loop.fly`), "+ recording" the whole ``fly_in_process`` with its
 recording, per step (wall). ``run_all.py`` reports the loop's CPU time.
 """
 
@@ -97,7 +97,7 @@ def parts(scenario) -> tuple[float, float, float]:  # noqa: ANN001
 def flights(scenario, repeat: int) -> tuple[list[float], list[float]]:  # noqa: ANN001
     """(compiled loop, whole call with recording) [us per step] of ``repeat`` flights."""
     loop_seconds = [0.0]
-    original = flight_loop.fly_steps
+    original = flight_loop.fly
 
     def timed(*args):  # noqa: ANN002, ANN202
         start = time.perf_counter()
@@ -106,7 +106,7 @@ def flights(scenario, repeat: int) -> tuple[list[float], list[float]]:  # noqa: 
         return result
 
     loops, recorded = [], []
-    flight_loop.fly_steps = timed
+    flight_loop.fly = timed
     try:
         with tempfile.TemporaryDirectory() as tmp:
             for _ in range(repeat):
@@ -117,7 +117,7 @@ def flights(scenario, repeat: int) -> tuple[list[float], list[float]]:  # noqa: 
                 fly_in_process(scenario, Path(tmp) / "bench.mcap")
                 recorded.append((time.perf_counter() - start) / len(run.time) * 1e6)
     finally:
-        flight_loop.fly_steps = original
+        flight_loop.fly = original
     return loops, recorded
 
 

@@ -218,3 +218,59 @@ def test_a_lost_flight_for_one_metric_is_its_end_alone():
     lost, lost_steps = fly_one(base, {"plant.mass": 30.0}, packed=packed, metric="position_error_rms_m")
     assert whole["end_reason"] == lost["end_reason"] == "diverged" and lost_steps == steps < 2000
     assert lost["flown_s"] == whole["flown_s"] and math.isnan(lost["position_error_rms_m"])
+
+
+ONE_TRUTH_FLIGHTS = [
+    ("ex3_estimation", {"duration": 1.0, "plant.rotor_time_constant": 0.03}),  # wrench actuation, the wrench lags
+    ("octo_ground_effect", {"duration": 1.0}),  # rotors, the ground's thrust ratios
+    ("wind_rejection", {"duration": 1.0, "plant.rotor_time_constant": 0.02}),  # rotors that lag
+    ("ex5_voliro", {"duration": 1.0, "estimator.mass": 1.9}),  # tilts, a model mismatch
+]
+
+
+@pytest.mark.parametrize(("scenario", "fixed"), ONE_TRUTH_FLIGHTS)
+def test_the_analysis_effective_truth_is_the_loops(scenario, fixed):
+    """One flight flown written out and measured at once: the loop's accumulators (the effective truth of each
+    step from its state) equal the same accumulators fed the flight's arrays and the analysis's effective truth
+    of them (one compiled function, applied to a log)."""
+    import numpy as np
+
+    from fsr_bringup.analysis.effective import effective_wrench
+    from fsr_bringup.analysis.in_memory import recorded_flight_of_run
+    from fsr_bringup.core import flight_loop
+    from fsr_bringup.core import flight_measures as core
+    from fsr_bringup.runner.in_process_flight import prepare_flight
+    from fsr_bringup.sweeps.measured import loop_flight
+
+    setup = prepare_flight(load_scenario(scenario, values=fixed))
+    loop, a = loop_flight(setup, 0.01), setup.arrays
+    acc = np.zeros(core.SIZE)
+    outcome, k, _ = flight_loop.fly(
+        loop.plant_params, loop.plant_state, loop.controller_params, loop.controller_state, loop.with_estimator,
+        loop.estimator_measured, loop.observer_params, loop.observer_state, 0, setup.steps, setup.steps,
+        setup.period_ns, loop.control_bounds, flight_loop.RECORD | flight_loop.MEASURE, a.states, a.published,
+        a.actuators, a.control, a.estimates, loop.measures, loop.actuator_params, loop.actuator_state, a.rotor_rows,
+        acc)
+    assert outcome == flight_loop.FINISHED and k == setup.steps
+    flight = recorded_flight_of_run(setup.run(k + 1, "finished", "", 0.0))
+    truth = effective_wrench(flight)
+    from_arrays = np.zeros(core.SIZE)
+    odom = flight.odom
+    core.measure_log(loop.measures, from_arrays, odom.t, np.ascontiguousarray(odom.position),
+                     np.ascontiguousarray(odom.rotation), a.control[:k + 1], truth.wrench_body, a.estimates[:k + 1])
+    assert acc[core.TRUTH_SAMPLES] == from_arrays[core.TRUTH_SAMPLES] == setup.steps
+    np.testing.assert_allclose(from_arrays, acc, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize(("scenario", "fixed"), ONE_TRUTH_FLIGHTS[:3])
+def test_a_recorded_flights_row_is_the_sweeps_row_of_that_flight(scenario, fixed, tmp_path):
+    """The row of a flight's recording (its samples fed through the sweep's accumulators) is the row the sweep
+    measured as it flew the same flight."""
+    from fsr_bringup.analysis.load import load_flight
+    from fsr_bringup.runner.in_process_flight import fly_in_process
+    from fsr_bringup.sweeps.metrics import recorded_row
+
+    base = load_scenario(scenario, values=fixed)
+    measured, _ = fly_one(base, {})
+    fly_in_process(base, tmp_path / "flight.mcap")
+    assert_rows_agree(recorded_row(load_flight(tmp_path / "flight.mcap")), measured)

@@ -86,16 +86,17 @@ def test_sweep_marks_the_pareto_front_as_the_command_does():
 
 
 def test_the_settling_time_counts_from_the_references_arrival():
-    from fsr_bringup.sweeps.metrics import settling_time
+    from fsr_bringup.sweeps.metrics import settled_after_arrival
 
-    t = np.arange(11) * 0.1
-    moving = t < 0.35  # the reference arrives at 0.4 s
-    error = np.where(t < 0.65, 0.1, 0.001)  # within the band from 0.7 s
-    assert settling_time(t, error, 0.01, moving) == pytest.approx(0.3)
-    assert settling_time(t, np.full(11, 0.001), 0.01, moving) == 0.0  # within the band on arrival
-    assert settling_time(t, np.where(t < 1.05, 0.1, 0.0), 0.01, moving) == math.inf  # ends outside
-    assert math.isnan(settling_time(t, error, 0.01, np.ones(11, dtype=bool)))  # the reference still moves
-    assert settling_time(t, error, 0.01, np.zeros(11, dtype=bool)) == pytest.approx(0.7)  # at rest from the start
+    def time(k: int) -> float:  # 11 samples, 0.1 s apart
+        return 0.1 * k if k < 11 else math.inf
+
+    # the reference at rest from sample 4 (0.4 s), the error within the band from sample 7 (0.7 s)
+    assert settled_after_arrival(1.0, 4, 7, time) == pytest.approx(0.3)
+    assert settled_after_arrival(1.0, 4, 0, time) == 0.0  # within the band on arrival
+    assert settled_after_arrival(1.0, 4, 11, time) == math.inf  # ends outside
+    assert math.isnan(settled_after_arrival(1.0, 11, 7, time))  # the reference still moves
+    assert settled_after_arrival(1.0, 0, 7, time) == pytest.approx(0.7)  # at rest from the start
 
 
 @pytest.mark.slow

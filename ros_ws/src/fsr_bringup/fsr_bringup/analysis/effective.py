@@ -1,43 +1,18 @@
 """Effective truth: the wrench the momentum observer must converge to, from a recording and its scenario.
 
-The observer (docs/model.md §3.8, :mod:`fsr_estimation.core.momentum`) does not estimate the injected external
-wrench alone: it estimates everything its model misses. With its model mass ``m_e`` and inertia ``I_e``
-and the commanded body wrench ``(f_c, tau_c)`` (``wrench_cmd``), its force residual over the control step
-``[t_k, t_k+1]`` is (world NED, ``e3`` down, ``a_k = (v_k+1 - v_k) / T_s``)::
+The equations are those of :mod:`fsr_bringup.core.effective_truth` (one compiled function per step, the one the
+sweep's measured loop calls); here its inputs are taken from the recording and the scenario, not from the
+estimate: the true states (``odom``, or ``odom_truth`` beside a measured ``odom``), ``wrench_truth`` and
+``wrench_cmd`` held at their stamps, and the actuator's wrench at the start and at the end of each step (from
+``rotor_cmd``'s speeds and tilts held over the step, or ``rotor_state``'s of both ends where actuator dynamics
+make them lag the command - scaled per rotor by the ground/ceiling thrust ratio; in wrench actuation ``f_c``
+itself, or with a rotor time constant the applied wrench lagging it, replayed from the commands by the plant's
+own lag as its RK4 steps apply it). ``f_eff`` of step k is stamped ``t_k`` (the last sample, which has no step,
+is NaN) and given in body FRD (``R_k^T f_eff``, like ``wrench_estimate``) and world NED.
 
-    f_hat -> m_e a_k - m_e g e3 - R_k f_c,k
-
-while the true plant (mass ``m``, inertia ``I``) obeys, averaged over the same step::
-
-    m a_k = m g e3 + <R f_a> + f_ext + f_contact
-
-with ``f_a`` the body force the rotors really produce (from their speeds and tilts - ``rotor_cmd``'s held over
-the step, or ``rotor_state``'s of both ends where actuator dynamics make them lag the command - scaled per rotor
-by the ground/ceiling thrust ratio; in wrench actuation ``f_c`` itself, or with a rotor time constant the
-applied wrench lagging it, replayed from the commands by the plant's own lag as its RK4 steps apply it) and
-``<.>`` the mean over the step (trapezoid of its ends). ``f_ext`` (``wrench_truth``) is everything beyond the
-rotors' ``c_f w^2``, ``c_m w^2``: the disturbances and the aerodynamics. Eliminating ``a_k`` gives the effective
-force::
-
-    f_eff = f_ext + (<R f_a> - R_k f_c) + f_contact + (m_e - m) (a_k - g e3)      [N, world NED]
-
-terms: the injected wrench; the surface-effect thrust change (and the turn of ``R`` within the step); the
-ground's contact force; the model mismatch (in steady flight ``(m - m_e) g e3``: a model heavier than the
-plant sees an upward, negative-z force). The torque (body FRD, ``omega_dot_k`` by the same difference)::
-
-    tau_eff = tau_ext + (<tau_a> - tau_c) + tau_contact + (I_e - I) omega_dot + omega x (I_e - I) omega
-
-Contact: the plant holds the vehicle on a surface (its state is put back on it with zero velocity and angular
-velocity at the end of a step: the contact rule of :func:`fsr_sim.core.surfaces.in_contact` with no motion
-left); the contact force is the constraint force of those steps,
-``m a_k - m g e3 - <R f_a> - f_ext`` (and ``I omega_dot + omega x I omega - <tau_a> - tau_ext``), zero in
-every other step. Everything else comes from the recording and the scenario, not from the estimate.
-``f_eff`` of step k is stamped ``t_k`` (the last sample, which has no step, is NaN) and given in body FRD
-(``R_k^T f_eff``, like ``wrench_estimate``) and world NED.
-
-No physics is written here: the actuator wrench, the thrust ratios and the contact rule are the plant's own
-compiled functions (:func:`fsr_sim.core.plant.actuator_wrench_log`, :func:`fsr_sim.model.environment.
-thrust_ratio_log`, :func:`fsr_sim.model.environment.contact_mask`), applied to the whole log.
+No physics is written here: the actuator wrench and the thrust ratios are the plant's own compiled functions
+(:func:`fsr_sim.core.plant.actuator_wrench_log`, :func:`fsr_sim.model.environment.thrust_ratio_log`), applied
+to the whole log.
 """
 
 from __future__ import annotations
@@ -47,11 +22,23 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
+from fsr_bringup.core.effective_truth import (
+    CONTACT_FORCE,
+    EXTERNAL_FORCE,
+    FORCE_BODY,
+    FORCE_WORLD,
+    HELD,
+    LOG_COLUMNS,
+    MISMATCH_FORCE,
+    THRUST_CHANGE,
+    TORQUE_BODY,
+    TruthParams,
+    effective_truth_log,
+)
 from fsr_sim.config.scenario import SimulationConfig, plant_from_config
 from fsr_sim.core.plant import actuator_wrench_log, applied_wrench_log
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.model.environment import contact_mask, pack_surfaces, thrust_ratio_log
-from fsr_sim.model.frames import E3
+from fsr_sim.model.environment import pack_surfaces, thrust_ratio_log
 
 
 @dataclass
@@ -123,15 +110,14 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
     rotation = odom.rotation
     plant = config.plant_vehicle
     m_true, m_est = plant.mass, model.mass
-    i_true, i_est = np.asarray(plant.inertia, float), np.asarray(model.inertia, float)
+    i_true, i_est = np.ascontiguousarray(plant.inertia, dtype=float), np.asarray(model.inertia, float)
     f_cmd = zero_order_hold(cmd.stamp_ns, cmd.force, target)
     tau_cmd = zero_order_hold(cmd.stamp_ns, cmd.torque, target)
     if flight.wrench_truth is not None:
-        f_ext_body = np.nan_to_num(zero_order_hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.force, target))
-        tau_ext = np.nan_to_num(zero_order_hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.torque, target))
+        f_ext_body = zero_order_hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.force, target)
+        tau_ext = zero_order_hold(flight.wrench_truth.stamp_ns, flight.wrench_truth.torque, target)
     else:
         f_ext_body, tau_ext = np.zeros((n, 3)), np.zeros((n, 3))
-    f_ext = np.einsum("kij,kj->ki", rotation, f_ext_body)
     # Actuator wrench at the start and at the end of each step, the command of the start held over it.
     rotors = flight.rotor_state or flight.rotor_cmd  # the actual speeds where they lag the command
     if config.actuation == "rotors" and rotors is not None:
@@ -158,42 +144,25 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
     else:
         f_start = f_end = f_cmd
         tau_start = tau_end = tau_cmd
-    next_rotation = np.concatenate((rotation[1:], rotation[-1:]))
-    mean_actuator_world = 0.5 * (np.einsum("kij,kj->ki", rotation, f_start)
-                                 + np.einsum("kij,kj->ki", next_rotation, f_end))
-    mean_actuator_torque = 0.5 * (tau_start + tau_end)
-    dt = np.diff(odom.t)[:, None]
-    accel = np.full((n, 3), np.nan)
-    accel[:-1] = np.diff(odom.velocity_world, axis=0) / dt
-    omega = odom.angular_velocity
-    omega_dot = np.full((n, 3), np.nan)
-    omega_dot[:-1] = np.diff(omega, axis=0) / dt
-    gravity = GRAVITY * E3
-    thrust_change = mean_actuator_world - np.einsum("kij,kj->ki", rotation, f_cmd)
-    # Contact: a surface held the vehicle at the end of the step (state put back at rest on it).
-    in_contact = np.zeros(n, dtype=bool)
-    held = contact_mask(pack_surfaces(config.environment, plant), odom.position[:, 2]) \
-        & ~np.any(odom.velocity_world, axis=1) & ~np.any(omega, axis=1)
-    in_contact[:-1] = held[1:]
-    contact_force = np.zeros((n, 3))
-    contact_torque = np.zeros((n, 3))
-    if in_contact.any():
-        c = in_contact
-        contact_force[c] = m_true * (accel[c] - gravity) - mean_actuator_world[c] - f_ext[c]
-        spin = np.cross(omega[c], omega[c] @ i_true.T)
-        contact_torque[c] = omega_dot[c] @ i_true.T + spin - mean_actuator_torque[c] - tau_ext[c]
-    mismatch = (m_est - m_true) * (accel - gravity)
-    force_world = f_ext + thrust_change + contact_force + mismatch
-    delta_i = i_est - i_true
-    torque = (tau_ext + mean_actuator_torque - tau_cmd + contact_torque + omega_dot @ delta_i.T
-              + np.cross(omega, omega @ delta_i.T))
-    force_world[-1] = np.nan
-    torque[-1] = np.nan
+    params = TruthParams(mass=float(m_true), mass_model=float(m_est), inertia=i_true,
+                         inertia_delta=np.ascontiguousarray(i_est - i_true), gravity=GRAVITY)
+    out = np.zeros((n, LOG_COLUMNS))
+
+    def c(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=float)
+
+    effective_truth_log(params, pack_surfaces(config.environment, plant), c(odom.t), c(rotation),
+                        c(odom.velocity_world), c(odom.angular_velocity), c(odom.position[:, 2]), c(f_ext_body),
+                        c(tau_ext), c(f_cmd), c(tau_cmd), c(f_start), c(tau_start), c(f_end), c(tau_end), out)
+
+    def part(at: int) -> np.ndarray:
+        return out[:, at:at + 3]
+
     return EffectiveWrench(
-        stamp_ns=target, t=odom.t, force_world=force_world,
-        force_body=np.einsum("kji,kj->ki", rotation, force_world), torque_body=torque,
-        external_force_world=f_ext, thrust_change_world=thrust_change, contact_force_world=contact_force,
-        mismatch_force_world=mismatch, in_contact=in_contact,
+        stamp_ns=target, t=odom.t, force_world=part(FORCE_WORLD), force_body=part(FORCE_BODY),
+        torque_body=part(TORQUE_BODY), external_force_world=part(EXTERNAL_FORCE),
+        thrust_change_world=part(THRUST_CHANGE), contact_force_world=part(CONTACT_FORCE),
+        mismatch_force_world=part(MISMATCH_FORCE), in_contact=out[:, HELD] > 0.0,
     )
 
 

@@ -50,7 +50,7 @@ from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, th
 from fsr_bringup.analysis.figure_layout import PNG_DPI, Panel, Panels, add_zoom, arrange, envelope, panel_grid
 from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
 from fsr_bringup.analysis.figure_rules import disturbance_windows, limits_near, start_transient, zoom_span
-from fsr_bringup.analysis.load import RecordedFlight
+from fsr_bringup.analysis.load import RecordedFlight, RecordingName
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_bringup.visualization.frames import NED_TO_ENU
 from fsr_sim.contract import ODOM, REFERENCE, ROTOR_STATE, WRENCH_CMD
@@ -631,15 +631,6 @@ def draw_and_save(name: str, runs: list[Run], out_dir: Path, options: FigureOpti
 
 _JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, in a worker: set at its start
 WORKER_MODULES = ["fsr_bringup.analysis.figures"]  # imported once by the fork server, inherited by every worker
-
-
-@dataclass(frozen=True)
-class RecordingName:
-    """What a figure needs of a recording (its path, in the files' metadata): a worker gets this, not the
-    recording's messages."""
-
-    path: Path | None
-    truncated: bool = False
 
 
 def _light(run: Run) -> Run:

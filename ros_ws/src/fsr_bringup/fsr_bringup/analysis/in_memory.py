@@ -9,20 +9,24 @@ them), so the metrics of a flight in memory and of its recording are the same.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from fsr_bringup.analysis.load import (
+    LOADERS,
     Attitude,
     Imu,
     Odometry,
     RecordedFlight,
+    RecordingName,
     Reference,
     RotorCommand,
     Scalar,
     Wrench,
     controller_side,
 )
-from fsr_sim.contract import SimStatus
+from fsr_sim.contract import SimStatus, resolve
 from fsr_sim.model.so3 import rotations_from_quaternions
 
 
@@ -35,16 +39,18 @@ def measured_odometry(stamp_ns: np.ndarray, t: np.ndarray, rows: np.ndarray) -> 
                     rows[:, 10:13])
 
 
-def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun (import cycle)
+def recorded_flight_of_run(run, recording: Path | None = None) -> RecordedFlight:  # noqa: ANN001 - a FlightRun
     """The topics of ``run`` at its states' stamps (module docstring); ``run`` must come from
-    :func:`fsr_bringup.api.simulate` or a sweep (it carries its validated configs)."""
+    :func:`fsr_bringup.api.simulate` or a sweep (it carries its validated configs). ``recording``: the file the
+    flight was recorded into (named in the metrics and the figures, not read)."""
     if run.simulation is None:
         raise ValueError("this run carries no validated scenario (fly it with fsr_bringup.simulate)")
     sim = run.simulation
     stamp_ns = np.rint(run.time * 1e9).astype(np.int64)
     t = run.time
     rotation = run.rotation
-    flight = RecordedFlight(None, "/", sim.name, sim, run.estimator)  # type: ignore[arg-type]
+    flight = RecordedFlight(None if recording is None else RecordingName(Path(recording)),  # type: ignore[arg-type]
+                            "/", sim.name, sim, run.estimator)
     flight.plan = {"kind": run.plan_kind, "end_s": run.plan_end_time} if run.plan_end_time is not None else None
     flight.sim_status = [SimStatus(run.end_reason, run.reason, float(t[-1]) if len(t) else 0.0, max(len(t) - 1, 0))]
     if run.scenario is not None:  # the controller's side as a recording's metadata gives it
@@ -74,4 +80,10 @@ def recorded_flight_of_run(run) -> RecordedFlight:  # noqa: ANN001 - a FlightRun
     if run.estimate_force_body is not None:
         flight.wrench_estimate = Wrench(stamp_ns, t, run.estimate_force_body, run.estimate_torque_body)
         flight.mass_estimate = Scalar(stamp_ns, t, run.mass_estimate)
+    for topic in LOADERS:  # what a recording of it holds: a message per state on each topic flown
+        name = resolve(topic.name, "/")
+        present = getattr(flight, topic.name) is not None
+        flight.message_counts[name] = len(t) if present else 0
+        if not present:
+            flight.notes.append(f"no messages on {name}")
     return flight

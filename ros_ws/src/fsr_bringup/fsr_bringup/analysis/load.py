@@ -57,6 +57,15 @@ NS_PER_S = 1_000_000_000
 STANDARD_TOPICS = tuple(recorded_topics())
 
 
+@dataclass(frozen=True)
+class RecordingName:
+    """What the analysis needs of a recording besides its messages (its path, in the figures' metadata and
+    ``metrics.json``): what a figure worker gets, and what a flight analysed in memory names."""
+
+    path: Path | None
+    truncated: bool = False
+
+
 @dataclass
 class Odometry:
     stamp_ns: np.ndarray  # (n,) int64
@@ -211,12 +220,7 @@ def load_flight(recording: Recording | str | Path, namespace: str | None = None)
         notes.append("recording is truncated (writer did not close it): analysed up to its last complete chunk")
     for topic in sorted({*recording.topics, *(resolve(name, namespace) for name in (CLOCK.name, *STANDARD_TOPICS))}):
         flight.message_counts[topic] = recording.count(topic)
-    loaders = {  # topic -> its decoder; the RecordedFlight attribute has the topic's name
-        ODOM: _odometry, REFERENCE: _reference, WRENCH_TRUTH: _wrench, WRENCH_CMD: _wrench,
-        WRENCH_SHORTFALL: _wrench, WRENCH_ESTIMATE: _wrench, ROTOR_CMD: _rotor_command, MASS_ESTIMATE: _scalar,
-        ATTITUDE_CMD: _attitude, WRENCH_DESIRED: _wrench,
-    }
-    for contract_topic, loader in loaders.items():
+    for contract_topic, loader in LOADERS.items():
         name = contract_topic.name
         topic = resolve(name, namespace)
         if not recording.has(topic) or recording.count(topic) == 0:
@@ -397,3 +401,10 @@ def _statuses(recording: Recording, topic: str, notes: list[str]) -> list[SimSta
         else:
             statuses.append(status)
     return statuses
+
+
+LOADERS = {  # topic -> its decoder (a note where it has no messages); the RecordedFlight attribute has its name
+    ODOM: _odometry, REFERENCE: _reference, WRENCH_TRUTH: _wrench, WRENCH_CMD: _wrench,
+    WRENCH_SHORTFALL: _wrench, WRENCH_ESTIMATE: _wrench, ROTOR_CMD: _rotor_command, MASS_ESTIMATE: _scalar,
+    ATTITUDE_CMD: _attitude, WRENCH_DESIRED: _wrench,
+}

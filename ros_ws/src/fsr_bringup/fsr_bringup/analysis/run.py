@@ -37,6 +37,12 @@ def _opened(recording: Recording | str | Path) -> Recording:
     return recording
 
 
+def _stem(flight: RecordedFlight) -> str:
+    """The file stem of the flight's recording (its scenario's name where it has none)."""
+    path = getattr(flight.recording, "path", None)
+    return path.stem if path is not None else flight.scenario_name
+
+
 RUN_STAMP = re.compile(r"_\d{8}-\d{6}$")  # fsr-fly's default run name: <scenario>_<YYYYmmdd-HHMMSS>
 
 
@@ -48,7 +54,7 @@ def run_labels(stems: list[str]) -> list[str]:
 
 
 def analyze_recordings(
-    recordings: list[Recording | str | Path],
+    recordings: list[Recording | str | Path | RecordedFlight],
     out_dir: str | Path,
     labels: list[str] | None = None,
     namespace: str | None = None,
@@ -58,7 +64,8 @@ def analyze_recordings(
     settling: str = "standard",
     after: float | None = None,
 ) -> Analysis:
-    """Analyse one or several recordings into ``out_dir``.
+    """Analyse one or several recordings (or flights already loaded, such as one flown in this process:
+    :attr:`fsr_bringup.runner.in_process_flight.FlightRun.trace`) into ``out_dir``.
 
     One recording: ``metrics.json`` is its metrics (:func:`fsr_bringup.analysis.metrics.flight_metrics`).
     Several: every figure overlays them (a colour per run, ``labels`` in the legends, default the file
@@ -67,14 +74,13 @@ def analyze_recordings(
     :class:`RecordingError` for a recording without messages; ValueError for labels
     that do not match the recordings one to one.
     """
-    opened = [_opened(r) for r in recordings]
+    flights = [r if isinstance(r, RecordedFlight) else load_flight(_opened(r), namespace) for r in recordings]
     if labels is None:
-        labels = run_labels([r.path.stem for r in opened])
-    if len(labels) != len(opened) or len(set(labels)) != len(labels):
-        raise ValueError(f"--labels: need {len(opened)} distinct labels, one per recording; got {labels}")
+        labels = run_labels([_stem(flight) for flight in flights])
+    if len(labels) != len(flights) or len(set(labels)) != len(labels):
+        raise ValueError(f"--labels: need {len(flights)} distinct labels, one per recording; got {labels}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    flights = [load_flight(r, namespace) for r in opened]
     runs = [Run.of(flight, label) for flight, label in zip(flights, labels, strict=True)]
     drawing = start_figures(runs, out_dir, options) if figures else None  # drawn while the metrics are computed
     per_run = [flight_metrics(flight, settle_time, settling, after) for flight in flights]
@@ -99,7 +105,7 @@ def analyze_recordings(
 
 
 def analyze_recording(
-    recording: Recording | str | Path,
+    recording: Recording | str | Path | RecordedFlight,
     out_dir: str | Path,
     namespace: str | None = None,
     settle_time: float = DEFAULT_SETTLE_S,

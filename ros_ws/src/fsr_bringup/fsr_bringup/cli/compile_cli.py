@@ -85,14 +85,20 @@ def _paths() -> None:
 
 def _sweep_flights() -> None:
     """A sweep's flights measured in the loop (:mod:`fsr_bringup.sweeps.measured`), of every built-in scenario,
-    with and without the estimator."""
-    from fsr_bringup.sweeps.batch import fly_one
+    with and without the estimator; one of each actuation measured from its arrays (a flight that ends early)."""
+    from fsr_bringup.sweeps.batch import fly_one, packed_sweep
+    from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
     from fsr_sim.config.scenario import load_scenario
 
     flights = [(name, {}) for name in BUILT_IN] + [("ex4_geometric", {"actuation": "rotors"})]
     for name, fixed in flights:
         for enabled in (True, False):
             fly_one(load_scenario(name, values={**fixed, "duration": 0.02, "estimator.enabled": enabled}), {})
+    for fixed in ({}, {"actuation": "rotors"}):
+        base = load_scenario("ex4_geometric", values={**fixed, "duration": 0.02})
+        fly_one(base, {}, measured=False)
+        # set up from the sweep's packed scenario, a swept inertia (arrays of its own, other types)
+        fly_one(base, {"plant.inertia": [0.03, 0.03, 0.06]}, packed=packed_sweep(base, DEFAULT_BAND_M))
 
 
 def _node_calls() -> None:

@@ -264,7 +264,9 @@ def main(argv: list[str] | None = None) -> int:
                   "host", flush=True)
             return result.exit_code
     sim_time, opened = result.sim_time, None
-    if recording.exists():  # the stop time the simulator recorded (what the summary reports), not the last seen
+    if args.in_process and args.record_topics is None and recording.exists():
+        opened = result.trace  # analysed as flown: its recording is not read back
+    elif recording.exists():  # the stop time the simulator recorded (what the summary reports), not the last seen
         from fsr_bringup.analysis.load import final_sim_time
         from fsr_sim.recording.reader import RecordingError, open_recording
 

@@ -20,12 +20,23 @@ Per step ``k`` (``t_k = k T``, stamps in integer ns, ``t_k = stamp * 1e-9`` as t
    as the simulator does.
 
 The final state ``t_N`` is published and answered (the controller does not know it is the last) but not
-applied. :func:`fly_steps` runs steps ``first..last`` and returns, so the Python driver
-(:mod:`fsr_bringup.runner.in_process_flight`) can notice Ctrl-C and write the recording between calls.
+applied. :func:`fly` runs steps ``first..last`` and returns, so the Python driver
+(:mod:`fsr_bringup.runner.in_process_flight`) can notice Ctrl-C and write the recording between calls; what it
+does with each step is the caller's (``what``): write its rows (the in-process flight), measure it into the
+row of a sweep (:mod:`fsr_bringup.core.flight_measures`, without per-step arrays), or both.
 """
 
 from __future__ import annotations
 
+from fsr_bringup.core.flight_measures import (
+    MeasureParams,
+    held_wrench,
+    measure_first,
+    measure_sample,
+    measure_step,
+    reset,
+    state_rotation,
+)
 from fsr_control.core.allocation import TILTING, WRENCH
 from fsr_control.core.controller import (
     COMMANDED_QUATERNION,
@@ -46,7 +57,8 @@ from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
 from fsr_sim.core.rotors import measured_rotor_wrench
 
-GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly_steps
+GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly
+RECORD, MEASURE = 1, 2  # what fly does with each step (flags): write its rows; measure it (a sweep's row)
 
 
 @jit_inline
@@ -91,36 +103,56 @@ def closed_loop_tick(controller: ControllerParams, controller_state: ControllerS
 
 
 @jit
-def fly_steps(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
-              controller_state: ControllerState, with_estimator: bool, estimator_measured: bool,
-              observer: ObserverParams,
-              observer_state: ObserverState, first: int, last: int, step_count: int, period_ns: int,
-              control_bounds: tuple, states, published, actuators, control, estimates) -> tuple:  # noqa: ANN001
-    """Steps ``first..last`` (``last <= step_count``); row ``k`` of ``states`` (13), ``published`` (the row of
-    :mod:`fsr_sim.core.odometry`), ``actuators`` (2n: the rotors' actual speeds, then tilts: ``rotor_state``),
-    ``control`` (the controller's output row) and ``estimates`` (7) gets what step ``k`` published;
-    ``estimator_measured``: the estimator takes the rotors' measured wrench (``estimator.input: measured``).
+def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParams, controller_state: ControllerState,
+        with_estimator: bool, estimator_measured: bool, observer: ObserverParams, observer_state: ObserverState,
+        first: int, last: int, step_count: int, period_ns: int, control_bounds: tuple, what: int, states, published,
+        actuators, control, estimates, measures: MeasureParams, actuator_plant: PlantParams,
+        actuator_state: PlantState, rotor_rows, acc) -> tuple:  # noqa: ANN001
+    """Steps ``first..last`` (``last <= step_count``), each written and/or measured as ``what`` says
+    (:data:`RECORD` | :data:`MEASURE`).
+
+    RECORD: row ``k`` of ``states`` (13), ``published`` (the row of :mod:`fsr_sim.core.odometry`), ``actuators``
+    (2n: the rotors' actual speeds, then tilts: ``rotor_state``), ``control`` (the controller's output row) and
+    ``estimates`` (7) gets what step ``k`` published. Without it these hold two rows each, step ``k`` in row
+    ``k % 2`` (scratch). MEASURE: the step is measured into ``acc`` (:mod:`fsr_bringup.core.flight_measures`,
+    with ``measures``; ``actuator_plant`` the plant without actuator dynamics and its ``actuator_state``, the
+    rotors' wrench of a command; ``rotor_rows`` (``ROTOR_ROWS``, n) scratch kept from one call to the next),
+    reset at step 0. ``estimator_measured``: the estimator takes the rotors' measured wrench
+    (``estimator.input: measured``).
+
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
     ``CONTROLLER_FAILED`` with the law's status at step ``k`` (its row holds only the reference);
     ``LOST_CONTROL`` with the :func:`fsr_sim.core.control_loss.control_loss` code of state ``k`` (``k < step_count``:
     the simulator node does not check the final state either) against its answer, within ``control_bounds``
     (:meth:`fsr_sim.model.control_loss.ControlBounds.pack`): row ``k`` is complete."""
+    record = (what & RECORD) != 0
     mode = controller.allocation.mode
+    truth = (what & MEASURE) != 0 and with_estimator and measures.truth
+    rotor_truth = truth and mode != WRENCH
+    n = actuators.shape[1] // 2
     if first == 0:
         publish(plant, plant_state, published[0])
         actuator_row(plant_state, actuators[0])
+        if what & MEASURE:
+            reset(acc)
+        if rotor_truth:
+            measure_first(measures, plant_state.x, rotor_rows)
     for k in range(first, last + 1):
         t = (k * period_ns) * 1e-9
+        now = k if record else k % 2
+        after = k + 1 if record else (k + 1) % 2
+        x = states[now]
         for i in range(plant_state.x.shape[0]):
-            states[k, i] = plant_state.x[i]
-        row = control[k]
-        n = actuators.shape[1] // 2
+            x[i] = plant_state.x[i]
+        row = control[now]
         status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, estimator_measured,
-                                                 observer, observer_state, t, published[k], actuators[k, :n],
-                                                 actuators[k, n:], row, estimates[k])
+                                                 observer, observer_state, t, published[now], actuators[now, :n],
+                                                 actuators[now, n:], row, estimates[now])
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status
+        if what & MEASURE:
+            measure_sample(measures, acc, k, x, state_rotation(x), row)
         if k == step_count:
             return FINISHED, k, 0
         lost = control_loss(control_bounds, plant_state.x, row[REFERENCE_POSITION:REFERENCE_POSITION + 3],
@@ -128,10 +160,16 @@ def fly_steps(plant: PlantParams, plant_state: PlantState, controller: Controlle
         if lost != IN_CONTROL:
             return LOST_CONTROL, k, lost
         hold_command(plant, plant_state, mode, row, force, torque)
+        force_held, torque_held = held_wrench(plant, plant_state, force, torque) if truth and not rotor_truth \
+            else (force, torque)
         if k == 0:  # rotor_state of t_0: the rotors spin at the first command from the start, as the node publishes
             actuator_row(plant_state, actuators[0])
-        code = advance(plant, plant_state, published[k + 1])
-        actuator_row(plant_state, actuators[k + 1])
+        code = advance(plant, plant_state, published[after])
+        actuator_row(plant_state, actuators[after])
         if code != RUNNING:
             return DIVERGED, k, code
+        if truth:
+            measure_step(measures, plant, plant_state, rotor_truth, actuator_plant, actuator_state, acc, k, t,
+                         ((k + 1) * period_ns) * 1e-9, x, published[now], row, actuators[now], force, torque,
+                         force_held, torque_held, estimates[now], rotor_rows)
     return GOING_ON, last, 0

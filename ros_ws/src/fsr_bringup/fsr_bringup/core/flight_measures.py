@@ -1,6 +1,7 @@
-"""A sweep's flight measured as it flies (compiled core): the closed loop of :mod:`fsr_bringup.core.flight_loop`
-(the same per-step functions in the same order, so the flight is the same bit for bit) with the metrics of the
-sweep's row accumulated step by step instead of written out per step.
+"""A sweep's row measured sample by sample (compiled core): the accumulators that the closed loop
+(:func:`fsr_bringup.core.flight_loop.fly` with ``MEASURE``) updates as it flies, instead of writing each step out,
+and that a flight's arrays are fed through after the fact (:mod:`fsr_bringup.sweeps.metrics`), so a sweep's row has
+one definition.
 
 Per sample ``k = 0..K`` (the state stamped ``t_k = k T``, ``t_k = (k period_ns) 1e-9`` as the loop computes it,
 and the controller's answer to it), into the accumulator vector ``acc`` (:data:`SIZE`, indices below):
@@ -14,14 +15,14 @@ and the controller's answer to it), into the accumulator vector ``acc`` (:data:`
   (NaN counts as the middle of the range) or a tilt at its limit, and per body axis whether the wrench gave way
   (``|shortfall| > tolerance`` at some step);
 * with the estimator: the effective truth of sample ``k < K`` (what the observer must converge to,
-  :mod:`fsr_bringup.analysis.effective`, from the states ``k`` and ``k + 1``: the external wrench, the actuator's
-  wrench against the commanded one - in wrench actuation the turn of ``R`` within the step; with rotors their
-  wrench at the thrust ratios of both poses, from the commanded speeds and tilts or, where the rotors lag, the
-  actual ones of both ends, computed by the plant's own functions on the plant without actuator dynamics -, the ground's
-  contact force, the model mismatch), and per channel the sum of
-  the squared estimate errors of the samples at ``t_k >= late_from``, the last sample outside the 3 % band (and
-  the same for the estimate and the truth through the ``smoothed`` settling time's low-pass), the
-  sum of the truths at ``t_k >= last_from`` (their count too), the band of the last sample, and the samples whose
+  :func:`fsr_bringup.core.effective_truth.effective_truth`, from the states ``k`` and ``k + 1``: the external
+  wrench, the actuator's wrench against the commanded one - in wrench actuation the turn of ``R`` within the
+  step; with rotors their wrench at the thrust ratios of both poses, from the commanded speeds and tilts or,
+  where the rotors lag, the actual ones of both ends, computed by the plant's own functions on the plant without
+  actuator dynamics -, the ground's contact force, the model mismatch), and per channel the sum of the squared
+  estimate errors of the samples at ``t_k >= late_from``, the last sample outside the 3 % band (and the same for
+  the estimate and the truth through the ``smoothed`` settling time's low-pass), the sum of the truths at
+  ``t_k >= last_from`` (their count too), the band of the last sample, and the samples whose
   truth is not finite.
 
 The numbers are those of :mod:`fsr_bringup.analysis.metrics` applied to the flight's arrays
@@ -37,36 +38,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_bringup.core.flight_loop import (
-    CONTROLLER_FAILED,
-    DIVERGED,
-    FINISHED,
-    LOST_CONTROL,
-    closed_loop_tick,
-    hold_command,
-)
-from fsr_control.core.allocation import WRENCH
+from fsr_bringup.core.effective_truth import effective_truth, finite
 from fsr_control.core.controller import (
-    COMMANDED_QUATERNION,
     COMMANDED_ROTATION,
     REFERENCE_ACCELERATION,
     REFERENCE_POSITION,
     REFERENCE_VELOCITY,
     ROTOR_SPEEDS,
     SHORTFALL,
-    ControllerParams,
-    ControllerState,
 )
-from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_estimation.core.observer_step import ObserverParams, ObserverState
-from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.jit import jit, jit_inline
-from fsr_sim.core.lockstep import advance, publish
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
-from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, period_mean_lagged, set_rotor_command
+from fsr_sim.core.plant import PlantParams, PlantState, period_mean_lagged, set_rotor_command
 from fsr_sim.core.rotors import scaled_rotor_wrench
-from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
-from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, in_contact, thrust_ratios
+from fsr_sim.core.so3 import Mat3, Vec3, mat_t_mat3, mat_t_vec3, rotation_rows_from_quaternion
+from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, thrust_ratios
 
 # The accumulators (acc).
 POSITION_FINAL, POSITION_PEAK, POSITION_SQUARES, POSITION_SAMPLES, POSITION_LAST_OUTSIDE = 0, 1, 2, 3, 4
@@ -92,7 +78,6 @@ SIZE = 72
 # acting over the step, work rows.
 ACTUAL_SPEEDS, ACTUAL_TILTS, RATIOS, RATIOS_NEXT, SPEEDS, TILTS, GROUND, CEILING = range(8)
 ROTOR_ROWS = 8
-LARGEST = float(np.finfo(np.float64).max)
 
 
 class MeasureParams(NamedTuple):
@@ -107,6 +92,7 @@ class MeasureParams(NamedTuple):
     tilt_limit: float  # rad: |tilt| >= this is at the limit
     shortfall_tolerance: float  # N, N m
     truth: bool  # the estimator is measured against the effective truth
+    # the plant and the observer's model, as the effective truth takes them (the fields of TruthParams)
     mass: float  # kg: the plant's
     mass_model: float  # kg: the observer's model
     inertia: np.ndarray  # (3, 3) kg m^2: the plant's
@@ -121,6 +107,14 @@ class MeasureParams(NamedTuple):
     with_tilts: bool  # rotors: the tilts are applied (commanded tilts on a plant with servos)
     ground: Surfaces  # the surfaces with the ceiling's effect off (the ground's thrust ratios)
     ceiling: Surfaces  # ... with the ground's effect off
+
+
+def unmeasured(surfaces: Surfaces) -> MeasureParams:
+    """Measurement parameters that measure nothing (a flight only written out), of the types of a measured
+    flight's (one compiled loop for both); ``surfaces`` the plant's."""
+    zero = np.zeros((3, 3))
+    return MeasureParams(0.0, False, 0.0, 0.0, 0.0, False, 0.0, 0.0, False, 1.0, 1.0, zero, zero, 0.0, 0.0, 0.0,
+                         0.0, 0.0, False, False, False, surfaces, surfaces)
 
 
 @jit
@@ -157,7 +151,7 @@ def _rows(row, at: int) -> Mat3:  # noqa: ANN001
 
 
 @jit
-def _state_rotation(x) -> Mat3:  # noqa: ANN001
+def state_rotation(x) -> Mat3:  # noqa: ANN001
     return rotation_rows_from_quaternion(x[6], x[7], x[8], x[9])
 
 
@@ -213,39 +207,8 @@ def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> Non
             acc[GAVE_WAY + c] = 1.0
 
 
-@jit
-def _finite(value: float) -> float:
-    """``numpy.nan_to_num`` of one number: NaN -> 0, +-inf -> the largest finite float."""
-    if math.isnan(value):
-        return 0.0
-    if math.isinf(value):
-        return LARGEST if value > 0.0 else -LARGEST
-    return value
-
-
-@jit
-def _add(a: Vec3, b: Vec3) -> Vec3:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-
-@jit
-def _spin(omega: Vec3, inertia) -> Vec3:  # noqa: ANN001
-    """``omega x (I omega)`` with ``I omega`` as ``omega @ I.T``."""
-    i_omega = (inertia[0, 0] * omega[0] + inertia[0, 1] * omega[1] + inertia[0, 2] * omega[2],
-               inertia[1, 0] * omega[0] + inertia[1, 1] * omega[1] + inertia[1, 2] * omega[2],
-               inertia[2, 0] * omega[0] + inertia[2, 1] * omega[1] + inertia[2, 2] * omega[2])
-    return cross3(omega, i_omega)
-
-
-@jit
-def _times(inertia, v: Vec3) -> Vec3:  # noqa: ANN001
-    return (inertia[0, 0] * v[0] + inertia[0, 1] * v[1] + inertia[0, 2] * v[2],
-            inertia[1, 0] * v[0] + inertia[1, 1] * v[1] + inertia[1, 2] * v[2],
-            inertia[2, 0] * v[0] + inertia[2, 1] * v[1] + inertia[2, 2] * v[2])
-
-
 @jit_inline
-def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float, t_next: float, x, x_next,
+def measure_estimate(m: MeasureParams, surfaces: Surfaces, acc, t: float, t_next: float, x, x_next,
                      rotation: Mat3, rotation_next: Mat3, published, force_cmd: Vec3, torque_cmd: Vec3,
                      force_start: Vec3, torque_start: Vec3, force_end: Vec3, torque_end: Vec3,
                      estimate) -> None:  # noqa: ANN001
@@ -253,53 +216,25 @@ def measure_estimate(m: MeasureParams, plant: PlantParams, acc, k: int, t: float
     ``x_next`` of ``t_next`` (and their rotations), the published row of ``t`` (its ``wrench_truth``), the
     commanded body wrench, the actuator's body wrench at the start and at the end of the step, and the estimate
     of ``t``."""
-    dt = t_next - t
-    f_ext_body = (published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2])
-    tau_ext = (published[TRUTH_TORQUE], published[TRUTH_TORQUE + 1], published[TRUTH_TORQUE + 2])
-    f_ext_body = (_finite(f_ext_body[0]), _finite(f_ext_body[1]), _finite(f_ext_body[2]))
-    tau_ext = (_finite(tau_ext[0]), _finite(tau_ext[1]), _finite(tau_ext[2]))
-    f_ext = mat_vec3(rotation, f_ext_body)
-    commanded_world = mat_vec3(rotation, force_cmd)
-    start_world = mat_vec3(rotation, force_start)
-    end_world = mat_vec3(rotation_next, force_end)
-    mean_actuator = (0.5 * (start_world[0] + end_world[0]), 0.5 * (start_world[1] + end_world[1]),
-                     0.5 * (start_world[2] + end_world[2]))
-    mean_torque = (0.5 * (torque_start[0] + torque_end[0]), 0.5 * (torque_start[1] + torque_end[1]),
-                   0.5 * (torque_start[2] + torque_end[2]))
-    accel = ((x_next[3] - x[3]) / dt, (x_next[4] - x[4]) / dt, (x_next[5] - x[5]) / dt)
-    omega = (x[10], x[11], x[12])
-    omega_dot = ((x_next[10] - x[10]) / dt, (x_next[11] - x[11]) / dt, (x_next[12] - x[12]) / dt)
-    gravity = (0.0, 0.0, m.gravity)
-    free = (accel[0] - gravity[0], accel[1] - gravity[1], accel[2] - gravity[2])
-    thrust_change = (mean_actuator[0] - commanded_world[0], mean_actuator[1] - commanded_world[1],
-                     mean_actuator[2] - commanded_world[2])
-    held = in_contact(plant.surfaces, x_next[2]) and x_next[3] == 0.0 and x_next[4] == 0.0 and x_next[5] == 0.0 \
-        and x_next[10] == 0.0 and x_next[11] == 0.0 and x_next[12] == 0.0
-    contact_force = (0.0, 0.0, 0.0)
-    contact_torque = (0.0, 0.0, 0.0)
-    if held:
-        contact_force = (m.mass * free[0] - mean_actuator[0] - f_ext[0], m.mass * free[1] - mean_actuator[1] - f_ext[1],
-                         m.mass * free[2] - mean_actuator[2] - f_ext[2])
-        spin = _spin(omega, m.inertia)
-        turn = _times(m.inertia, omega_dot)
-        contact_torque = (turn[0] + spin[0] - mean_torque[0] - tau_ext[0],
-                          turn[1] + spin[1] - mean_torque[1] - tau_ext[1],
-                          turn[2] + spin[2] - mean_torque[2] - tau_ext[2])
-    difference = m.mass_model - m.mass
-    mismatch = (difference * free[0], difference * free[1], difference * free[2])
-    force_world = _add(_add(_add(f_ext, thrust_change), contact_force), mismatch)
-    turn_delta = _times(m.inertia_delta, omega_dot)
-    spin_delta = _spin(omega, m.inertia_delta)
-    torque = (tau_ext[0] + mean_torque[0] - torque_cmd[0] + contact_torque[0] + turn_delta[0] + spin_delta[0],
-              tau_ext[1] + mean_torque[1] - torque_cmd[1] + contact_torque[1] + turn_delta[1] + spin_delta[1],
-              tau_ext[2] + mean_torque[2] - torque_cmd[2] + contact_torque[2] + turn_delta[2] + spin_delta[2])
-    force_body = mat_t_vec3(rotation, force_world)
-    truth = (force_body[0], force_body[1], force_body[2], torque[0], torque[1], torque[2])
-    finite = True
+    parts = effective_truth(m, surfaces, t_next - t, rotation, rotation_next, (x[3], x[4], x[5]),
+                            (x_next[3], x_next[4], x_next[5]), (x[10], x[11], x[12]),
+                            (x_next[10], x_next[11], x_next[12]), x_next[2],
+                            (published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2]),
+                            (published[TRUTH_TORQUE], published[TRUTH_TORQUE + 1], published[TRUTH_TORQUE + 2]),
+                            force_cmd, torque_cmd, force_start, torque_start, force_end, torque_end)
+    force_body, torque = mat_t_vec3(rotation, parts[0]), parts[1]
+    measure_truth(m, acc, t, (force_body[0], force_body[1], force_body[2], torque[0], torque[1], torque[2]),
+                  estimate)
+
+
+@jit_inline
+def measure_truth(m: MeasureParams, acc, t: float, truth: tuple, estimate) -> None:  # noqa: ANN001
+    """Sample ``t`` [s] (before the last) of the estimate (7) against the effective truth ``truth`` (6, body)."""
+    defined = True
     for c in range(6):
         if not math.isfinite(truth[c]):
-            finite = False
-    if not finite:
+            defined = False
+    if not defined:
         acc[TRUTH_UNDEFINED] += 1.0
         return
     j = acc[TRUTH_SAMPLES]  # the index among the samples with a truth
@@ -357,89 +292,83 @@ def rotor_command_row(m: MeasureParams, k: int, row, actual_speeds, actual_tilts
     n = speeds.shape[0]
     lagging = m.lagging and k > 0
     for i in range(n):
-        speeds[i] = _finite(actual_speeds[i] if lagging else row[ROTOR_SPEEDS + i])
-        tilts[i] = _finite(actual_tilts[i] if lagging else row[ROTOR_SPEEDS + n + i]) if m.commanded_tilts else 0.0
+        speeds[i] = finite(actual_speeds[i] if lagging else row[ROTOR_SPEEDS + i])
+        tilts[i] = finite(actual_tilts[i] if lagging else row[ROTOR_SPEEDS + n + i]) if m.commanded_tilts else 0.0
+
+
+@jit_inline
+def measure_first(m: MeasureParams, x, rotor_rows) -> None:  # noqa: ANN001
+    """Before sample 0: the rotors' thrust ratios of the first state ``x`` (13) into ``rotor_rows[RATIOS_NEXT]``."""
+    thrust_ratio_row(m, x, state_rotation(x), rotor_rows[GROUND], rotor_rows[CEILING], rotor_rows[RATIOS_NEXT])
+
+
+@jit_inline
+def held_wrench(plant: PlantParams, plant_state: PlantState, force: Vec3, torque: Vec3) -> tuple:
+    """The body wrench a wrench-actuated plant applies over the coming step for the command ``force``,
+    ``torque`` just held: the command, or with a rotor time constant its mean as the RK4 steps apply it
+    (lagging the command)."""
+    if not plant.wrench_lag:
+        return force, torque
+    w = plant_state.body_wrench
+    c = plant_state.wrench_command
+    d, h, s = plant.speed_decay, plant.speed_mean, plant.substeps
+    return ((period_mean_lagged(w[0], c[0], d, h, s), period_mean_lagged(w[1], c[1], d, h, s),
+             period_mean_lagged(w[2], c[2], d, h, s)),
+            (period_mean_lagged(w[3], c[3], d, h, s), period_mean_lagged(w[4], c[4], d, h, s),
+             period_mean_lagged(w[5], c[5], d, h, s)))
+
+
+@jit_inline
+def measure_step(m: MeasureParams, plant: PlantParams, plant_state: PlantState, rotors: bool,
+                 actuator_plant: PlantParams, actuator_state: PlantState, acc, k: int, t: float, t_next: float, x,
+                 published, row, actual, force: Vec3, torque: Vec3, force_held: Vec3, torque_held: Vec3, estimate,
+                 rotor_rows) -> None:  # noqa: ANN001
+    """Step ``k`` (``[t, t_next]``, just flown) of the estimate against the effective truth: ``x`` (13) the state
+    of ``t``, ``plant_state`` that of ``t_next``, ``published`` the row of ``t``, ``row`` the controller's answer
+    and ``force``, ``torque`` its commanded wrench, ``actual`` (2n) the rotors' speeds and tilts of ``t``
+    (``rotor_state``), ``force_held``, ``torque_held`` what a wrench-actuated plant applied (:func:`held_wrench`),
+    ``estimate`` the estimator's of ``t``. With ``rotors`` their wrench at the thrust ratios of both poses
+    (``rotor_rows``: the ratios of ``t`` in ``RATIOS_NEXT`` on entry, of ``t_next`` on return), computed on
+    ``actuator_plant``, the plant without actuator dynamics, as the analysis computes it."""
+    rotation = state_rotation(x)
+    rotation_next = state_rotation(plant_state.x)
+    if not rotors:  # wrench actuation: the command, or the wrench lagging it
+        measure_estimate(m, plant.surfaces, acc, t, t_next, x, plant_state.x, rotation, rotation_next, published,
+                         force, torque, force_held, torque_held, force_held, torque_held, estimate)
+        return
+    n = rotor_rows.shape[1]
+    for i in range(n):
+        rotor_rows[ACTUAL_SPEEDS, i] = actual[i]
+        rotor_rows[ACTUAL_TILTS, i] = actual[n + i]
+        rotor_rows[RATIOS, i] = rotor_rows[RATIOS_NEXT, i]
+    rotor_command_row(m, k, row, rotor_rows[ACTUAL_SPEEDS], rotor_rows[ACTUAL_TILTS], rotor_rows[SPEEDS],
+                      rotor_rows[TILTS])
+    thrust_ratio_row(m, plant_state.x, rotation_next, rotor_rows[GROUND], rotor_rows[CEILING],
+                     rotor_rows[RATIOS_NEXT])
+    set_rotor_command(actuator_plant, actuator_state, rotor_rows[SPEEDS], rotor_rows[TILTS], m.with_tilts)
+    force_start, torque_start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
+                                                    rotor_rows[RATIOS])
+    if m.lagging:  # the rotors move within the step: at its end, their speeds and tilts of t_next
+        set_rotor_command(actuator_plant, actuator_state, plant_state.speeds, plant_state.tilts, m.with_tilts)
+    force_end, torque_end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
+                                                rotor_rows[RATIOS_NEXT])
+    measure_estimate(m, plant.surfaces, acc, t, t_next, x, plant_state.x, rotation, rotation_next, published, force,
+                     torque, force_start, torque_start, force_end, torque_end, estimate)
 
 
 @jit
-def fly_measured(plant: PlantParams, plant_state: PlantState, controller: ControllerParams,
-                 controller_state: ControllerState, with_estimator: bool, estimator_measured: bool,
-                 observer: ObserverParams,
-                 observer_state: ObserverState, step_count: int, period_ns: int, measures: MeasureParams,
-                 actuator_plant: PlantParams, actuator_state: PlantState, control_bounds: tuple, states, published,
-                 row, estimate, rotor_rows, acc) -> tuple:  # noqa: ANN001
-    """Steps ``0..step_count`` measured into ``acc`` (module docstring); ``states`` (13,) the state of ``t_k``,
-    ``published`` (2, 19) the rows of ``t_k`` and ``t_k+1``, ``row`` the controller's output, ``estimate`` (7)
-    the estimator's and ``rotor_rows`` (8, n) the rotors' (:data:`ACTUAL_SPEEDS` ...), all scratch.
-    ``actuator_plant`` is the plant without actuator dynamics (its ``actuator_state`` scratch): the rotors'
-    wrench of a command, as the analysis computes it. Returns ``(outcome, k, detail)`` as
-    :func:`fsr_bringup.core.flight_loop.fly_steps` (never ``GOING_ON``)."""
+def measure_log(m: MeasureParams, acc, t, x, rotation, rows, truth, estimates) -> None:  # noqa: ANN001
+    """The accumulators of a flight's arrays, the samples fed through the loop's functions: per sample ``k`` of
+    ``t`` (n,) [s] the true state ``x`` (n, 13: position first), its ``rotation`` (n, 3, 3), the controller's
+    output ``rows`` (n, its layout) into :func:`measure_sample`; with ``m.truth`` the effective truth ``truth``
+    (n, 6, body; the last sample has none) and the ``estimates`` (n, 7) into :func:`measure_truth`."""
     reset(acc)
-    n = (row.shape[0] - ROTOR_SPEEDS) // 2
-    mode = controller.allocation.mode
-    rotor_truth = with_estimator and measures.truth and mode != WRENCH
-    publish(plant, plant_state, published[0])
-    rotation_k = _state_rotation(plant_state.x)  # R of the true state t_k (then of t_k+1, for the next step)
-    if rotor_truth:
-        thrust_ratio_row(measures, plant_state.x, rotation_k, rotor_rows[GROUND], rotor_rows[CEILING],
-                         rotor_rows[RATIOS_NEXT])
-    for k in range(step_count + 1):
-        t = (k * period_ns) * 1e-9
-        now = published[k % 2]
-        for i in range(plant_state.x.shape[0]):
-            states[i] = plant_state.x[i]
-        if rotor_truth:
-            for i in range(n):  # rotor_state of t_k; the ratios of t_k (computed at the end of the last step)
-                rotor_rows[ACTUAL_SPEEDS, i] = plant_state.speeds[i]
-                rotor_rows[ACTUAL_TILTS, i] = plant_state.tilts[i]
-                rotor_rows[RATIOS, i] = rotor_rows[RATIOS_NEXT, i]
-        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, estimator_measured,
-                                                 observer, observer_state, t, now, plant_state.speeds,
-                                                 plant_state.tilts, row, estimate)
-        if status != ATTITUDE_OK:
-            return CONTROLLER_FAILED, k, status
-        measure_sample(measures, acc, k, states, rotation_k, row)
-        if k == step_count:
-            return FINISHED, k, 0
-        lost = control_loss(control_bounds, plant_state.x, row[REFERENCE_POSITION:REFERENCE_POSITION + 3],
-                            row[COMMANDED_QUATERNION:COMMANDED_QUATERNION + 4], held_by_surface(plant_state))
-        if lost != IN_CONTROL:
-            return LOST_CONTROL, k, lost
-        hold_command(plant, plant_state, mode, row, force, torque)
-        if plant.wrench_lag:  # the applied wrench over the step (as the RK4 steps apply it, lagging the command)
-            w = plant_state.body_wrench
-            c = plant_state.wrench_command
-            d, h, s = plant.speed_decay, plant.speed_mean, plant.substeps
-            force_held = (period_mean_lagged(w[0], c[0], d, h, s), period_mean_lagged(w[1], c[1], d, h, s),
-                          period_mean_lagged(w[2], c[2], d, h, s))
-            torque_held = (period_mean_lagged(w[3], c[3], d, h, s), period_mean_lagged(w[4], c[4], d, h, s),
-                           period_mean_lagged(w[5], c[5], d, h, s))
-        else:
-            force_held, torque_held = force, torque
-        code = advance(plant, plant_state, published[(k + 1) % 2])
-        if code != RUNNING:
-            return DIVERGED, k, code
-        rotation_next = _state_rotation(plant_state.x)
-        if rotor_truth:
-            rotor_command_row(measures, k, row, rotor_rows[ACTUAL_SPEEDS], rotor_rows[ACTUAL_TILTS],
-                              rotor_rows[SPEEDS], rotor_rows[TILTS])
-            thrust_ratio_row(measures, plant_state.x, rotation_next, rotor_rows[GROUND], rotor_rows[CEILING],
-                             rotor_rows[RATIOS_NEXT])
-            set_rotor_command(actuator_plant, actuator_state, rotor_rows[SPEEDS], rotor_rows[TILTS],
-                              measures.with_tilts)
-            force_start, torque_start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
-                                                            rotor_rows[RATIOS])
-            if measures.lagging:  # the rotors move within the step: at its end, their speeds and tilts of t_k+1
-                set_rotor_command(actuator_plant, actuator_state, plant_state.speeds, plant_state.tilts,
-                                  measures.with_tilts)
-            force_end, torque_end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
-                                                        rotor_rows[RATIOS_NEXT])
-            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,
-                             rotation_k, rotation_next, now, force, torque, force_start, torque_start, force_end,
-                             torque_end, estimate)
-        elif with_estimator and measures.truth:  # wrench actuation: the command, or the wrench lagging it
-            measure_estimate(measures, plant, acc, k, t, ((k + 1) * period_ns) * 1e-9, states, plant_state.x,
-                             rotation_k, rotation_next, now, force, torque, force_held, torque_held, force_held,
-                             torque_held, estimate)
-        rotation_k = rotation_next
-    return FINISHED, step_count, 0
+    n = t.shape[0]
+    for k in range(n):
+        r = ((rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 0, 2]),
+             (rotation[k, 1, 0], rotation[k, 1, 1], rotation[k, 1, 2]),
+             (rotation[k, 2, 0], rotation[k, 2, 1], rotation[k, 2, 2]))
+        measure_sample(m, acc, k, x[k], r, rows[k])
+        if m.truth and k < n - 1:
+            measure_truth(m, acc, t[k], (truth[k, 0], truth[k, 1], truth[k, 2], truth[k, 3], truth[k, 4],
+                                         truth[k, 5]), estimates[k])

@@ -12,12 +12,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fsr_bringup.core import flight_loop
+from fsr_bringup.core.flight_measures import ROTOR_ROWS, SIZE, unmeasured
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
 from fsr_control.core.controller import COMMANDED_QUATERNION, REFERENCE_POSITION
@@ -143,6 +145,7 @@ class FlightRun:
     plan_kind: str = "waypoints"  # trajectory.kind
     plan_end_time: float | None = None  # [s] when the plan comes to rest (None: no plan)
     notes: list[str] = field(default_factory=list)
+    recording: Path | None = None  # the file the flight was recorded into (None: not recorded)
 
     @property
     def sim_time(self) -> float:
@@ -185,14 +188,23 @@ class FlightRun:
     def thrust(self) -> np.ndarray:
         return -self.force_cmd[:, 2]
 
+    @cached_property
+    def trace(self) -> Any:
+        """This flight's time series as the analysis takes them: the
+        :class:`fsr_bringup.analysis.load.RecordedFlight` that ``load_flight`` reads from its recording, made
+        from these arrays (``odom`` what is published - the measurement when a sensor stage is on, with the
+        true state on ``odom_truth`` beside it -, every topic at the states' stamps)."""
+        from fsr_bringup.analysis.in_memory import recorded_flight_of_run
+
+        return recorded_flight_of_run(self, self.recording)
+
     def metrics(self, **options: Any) -> dict[str, Any]:
         """The metrics of this flight, the ones its summary and ``fsr-sweep`` report
-        (:func:`fsr_bringup.analysis.metrics.flight_metrics` of the flight in memory; ``options``: its
+        (:func:`fsr_bringup.analysis.metrics.flight_metrics` of :attr:`trace`; ``options``: its
         ``settle_time``, ``settling``, ``after``). Tracking errors are on the true state."""
-        from fsr_bringup.analysis.in_memory import recorded_flight_of_run
         from fsr_bringup.analysis.metrics import flight_metrics
 
-        return flight_metrics(recorded_flight_of_run(self), **options)
+        return flight_metrics(self.trace, **options)
 
     def save_mcap(self, path: str | Path) -> Path:
         """Write this flight's recording, the file ``fsr-fly --in-process`` writes: the flight is flown again
@@ -220,7 +232,7 @@ class _Stopped(KeyboardInterrupt):
 @dataclass
 class FlightSetup:
     """A flight ready to fly: its validated configs, the packed objects the compiled loop steps, and the arrays
-    it writes (row ``k`` = step ``k``; :func:`fsr_bringup.core.flight_loop.fly_steps`)."""
+    it writes (row ``k`` = step ``k``; :func:`fsr_bringup.core.flight_loop.fly`)."""
 
     scenario: Scenario
     simulation: Any  # fsr_sim.config.scenario.SimulationConfig
@@ -258,13 +270,15 @@ class FlightSetup:
         return bool(self.plant.params.sensors.odometry.enabled)
 
     def fly(self, first: int, last: int) -> tuple[int, int, int]:
-        """Steps ``first..last`` in the compiled loop: ``(outcome, k, detail)`` of ``fly_steps``."""
+        """Steps ``first..last`` in the compiled loop, written into the arrays: ``(outcome, k, detail)`` of
+        :func:`fsr_bringup.core.flight_loop.fly`."""
         a = self.arrays
-        return flight_loop.fly_steps(
+        return flight_loop.fly(
             self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
             self.estimation.enabled, self.estimation.rotor_state, self.observer.params, self.observer.state, first,
-            last, self.steps, self.period_ns, self.control_bounds, a.states, a.published, a.actuators, a.control,
-            a.estimates)
+            last, self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, a.states, a.published,
+            a.actuators, a.control, a.estimates, unmeasured(self.plant.params.surfaces), self.plant.params,
+            self.plant.core_state, a.rotor_rows, a.acc)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""
@@ -304,11 +318,14 @@ class FlightArrays:
     actuators: np.ndarray  # (size, 2 rotors): the rotors' actual speeds and tilts (rotor_state)
     control: np.ndarray  # (size, controller output): the controller's output row
     estimates: np.ndarray  # (size, 7)
+    rotor_rows: np.ndarray  # (ROTOR_ROWS, rotors), acc (SIZE): the loop's measurement scratch (unused here)
+    acc: np.ndarray
 
     @classmethod
     def make(cls, size: int, rotors: int) -> FlightArrays:
         return cls(np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE)), np.zeros((size, 2 * rotors)),
-                   np.zeros((size, control_layout.output_size(rotors))), np.zeros((size, 7)))
+                   np.zeros((size, control_layout.output_size(rotors))), np.zeros((size, 7)),
+                   np.zeros((ROTOR_ROWS, rotors)), np.zeros(SIZE))
 
     def fits(self, size: int, rotors: int) -> bool:
         return len(self.states) >= size and self.actuators.shape[1] == 2 * rotors
@@ -404,7 +421,9 @@ def fly_in_process(scenario: Any, recording: Path | None = None, max_steps: int 
                 recorder.status(max(count - 1, 0) * period_ns, end_reason, reason, max(count - 1, 0))
             finally:
                 recorder.close()
-    return setup.run(count, end_reason, reason, time.perf_counter() - start, interrupted, startup)
+    run = setup.run(count, end_reason, reason, time.perf_counter() - start, interrupted, startup)
+    run.recording = None if recording is None else Path(recording)
+    return run
 
 
 def flight_run(setup: FlightSetup, states: np.ndarray, published: np.ndarray, control: np.ndarray,

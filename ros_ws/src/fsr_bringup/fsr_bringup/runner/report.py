@@ -6,20 +6,22 @@ import sys
 from pathlib import Path
 
 from fsr_bringup.analysis.figures import FigureOptions
+from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.run import analyze_recording
 from fsr_sim.recording.reader import Recording, RecordingError, open_recording
 
 
-def analyse_and_summarise(recording: Recording | Path, run_dir: Path, namespaces: list[str],
+def analyse_and_summarise(recording: Recording | Path | RecordedFlight, run_dir: Path, namespaces: list[str],
                           options: FigureOptions | None = None, settling: str = "standard",
                           after: float | None = None) -> bool:
-    """Analyse each vehicle of the recording (a path, or the recording already read) into ``run_dir``
+    """Analyse each vehicle of the recording (a path, or the recording already read; or the one flight
+    already in memory, :attr:`fsr_bringup.runner.in_process_flight.FlightRun.trace`) into ``run_dir``
     (``run_dir/<ns>`` for a fleet); False on error.
 
     ``options``: figure formats and sizes; ``settling`` / ``after``: the estimator metrics' settling-time
     definition and max-error window (:func:`fsr_bringup.analysis.metrics.flight_metrics`)."""
     try:
-        if not isinstance(recording, Recording):
+        if not isinstance(recording, Recording | RecordedFlight):
             recording = open_recording(recording)
     except RecordingError as error:
         print(f"fsr-fly: cannot analyse the recording: {error}", file=sys.stderr)

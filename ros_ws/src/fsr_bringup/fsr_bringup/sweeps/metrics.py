@@ -1,5 +1,7 @@
-"""One flight of a sweep as one row: the metrics of the flight summary (:mod:`fsr_bringup.analysis.metrics`,
-applied to the flight in memory: :mod:`fsr_bringup.analysis.in_memory`), flattened to numbers and short texts.
+"""One flight of a sweep as one row: the accumulators of :mod:`fsr_bringup.core.flight_measures` (the metrics of
+the flight summary, :mod:`fsr_bringup.analysis.metrics`, as running sums), flattened to numbers and short texts.
+A sweep's flight fills them as it flies (:mod:`fsr_bringup.sweeps.measured`); a flight's arrays - in memory
+(:func:`flight_row`) or a recording (:func:`recorded_row`) - are fed through the same functions after the fact.
 
 Columns (:data:`METRIC_COLUMNS`; NaN where a metric does not apply, e.g. no estimator or wrench actuation):
 
@@ -31,9 +33,16 @@ from typing import Any
 
 import numpy as np
 
-from fsr_bringup.analysis import metrics as summary
-from fsr_bringup.analysis.in_memory import recorded_flight_of_run
-from fsr_bringup.analysis.load import zero_order_hold
+from fsr_bringup.analysis.effective import effective_wrench
+from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
+from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, LIMIT_TOLERANCE, MEAN_WINDOW_S, WRENCH_AXES
+from fsr_bringup.core import flight_measures as core
+from fsr_control.core import controller as layout
+from fsr_estimation.core.metrics import TOLERANCE, smoothing_gain
+from fsr_sim.contract import FINISHED
+from fsr_sim.model.allocation import SHORTFALL_TOLERANCE
+from fsr_sim.model.environment import pack_surfaces
+from fsr_sim.model.frames import GRAVITY
 
 DEFAULT_BAND_M = 0.01  # m: the position band of settling_time_s
 SIGNIFICANT_WRENCH = 1e-3  # N, N m: a channel whose final effective truth is smaller has no settling time
@@ -66,70 +75,141 @@ def settled_after_arrival(end: float, arrival: int, settled: int, time: Callable
     return max(0.0, time(settled) - time(arrival))
 
 
-def settling_time(t: np.ndarray, error: np.ndarray, band: float, moving: np.ndarray) -> float:
-    """``settling_time_s`` (module docstring) of the errors ``error`` [m] at times ``t`` [s]; ``moving``: where
-    the position reference moves."""
-    def last(mask: np.ndarray) -> int:
-        return len(mask) - 1 - int(np.argmax(mask[::-1])) if mask.any() else -1
+def measure_params(sim, estimation, start: float, end: float, sample_s: float, band: float,  # noqa: ANN001
+                   lagging: bool) -> core.MeasureParams:
+    """The measurement parameters of a flight from ``start`` to ``end`` [s] with the plant side ``sim``
+    (:class:`fsr_sim.config.scenario.SimulationConfig`) and the estimator ``estimation`` (None: none), thresholds
+    and windows as :mod:`fsr_bringup.analysis.metrics` takes them; ``sample_s`` the mean spacing of the samples
+    with a truth (all but the last); ``lagging``: the rotors lag their commands."""
+    vehicle, plant = sim.vehicle, sim.plant_vehicle
+    rotors = sim.actuation == "rotors"
+    surfaces = pack_surfaces(sim.environment, plant)  # as the analysis packs it (the plant's own)
+    tol = LIMIT_TOLERANCE * vehicle.rotor_speed_max
+    inertia = np.ascontiguousarray(plant.inertia, dtype=float)
+    model = estimation if estimation is not None else plant
+    return core.MeasureParams(
+        band=float(band), rotors=rotors, speed_upper=vehicle.rotor_speed_max - tol,
+        speed_lower=vehicle.rotor_speed_min + tol,
+        speed_middle=0.5 * (vehicle.rotor_speed_min + vehicle.rotor_speed_max),
+        tilts=rotors and vehicle.has_servos and vehicle.tilt_angle_max < math.pi,
+        tilt_limit=vehicle.tilt_angle_max * (1 - LIMIT_TOLERANCE), shortfall_tolerance=SHORTFALL_TOLERANCE,
+        truth=estimation is not None and bool(estimation.enabled), mass=float(plant.mass),
+        mass_model=float(model.mass), inertia=inertia,
+        inertia_delta=np.ascontiguousarray(np.asarray(model.inertia, float) - inertia), gravity=GRAVITY,
+        tolerance=TOLERANCE, smoothing_gain=smoothing_gain(sample_s),
+        late_from=start + min(DEFAULT_SETTLE_S, 0.5 * (end - start)), last_from=end - MEAN_WINDOW_S,
+        lagging=bool(lagging), commanded_tilts=rotors and vehicle.has_servos,
+        with_tilts=rotors and vehicle.has_servos and plant.has_servos,
+        ground=surfaces._replace(ceiling_effect=False), ceiling=surfaces._replace(ground_effect=False))
 
-    def time(k: int) -> float:
-        return float(t[k]) if k < len(t) else math.inf
 
-    return settled_after_arrival(float(t[-1]), last(moving) + 1, last(~(error <= band)) + 1, time)  # NaN: outside
-
-
-def reference_moving(flight: Any) -> np.ndarray:
-    """Per ``odom`` sample of a recorded flight: whether the position reference held there moves (its velocity
-    or acceleration is not zero)."""
-    ref = flight.reference
-    motion = np.concatenate((ref.velocity, ref.acceleration), axis=1)
-    held = zero_order_hold(ref.stamp_ns, motion, flight.odom.stamp_ns)
-    return ~np.all(held == 0.0, axis=1)
+def _degrees(acc: np.ndarray, at: int) -> float:
+    """The angle [deg] of the ``(sin, cos)`` parts at ``acc[at]`` (NaN: no finite sample)."""
+    if not acc[core.ATTITUDE_SAMPLES]:
+        return math.nan
+    return float(np.degrees(np.arctan2(acc[at], acc[at + 1])))
 
 
-def _number(value: Any) -> float:
-    return math.nan if value is None else float(value)
-
-
-def flight_row(run, band: float = DEFAULT_BAND_M) -> dict[str, Any]:  # noqa: ANN001 - a FlightRun
-    """The row of one flight (module docstring), in :data:`METRIC_COLUMNS` order."""
-    flight = recorded_flight_of_run(run)
-    row: dict[str, Any] = {"end_reason": run.end_reason, "end_detail": run.reason if run.failures else "",
-                           "flown_s": float(run.time[-1])}
-    errors = summary.tracking_errors(flight)
-    position = summary.error_summary(errors.t, errors.position)
-    attitude = summary.error_summary(errors.t, errors.attitude_deg)
-    row.update(position_error_final_m=_number(position["final"]), position_error_peak_m=_number(position["peak"]),
-               position_error_rms_m=_number(position["rms"]),
-               attitude_error_final_deg=_number(attitude["final"]), attitude_error_peak_deg=_number(attitude["peak"]),
-               settling_time_s=settling_time(errors.t, np.linalg.norm(errors.position, axis=1), band,
-                                             reference_moving(flight)))
-    saturation = summary.saturation(flight)
-    if saturation is None:  # wrench actuation: nothing saturates
+def accumulated_row(acc: np.ndarray, measures: core.MeasureParams, count: int, time: Callable[[int], float],
+                    end_reason: str = FINISHED, end_detail: str = "") -> dict[str, Any]:
+    """The row (:data:`METRIC_COLUMNS`) of a flight of ``count`` samples from its accumulators ``acc``
+    (``time(k)`` [s] of sample ``k``, inf past the last)."""
+    valid = acc[core.POSITION_SAMPLES] > 0
+    last = int(acc[core.POSITION_LAST_OUTSIDE])
+    row: dict[str, Any] = {
+        "end_reason": end_reason, "end_detail": end_detail, "flown_s": time(count - 1),
+        "position_error_final_m": float(acc[core.POSITION_FINAL]) if valid else math.nan,
+        "position_error_peak_m": float(acc[core.POSITION_PEAK]) if valid else math.nan,
+        "position_error_rms_m": math.sqrt(acc[core.POSITION_SQUARES] / acc[core.POSITION_SAMPLES]) if valid
+        else math.nan,
+        "attitude_error_final_deg": _degrees(acc, core.ATTITUDE_FINAL),
+        "attitude_error_peak_deg": _degrees(acc, core.ATTITUDE_PEAK),
+        "settling_time_s": settled_after_arrival(time(count - 1), int(acc[core.REFERENCE_LAST_MOVING]) + 1,
+                                                 last + 1, time),
+    }
+    if not measures.rotors:
         row.update(rotor_speed_peak_rad_s=math.nan, saturated_fraction=math.nan, gave_way="")
     else:
-        fraction = saturation["rotor_speed"]["fraction"]
-        if saturation["tilt"] is not None:
-            fraction = max(fraction, saturation["tilt"]["fraction"])
-        shortfall = summary.wrench_shortfall(flight) or {}
-        row.update(rotor_speed_peak_rad_s=float(np.max(run.rotor_speeds)), saturated_fraction=float(fraction),
-                   gave_way="+".join(axis for axis in summary.WRENCH_AXES if shortfall.get(axis, {}).get("steps")))
+        fraction = acc[core.SATURATED_STEPS] / count
+        if measures.tilts:
+            fraction = max(fraction, acc[core.TILT_STEPS] / count)
+        row.update(rotor_speed_peak_rad_s=float(acc[core.ROTOR_SPEED_PEAK]), saturated_fraction=float(fraction),
+                   gave_way="+".join(axis for c, axis in enumerate(WRENCH_AXES) if acc[core.GAVE_WAY + c]))
     row.update(estimate_force_rms_N=math.nan, estimate_torque_rms_N_m=math.nan, estimate_settling_s=math.nan,
                estimate_force_settling_s=math.nan)
-    comparison = summary.wrench_comparison(flight) if flight.wrench_estimate is not None else None
-    if comparison is not None and comparison["rms_error"] is not None:
-        rms = np.asarray(comparison["rms_error"], dtype=float)
-        final_truth = np.asarray(comparison["effective_truth_mean_last_s"], dtype=float)
-        significant = [name for name, truth in zip(summary.WRENCH_CHANNELS, final_truth, strict=True)
-                       if abs(truth) >= SIGNIFICANT_WRENCH]
+    samples = int(acc[core.TRUTH_SAMPLES])
+    if measures.truth and samples >= 2 and acc[core.ESTIMATE_LATE] > 0:
+        rms = np.sqrt(acc[core.ESTIMATE_SQUARES:core.ESTIMATE_SQUARES + 6] / acc[core.ESTIMATE_LATE])
+        last_samples = acc[core.TRUTH_LAST_SAMPLES]
+        final_truth = (acc[core.TRUTH_LAST_SUM:core.TRUTH_LAST_SUM + 6] / last_samples if last_samples
+                       else np.full(6, math.nan))
+        significant = [c for c in range(6) if abs(final_truth[c]) >= SIGNIFICANT_WRENCH]
 
-        def slowest(channels: dict, names: list[str]) -> float:
-            settled = [_number(channels[name]) for name in names]
+        def slowest(last_outside: int, final_band: int, channels: list[int]) -> float:
+            settled = []
+            for c in channels:
+                outside = acc[last_outside + c]
+                value = math.nan if outside >= samples - 1 else time(int(outside) + 1) - time(0)
+                settled.append(value if acc[final_band + c] > 0.0 else math.nan)
             return (math.inf if any(math.isnan(v) for v in settled) else max(settled)) if settled else math.nan
 
         row.update(estimate_force_rms_N=float(np.sqrt(np.sum(rms[:3] ** 2))),
                    estimate_torque_rms_N_m=float(np.sqrt(np.sum(rms[3:] ** 2))),
-                   estimate_settling_s=slowest(comparison["settling_time_s"], significant),
-                   estimate_force_settling_s=slowest(comparison["settling_time_smoothed_s"],
-                                                     [n for n in significant if n in summary.WRENCH_CHANNELS[:3]]))
+                   estimate_settling_s=slowest(core.ESTIMATE_LAST_OUTSIDE, core.FINAL_BAND, significant),
+                   estimate_force_settling_s=slowest(core.SMOOTHED_LAST_OUTSIDE, core.SMOOTHED_FINAL_BAND,
+                                                     [c for c in significant if c < 3]))
     return row
+
+
+def recorded_row(flight: RecordedFlight, band: float = DEFAULT_BAND_M, end_reason: str | None = None,
+                 end_detail: str = "") -> dict[str, Any]:
+    """The row of a recorded flight (or one in memory as a :class:`RecordedFlight`, with its scenario): its
+    samples at the true state's stamps - the reference, the commanded attitude, the rotor commands and the
+    shortfall held there, the effective truth (:func:`fsr_bringup.analysis.effective.effective_wrench`) and the
+    estimate - fed through the accumulators the loop fills as it flies (:func:`fsr_bringup.core.flight_measures.
+    measure_log`). ``end_reason``: the flight's (default: its last ``sim_status``)."""
+    odom, config = flight.true_odom, flight.config
+    if odom is None or flight.reference is None or config is None:
+        raise ValueError("a sweep row needs the true state, the reference and the scenario")
+    target, t = odom.stamp_ns, np.ascontiguousarray(odom.t, dtype=float)
+    count, n = len(t), config.vehicle.rotor_count
+    rows = np.full((count, layout.output_size(n)), np.nan)
+
+    def hold(series: Any, values: np.ndarray, at: int) -> None:
+        rows[:, at:at + values.shape[1]] = zero_order_hold(series.stamp_ns, values, target)
+
+    ref = flight.reference
+    hold(ref, ref.position, layout.REFERENCE_POSITION)
+    hold(ref, ref.velocity, layout.REFERENCE_VELOCITY)
+    hold(ref, ref.acceleration, layout.REFERENCE_ACCELERATION)
+    commanded = flight.attitude_cmd or ref  # the law's attitude (the reference's where it is not recorded)
+    hold(commanded, commanded.rotation.reshape(-1, 9), layout.COMMANDED_ROTATION)
+    if flight.rotor_cmd is not None:
+        hold(flight.rotor_cmd, flight.rotor_cmd.speeds, layout.ROTOR_SPEEDS)
+        if flight.rotor_cmd.tilts is not None:
+            hold(flight.rotor_cmd, flight.rotor_cmd.tilts, layout.ROTOR_SPEEDS + n)
+    if flight.wrench_shortfall is not None:
+        shortfall = flight.wrench_shortfall
+        hold(shortfall, np.hstack((shortfall.force, shortfall.torque)), layout.SHORTFALL)
+    estimate = flight.wrench_estimate
+    effective = effective_wrench(flight) if estimate is not None else None
+    measured = flight.estimator if effective is not None else None
+    truth = effective.wrench_body if effective is not None else np.zeros((count, 6))
+    estimates = np.zeros((count, 7))
+    if estimate is not None:
+        estimates[:, :6] = zero_order_hold(estimate.stamp_ns, np.hstack((estimate.force, estimate.torque)), target)
+    sample_s = (t[-2] - t[0]) / (count - 2) if count > 2 else 0.0
+    measures = measure_params(config, measured, float(t[0]), float(t[-1]), float(sample_s), band,
+                              flight.rotor_state is not None)
+    acc = np.zeros(core.SIZE)
+    core.measure_log(measures, acc, t, np.ascontiguousarray(odom.position), np.ascontiguousarray(odom.rotation),
+                     rows, np.ascontiguousarray(truth), estimates)
+    if end_reason is None:
+        end_reason = flight.sim_status[-1].state if flight.sim_status else FINISHED
+    return accumulated_row(acc, measures, count, lambda k: float(t[k]) if k < count else math.inf, end_reason,
+                           end_detail)
+
+
+def flight_row(run, band: float = DEFAULT_BAND_M) -> dict[str, Any]:  # noqa: ANN001 - a FlightRun
+    """The row of one flight flown in this process (module docstring), in :data:`METRIC_COLUMNS` order."""
+    return recorded_row(run.trace, band, run.end_reason, run.reason if run.failures else "")
