@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from fsr_bringup.core.flight_loop import CONTROLLER_FAILED
-from fsr_bringup.core.flight_measures import FINISHED as FINISHED_OUTCOME
+from fsr_bringup.core.flight_loop import FINISHED as FINISHED_OUTCOME
 from fsr_bringup.core.flight_measures import TRUTH_UNDEFINED
 from fsr_bringup.runner.in_process_flight import FlightArrays, prepare_flight
 from fsr_bringup.sweeps.axes import flight_scenario

@@ -40,9 +40,9 @@ from fsr_bringup.core import flight_measures as core
 from fsr_control.core import controller as layout
 from fsr_estimation.core.metrics import TOLERANCE, smoothing_gain
 from fsr_sim.contract import FINISHED
+from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.allocation import SHORTFALL_TOLERANCE
 from fsr_sim.model.environment import pack_surfaces
-from fsr_sim.model.frames import GRAVITY
 
 DEFAULT_BAND_M = 0.01  # m: the position band of settling_time_s
 SIGNIFICANT_WRENCH = 1e-3  # N, N m: a channel whose final effective truth is smaller has no settling time
