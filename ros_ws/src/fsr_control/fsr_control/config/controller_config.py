@@ -112,6 +112,8 @@ class ControllerConfig:
     filter_hz: float = 0.0  # indi: controller.filter_hz [Hz]
     control_period: float = 0.0  # [s] the lockstep's step (the period indi's filter is discretised at)
     rotor_state: bool = False  # the simulator publishes rotor_state (the rotors' measured speeds)
+    odometry_measured: bool = False  # odom is a measurement (noisy, late or slow), not the true state
+    odometry_delay_steps: int = 0  # steps odom's samples are late by (sensors.odometry)
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
@@ -246,6 +248,7 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
         raise controller.error("aerodynamics", f"{controller_type} measures the aerodynamics with the rest of the "
                                                "external wrench: use controller.aerodynamics: none")
     controller.reject_unknown()
+    odometry = sim.odometry_noise
 
     section = scenario.section("trajectory")
     trajectory = trajectory_config(section, vehicle, sim.initial.position)
@@ -255,7 +258,9 @@ def controller_config(scenario: Scenario) -> ControllerConfig:
                               acceleration_filter_hz=acceleration_filter_hz, feasibility=trajectory.feasibility,
                               path=trajectory.path, trajectory_kind=trajectory.kind, aerodynamics=aerodynamics,
                               filter_hz=filter_hz, control_period=sim.control_period,
-                              rotor_state=sim.publishes_rotor_state)
+                              rotor_state=sim.publishes_rotor_state, odometry_measured=odometry.enabled
+                              or odometry.delay_steps > 0 or odometry.every_steps > 1,
+                              odometry_delay_steps=odometry.delay_steps)
     # Every leg checked before take-off, from the scenario's initial state: refused here, listed otherwise.
     try:
         plan = config.trajectory(vehicle, actuation, sim.initial.position, sim.initial.rotation)
