@@ -68,12 +68,12 @@ def test_configuration_defaults():
     np.testing.assert_array_equal(designed_gains(sim.vehicle)["k_p"], expected["k_p"])
     lagging = controller_config(indi_scenario("vehicle=hummingbird", "controller.filter_hz=20"))
     assert lagging.rotor_state and lagging.filter_hz == 20.0  # the Hummingbird's 5 ms motor
-    # its 5 ms motor and the 30 Hz filter (13 ms), not the 30 ms motor and 15 ms of odometry the geometric law's
-    # gains assume (45 ms): an attitude loop 3.5 times faster, 25.6 rad/s
+    # its 5 ms motor and the 30 Hz filter (13 ms, a quarter more: 16 ms), not the 30 ms motor and 15 ms of
+    # odometry the geometric law's gains assume (45 ms): an attitude loop 2.8 times faster, 20.5 rad/s
     hummingbird = simulation_config(indi_scenario("vehicle=hummingbird")).vehicle
-    assert design_lag(hummingbird) == pytest.approx(0.005 + 0.0075 + 0.0005, abs=1e-4)
+    assert design_lag(hummingbird) == pytest.approx(1.25 * (0.005 + 0.0075 + 0.0005), abs=1e-4)
     assert design_gains(hummingbird, lag=design_lag(hummingbird)).attitude == pytest.approx(
-        3.5 * design_gains(hummingbird).attitude, rel=0.02)
+        2.8 * design_gains(hummingbird).attitude, rel=0.02)
     onboard = controller_config(indi_scenario("sensors.preset=onboard"))
     assert onboard.odometry_measured and onboard.odometry_delay_steps == 10
 

@@ -67,16 +67,21 @@ from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_FILTER_HZ = 30.0  # controller.filter_hz: the low-pass on every measured signal [Hz]
 DESIGN_PERIOD = 0.001  # s: the control period the designed gains assume (the scenarios' 1 kHz)
+# The increment assumes the rotors' nominal effectiveness (c_f w^2); where the induced inflow adds to it (slow
+# rotors in an axial flow: a hard braking) the loop gain rises with it. A quarter more lag designed for: the
+# Hummingbird's race loses 2 of 20 flights under onboard sensors and gusts without it, none with it.
+LAG_MARGIN = 1.25
 CORRECTION = 0.2  # the share of the difference to a new odom sample the estimate takes (indi_law._estimate)
 FILTER_DAMPING = 1.0 / math.sqrt(2.0)  # Butterworth
 
 
 def design_lag(vehicle: Vehicle, filter_hz: float = DEFAULT_FILTER_HZ, period: float = DESIGN_PERIOD) -> float:
-    """The lag [s] INDI's gains are designed for: the vehicle's own motor (or servo) time constant, the
-    filter's group delay ``2 zeta / w_n`` and half a control period. No sensor delay: the attitude loop damps
-    with the gyro and, where ``odom`` is late, flies on the IMU-propagated estimate (module docstring)."""
+    """The lag [s] INDI's gains are designed for: :data:`LAG_MARGIN` times the vehicle's own motor (or servo)
+    time constant, the filter's group delay ``2 zeta / w_n`` and half a control period. No sensor delay: the
+    attitude loop damps with the gyro and, where ``odom`` is late, flies on the IMU-propagated estimate (module
+    docstring)."""
     motor = max(vehicle.rotor_time_constant, vehicle.tilt_time_constant)
-    return motor + 2.0 * FILTER_DAMPING / (2.0 * math.pi * filter_hz) + 0.5 * period
+    return LAG_MARGIN * (motor + 2.0 * FILTER_DAMPING / (2.0 * math.pi * filter_hz) + 0.5 * period)
 
 
 def designed_gains(vehicle: Vehicle) -> dict[str, np.ndarray]:
