@@ -46,7 +46,7 @@ noise averaged (:func:`fsr_control.core.indi_law._estimate`).
 (Butterworth), discretised exactly for an input held over the control period ``T``: ``x_k = Phi x_(k-1) +
 Gamma u_k`` with ``Phi = exp(A T)``, ``Gamma = A^-1 (Phi - 1) B``; started at rest on the first sample. The
 default :data:`DEFAULT_FILTER_HZ` (30 Hz) keeps the gyro's derivative quiet at 1 kHz while the filter's group
-delay (``2 zeta / w_n``, 7.5 ms) stays below the designed 30 ms motor.
+delay (``2 zeta / w_n``, 7.5 ms) is part of the lag the gains are designed for (:func:`design_lag`).
 
 The law is written once, in the compiled core (:func:`fsr_control.core.indi_law.indi_law`).
 """
