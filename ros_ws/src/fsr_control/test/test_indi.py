@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from fsr_control.config.controller_config import controller_config
-from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, designed_gains, filter_coefficients
+from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, design_lag, designed_gains, filter_coefficients, pack_indi
+from fsr_control.core import indi_law
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
@@ -53,18 +54,28 @@ def test_the_filter_refuses_what_it_cannot_be(cutoff, period):
 
 
 def test_configuration_defaults():
-    """The designed gains without the integral, the default cutoff, rotor_state where the rotors lag."""
+    """The gains designed for INDI's own lag without the integral, the default cutoff, rotor_state where the
+    rotors lag, the estimate where odom is a measurement."""
     config = controller_config(indi_scenario())
     sim = simulation_config(indi_scenario())
     assert config.type == "indi" and config.filter_hz == DEFAULT_FILTER_HZ
     assert config.control_period == pytest.approx(0.001) and not config.rotor_state  # quadrotor_ex4: no lag
-    expected = design_gains(sim.vehicle).wrench_gains()
+    assert not config.odometry_measured and config.odometry_delay_steps == 0  # the ideal preset: the true state
+    expected = design_gains(sim.vehicle, lag=design_lag(sim.vehicle)).wrench_gains()
     for name in ("k_p", "k_v", "k_r", "k_w"):
         np.testing.assert_array_equal(config.gains[name], expected[name])
     np.testing.assert_array_equal(config.gains["k_i"], np.zeros((3, 3)))
     np.testing.assert_array_equal(designed_gains(sim.vehicle)["k_p"], expected["k_p"])
     lagging = controller_config(indi_scenario("vehicle=hummingbird", "controller.filter_hz=20"))
     assert lagging.rotor_state and lagging.filter_hz == 20.0  # the Hummingbird's 5 ms motor
+    # its 5 ms motor and the 30 Hz filter (13 ms, a quarter more: 16 ms), not the 30 ms motor and 15 ms of
+    # odometry the geometric law's gains assume (45 ms): an attitude loop 2.8 times faster, 20.5 rad/s
+    hummingbird = simulation_config(indi_scenario("vehicle=hummingbird")).vehicle
+    assert design_lag(hummingbird) == pytest.approx(1.25 * (0.005 + 0.0075 + 0.0005), abs=1e-4)
+    assert design_gains(hummingbird, lag=design_lag(hummingbird)).attitude == pytest.approx(
+        2.8 * design_gains(hummingbird).attitude, rel=0.02)
+    onboard = controller_config(indi_scenario("sensors.preset=onboard"))
+    assert onboard.odometry_measured and onboard.odometry_delay_steps == 10
 
 
 @pytest.mark.parametrize(
@@ -137,3 +148,40 @@ def test_the_node_answers_a_stamp_once_all_its_inputs_have_arrived():
     only_imu = StampedInputs(needs_imu=True, needs_rotor_state=False)
     assert only_imu.add(ODOM_INPUT, 5, "odom") is None  # the first stamp waits for everything but rotor_state
     assert only_imu.add(IMU_INPUT, 5, "imu") == ("odom", "imu")
+
+
+def test_the_estimate_bridges_the_odometry_delay_and_hold_with_the_imu():
+    """A vehicle turning at a constant body rate under a constant world acceleration, its odom 10 steps late
+    and held 10 steps, an exact IMU: the estimate of the current step is the true state (to the trapezoid's
+    rounding), where odom is up to 19 steps behind it."""
+    scenario = indi_scenario("vehicle=hummingbird")
+    vehicle = simulation_config(scenario).vehicle
+    period, delay, every = 0.001, 10, 10
+    params = pack_indi(vehicle, designed_gains(vehicle), DEFAULT_FILTER_HZ, period, True, predict=True,
+                       delay_steps=delay)
+    memory = np.zeros(indi_law.MEMORY_SIZE)
+    rate, acceleration = np.array([0.8, -0.5, 0.3]), np.array([2.0, -1.0, 0.5])
+    p0, v0 = np.array([1.0, 2.0, -3.0]), np.array([3.0, -1.0, 0.2])
+
+    def truth(step: int) -> tuple:
+        t = step * period
+        angle = np.linalg.norm(rate * t)
+        axis = rate / np.linalg.norm(rate)
+        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        rotation = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+        return p0 + v0 * t + 0.5 * acceleration * t * t, v0 + acceleration * t, rotation
+
+    estimate = getattr(indi_law._estimate, "py_func", indi_law._estimate)  # noqa: SLF001
+    worst, lag = 0.0, 0.0
+    for step in range(600):
+        measured = truth(max((step // every) * every - delay, 0))  # the sensor stage: delayed, then held
+        position, velocity, rotation = truth(step)
+        imu = np.r_[rate, rotation.T @ (acceleration - (0.0, 0.0, 9.81))]
+        rows = tuple(tuple(row) for row in measured[2])
+        p, r, v = estimate(params, memory, tuple(measured[0]), rows, tuple(measured[1]), imu)
+        if step > 200:
+            worst = max(worst, np.linalg.norm(np.subtract(p, position)), np.linalg.norm(np.subtract(v, velocity)),
+                        np.abs(np.subtract(r, rotation)).max())
+            lag = max(lag, np.linalg.norm(measured[0] - position))
+    assert lag > 0.05  # odom alone is up to 19 ms (6 cm) behind
+    assert worst < 1e-6

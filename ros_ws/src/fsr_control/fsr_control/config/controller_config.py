@@ -113,6 +113,8 @@ class ControllerConfig:
     filter_hz: float = 0.0  # indi: controller.filter_hz [Hz]
     control_period: float = 0.0  # [s] the lockstep's step (the period indi's filter is discretised at)
     rotor_state: bool = False  # the simulator publishes rotor_state (the rotors' measured speeds)
+    odometry_measured: bool = False  # odom is a measurement (noisy, late or slow), not the true state
+    odometry_delay_steps: int = 0  # steps odom's samples are late by (sensors.odometry)
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
@@ -246,10 +248,13 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
         raise controller.error("aerodynamics", f"{controller_type} measures the aerodynamics with the rest of the "
                                                "external wrench: use controller.aerodynamics: none")
     controller.reject_unknown()
+    odometry = sim.odometry_noise
     return {"type": controller_type, "gains": gains, "angular_feedforward": angular_feedforward, "profile": profile,
             "feedforward": feedforward, "integral_limit": integral_limit, "secondary_objective": secondary,
             "allocation": allocation, "compensation": compensation, "air_mode": air_mode,
-            "acceleration_filter_hz": acceleration_filter_hz, "aerodynamics": aerodynamics, "filter_hz": filter_hz}
+            "acceleration_filter_hz": acceleration_filter_hz, "aerodynamics": aerodynamics, "filter_hz": filter_hz,
+            "odometry_measured": odometry.enabled or odometry.delay_steps > 0 or odometry.every_steps > 1,
+            "odometry_delay_steps": odometry.delay_steps}
 
 
 def controller_config(scenario: Scenario) -> ControllerConfig:

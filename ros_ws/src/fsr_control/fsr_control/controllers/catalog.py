@@ -79,7 +79,7 @@ def _pack_voliro(vehicle: Vehicle, config: ControllerConfig) -> voliro_law.Volir
 
 def _pack_indi(vehicle: Vehicle, config: ControllerConfig) -> indi_law.IndiParams:
     return indi.pack_indi(vehicle, config.gains, config.filter_hz, config.control_period, config.rotor_state,
-                          config.integral_limit)
+                          config.integral_limit, config.odometry_measured, config.odometry_delay_steps)
 
 
 LAWS: dict[str, LawType] = {

@@ -36,11 +36,17 @@ rotors' wrench is the one commanded at the previous step (at the first step: the
 ``tau_hat`` zero). No estimator is needed (``controller.compensation: estimate`` is refused: INDI is itself the
 compensation). The law needs the IMU (``sensors.imu``).
 
+**Rates and state.** ``omega`` above is the gyro's (the IMU's angular velocity), not ``odom``'s. Where ``odom`` is
+a measurement (noisy, late or held: ``predict``) the law flies on its own estimate of the current pose and
+velocity: the IMU integrated step to step, moved at each new ``odom`` sample by :data:`CORRECTION` of its
+difference to the estimate of the step it measured (``delay_steps`` back) - the delay and the hold bridged, the
+noise averaged (:func:`fsr_control.core.indi_law._estimate`).
+
 **Filter.** ``y'' = w_n^2 (u - y) - 2 zeta w_n y'``, ``w_n = 2 pi filter_hz``, ``zeta = 1/sqrt(2)``
 (Butterworth), discretised exactly for an input held over the control period ``T``: ``x_k = Phi x_(k-1) +
 Gamma u_k`` with ``Phi = exp(A T)``, ``Gamma = A^-1 (Phi - 1) B``; started at rest on the first sample. The
 default :data:`DEFAULT_FILTER_HZ` (30 Hz) keeps the gyro's derivative quiet at 1 kHz while the filter's group
-delay (``2 zeta / w_n``, 7.5 ms) stays below the designed 30 ms motor.
+delay (``2 zeta / w_n``, 7.5 ms) is part of the lag the gains are designed for (:func:`design_lag`).
 
 The law is written once, in the compiled core (:func:`fsr_control.core.indi_law.indi_law`).
 """
@@ -60,14 +66,31 @@ from fsr_sim.model.gain_design import design_gains
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_FILTER_HZ = 30.0  # controller.filter_hz: the low-pass on every measured signal [Hz]
+DESIGN_PERIOD = 0.001  # s: the control period the designed gains assume (the scenarios' 1 kHz)
+# The increment assumes the rotors' nominal effectiveness (c_f w^2); where the induced inflow adds to it (slow
+# rotors in an axial flow: a hard braking) the loop gain rises with it. A quarter more lag designed for: the
+# Hummingbird's race loses 2 of 20 flights under onboard sensors and gusts without it, none with it.
+LAG_MARGIN = 1.25
+CORRECTION = 0.2  # the share of the difference to a new odom sample the estimate takes (indi_law._estimate)
 FILTER_DAMPING = 1.0 / math.sqrt(2.0)  # Butterworth
+
+
+def design_lag(vehicle: Vehicle, filter_hz: float = DEFAULT_FILTER_HZ, period: float = DESIGN_PERIOD) -> float:
+    """The lag [s] INDI's gains are designed for: :data:`LAG_MARGIN` times the vehicle's own motor (or servo)
+    time constant, the filter's group delay ``2 zeta / w_n`` and half a control period. No sensor delay: the
+    attitude loop damps with the gyro and, where ``odom`` is late, flies on the IMU-propagated estimate (module
+    docstring)."""
+    motor = max(vehicle.rotor_time_constant, vehicle.tilt_time_constant)
+    return LAG_MARGIN * (motor + 2.0 * FILTER_DAMPING / (2.0 * math.pi * filter_hz) + 0.5 * period)
 
 
 def designed_gains(vehicle: Vehicle) -> dict[str, np.ndarray]:
     """The gains of ``controller.profile: flight``: the geometric law's designed from the vehicle
-    (:func:`fsr_sim.model.gain_design.design_gains`) without the integral (``k_i = 0``): the increment removes
-    a constant external force itself, and an integral would only wind up during the transient and overshoot."""
-    gains = design_gains(vehicle).wrench_gains()
+    (:func:`fsr_sim.model.gain_design.design_gains`) for INDI's own lag (:func:`design_lag`: the vehicle's motor
+    and the default filter, not the 30 ms motor and the odometry's delay the geometric law is designed for),
+    without the integral (``k_i = 0``): the increment removes a constant external force itself, and an
+    integral would only wind up during the transient and overshoot."""
+    gains = design_gains(vehicle, lag=design_lag(vehicle)).wrench_gains()
     gains["k_i"] = np.zeros((3, 3))
     return gains
 
@@ -90,10 +113,14 @@ def filter_coefficients(cutoff_hz: float, period: float) -> np.ndarray:
 
 
 def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, period: float, rotor_state: bool,
-              integral_limit: float = 0.0) -> indi_law.IndiParams:
+              integral_limit: float = 0.0, predict: bool = False, delay_steps: int = 0) -> indi_law.IndiParams:
     """The core's parameters of INDI (module docstring): the geometric law's ``gains`` (``k_p``, ``k_v``,
     ``k_r``, ``k_w``, optionally ``k_i``), the filter's cutoff [Hz] at the control ``period`` [s], whether the
-    rotors' speeds are measured (``rotor_state``) and the bound [N] on the integral's force."""
+    rotors' speeds are measured (``rotor_state``), the bound [N] on the integral's force, and whether ``odom``
+    is a measurement to bridge with the IMU (``predict``) whose samples are ``delay_steps`` steps late."""
+    if not 0 <= delay_steps < indi_law.HISTORY:
+        raise ValueError(f"INDI's estimate bridges an odometry delay of at most {indi_law.HISTORY - 1} steps, got "
+                         f"{delay_steps}")
     if vehicle.fully_actuated or vehicle.has_servos:
         raise ValueError(f"INDI is for fixed rotors that produce thrust along -z_b; '{vehicle.name}' is not")
     matrices = law_matrices(vehicle, gains, indi_law.MATRICES[1:], OPTIONAL_GAINS)
@@ -103,7 +130,7 @@ def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, 
     return indi_law.IndiParams(float(vehicle.mass), matrices, integral, float(integral_limit),
                                filter_coefficients(filter_hz, period),
                                np.ascontiguousarray(wrench_from_rotor_speed_sq(vehicle)), float(vehicle.c_f),
-                               bool(rotor_state))
+                               bool(rotor_state), float(period), bool(predict), int(delay_steps), CORRECTION)
 
 
 class IndiController(CompiledLaw):

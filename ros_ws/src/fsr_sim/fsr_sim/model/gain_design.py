@@ -152,8 +152,8 @@ def lateral_acceleration(vehicle: Vehicle, force_set: ForceSet) -> float:
     return max(min(reach), 0.0) / vehicle.mass
 
 
-def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set: ForceSet | None = None
-                 ) -> GainDesign:
+def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set: ForceSet | None = None,
+                 lag: float | None = None) -> GainDesign:
     """The bandwidths and gains of the module docstring for ``vehicle`` (its nominal mass and inertia).
 
     Parameters
@@ -164,6 +164,8 @@ def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set
         Its authority at margin 1 (default: :func:`fsr_sim.model.authority_cache.model_authority`).
     force_set : ForceSet, optional
         A fully actuated vehicle's force set (default: the cached one); unused otherwise.
+    lag : float, optional
+        The total lag [s] to design for (default: :func:`design_lag`, the geometric law's).
 
     Returns
     -------
@@ -172,7 +174,7 @@ def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set
     from fsr_sim.model.authority_cache import model_authority, model_force_set
 
     authority = model_authority(vehicle) if authority is None else authority
-    lag = design_lag(vehicle)
+    lag = design_lag(vehicle) if lag is None else float(lag)
     cap = 1.0 / (LAG_FACTOR * lag)
     alpha = min(authority.roll_acceleration, authority.pitch_acceleration)
     attitude, attitude_limit = _bounded(cap, alpha, ATTITUDE_ERROR)
