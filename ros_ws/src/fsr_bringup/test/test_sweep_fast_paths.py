@@ -196,6 +196,20 @@ def test_a_sensor_switched_off_under_a_law_that_needs_it_is_refused_as_the_full_
     assert packed.flight_for({"sensors.imu.seed": 5}) is not None
 
 
+@pytest.mark.parametrize("values", [{"sensors.odometry.delay_steps": 4}, {"sensors.odometry.rate_hz": 250.0},
+                                    {"sensors.preset": "ideal"}])
+def test_the_odometry_indi_bridges_is_packed_anew_with_its_law(values):
+    """INDI's law reads the odometry's delay and rate (its IMU bridge): a sweep over them packs the law anew."""
+    base = load_scenario("ex4_geometric", values={"duration": 0.3, "actuation": "rotors", "controller.type": "indi",
+                                                  "sensors.preset": "onboard"})
+    packed = packed_sweep(base, 0.01)
+    fast = packed.flight_for(values)
+    assert fast is not None
+    full = loop_flight(prepare_flight(flight_scenario(base, values)), 0.01)
+    assert_packed_equal(fast.controller_params, full.controller_params, "controller_params")
+    assert fly_one(base, values, packed=packed) == fly_one(base, values)
+
+
 @pytest.mark.parametrize("values", [GAINS, {"plant.mass": 1.4}])
 def test_a_flight_for_one_metric_has_the_columns_of_the_whole_row_but_the_estimators(values):
     base = load_scenario("step_disturbance", values={"duration": 6.0, "sensors.preset": "onboard",

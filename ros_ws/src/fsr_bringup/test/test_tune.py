@@ -52,11 +52,16 @@ def test_bad_ranges_are_refused_naming_the_key(text, size, message):
 
 def test_the_objective_is_a_statistic_with_a_penalty_for_lost_flights():
     rows = [{"end_reason": "finished", "position_error_rms_m": value} for value in (0.1, 0.2, 0.3, math.inf)]
-    rows.append({"end_reason": "diverged", "position_error_rms_m": 0.05})
+    rows.append({"end_reason": "diverged", "position_error_rms_m": 0.05, "flown_s": 5.0})  # lost at 5 s of 10
     objective = parse_objective("position_error_rms_m:max", penalty=3.0)
-    assert objective.of(rows) == 3.0
-    assert Objective("position_error_rms_m", "mean", 3.0).of(rows) == pytest.approx((0.6 + 6.0) / 5)
-    assert Objective("position_error_rms_m", "median", 3.0).of(rows) == 0.3
+    assert objective.of(rows, 10.0) == 4.5  # 3 * (2 - 5 / 10)
+    assert Objective("position_error_rms_m", "mean", 3.0).of(rows, 10.0) == pytest.approx((0.6 + 3.0 + 4.5) / 5)
+    assert Objective("position_error_rms_m", "median", 3.0).of(rows, 10.0) == 0.3
+    # a flight lost later counts less, never less than the penalty; one refused before flying, twice it
+    lost_at = [Objective("position_error_rms_m", "mean", 3.0).of([{"end_reason": "diverged", "flown_s": t}], 10.0)
+               for t in (0.5, 5.0, 9.5, 10.0)]
+    assert lost_at == sorted(lost_at, reverse=True) and lost_at[-1] == 3.0
+    assert objective.of([{"end_reason": "invalid"}], 10.0) == 6.0
     for text, message in (("position_error", "unknown metric 'position_error'"), ("position_error_rms_m:q99",
                                                                                     "unknown statistic 'q99'")):
         with pytest.raises(TuneError, match=message):
@@ -119,7 +124,9 @@ def test_a_diverging_candidate_is_a_trial_with_the_penalty():
                   method="random", duration=1.0, holdout=0, workers=1, penalty=7.0)
     lost = result.trials[result.trials["lost"] == 2]
     kept = result.trials[result.trials["lost"] == 0]
-    assert len(lost) and (lost["objective"] == 7.0).all() and (lost["controller.gains.k_w.0"] > 4000).all()
+    # a lost flight counts between the penalty and twice it (less the later it was lost): 7 <= objective < 14
+    assert len(lost) and lost["objective"].between(7.0, 14.0, inclusive="left").all()
+    assert (lost["controller.gains.k_w.0"] > 4000).all()
     assert len(kept) and (kept["objective"] < 7.0).all()
 
 

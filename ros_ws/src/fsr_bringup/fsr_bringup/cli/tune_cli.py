@@ -55,7 +55,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                         help=f"the sweep metric to minimise and its statistic over the seeds ({', '.join(STATISTICS)};"
                              " default position_error_rms_m:mean)")
     parser.add_argument("--penalty", type=float, default=DEFAULT_PENALTY,
-                        help=f"what a lost flight counts, in the metric's unit (default {DEFAULT_PENALTY:g})")
+                        help=f"what a flight without a finite value counts, in the metric's unit; a lost one counts "
+                             f"up to twice it, less the later it was lost (default {DEFAULT_PENALTY:g})")
     parser.add_argument("--budget", type=int, default=DEFAULT_BUDGET, help=f"trials (default {DEFAULT_BUDGET})")
     parser.add_argument("--method", choices=METHODS, default="cma", help="optuna sampler (default cma)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sampler and the conditions (default 0)")

@@ -22,8 +22,9 @@ initial states. A flight is then set up from them in three steps:
    packing reads - traced once per sweep, not listed; the observer, :class:`fsr_estimation.core.observer.
    MomentumObserver`); every state is put back to its initial values (the plant's made anew from its params).
    A change no packing here covers (another vehicle property, the allocation, an estimator filter the
-   controller's own observer has too) sets the flight up in full. A sensor stage switched on or off has the
-   controller section validated again too (a law may need the IMU). The truth the estimate is measured against
+   controller's own observer has too) sets the flight up in full. A change of what the controller reads of the
+   sensor stage (a stage switched on or off: a law may need the IMU; the odometry's delay and rate: INDI's
+   bridge) has the controller section validated again too. The truth the estimate is measured against
    takes the plant's new mass properties as :func:`fsr_bringup.sweeps.measured.loop_flight` takes them.
 
 What steps 1-3 make of a section is kept by its raw values (:data:`CACHE_SIZE` of them): a study's conditions
@@ -150,6 +151,13 @@ class _FullSetUp(Exception):  # noqa: N818 - not an error: the flight is set up 
     """The flight's values need the full set-up (module docstring)."""
 
 
+def _sensing(sim: Any) -> tuple:
+    """What of the sensor stage the controller's settings read (:func:`fsr_control.config.controller_config.
+    controller_settings`: the law's checks, INDI's odometry bridge)."""
+    odometry = sim.odometry_noise
+    return odometry.enabled, odometry.delay_steps, odometry.every_steps, sim.imu.enabled
+
+
 class PackedSweep:
     """The flights of one sweep's scenario, set up from one packed flight (module docstring)."""
 
@@ -180,12 +188,10 @@ class PackedSweep:
             plant = sections & set(PLANT_SECTIONS)
             sim, packed = self._cached(("plant", *(repr(data.get(name)) for name in sorted(plant))),
                                        lambda: self._plant(scenario, plant)) if plant else (self.simulation, {})
-            switched = (sim.odometry_noise.enabled != self.simulation.odometry_noise.enabled
-                        or sim.imu.enabled != self.simulation.imu.enabled)  # the controller's checks read them
+            sensed = _sensing(sim)
             law = None
-            if "controller" in sections or switched:
-                key = ("controller", repr(data.get("controller")), repr(data.get("estimator")),
-                       sim.odometry_noise.enabled, sim.imu.enabled)
+            if "controller" in sections or sensed != _sensing(self.simulation):
+                key = ("controller", repr(data.get("controller")), repr(data.get("estimator")), sensed)
                 law = self._cached(key, lambda: self._law(scenario, sim))
             observer = (self._cached(("estimator", repr(data.get("estimator"))), lambda: self._observer(scenario))
                         if "estimator" in sections else None)

@@ -3,8 +3,12 @@
 ``METRIC[:STAT]`` with ``METRIC`` a numeric column of the sweep's table (:data:`fsr_bringup.sweeps.metrics.
 RANKABLE_METRICS`, e.g. ``position_error_rms_m``) and ``STAT`` ``mean`` (default), ``median``, ``q90`` (the 90 %
 quantile, linear interpolation) or ``max``. A flight that did not finish (it diverged, or its values were refused)
-or whose metric is not finite (inf: never settled) counts as ``penalty`` in the metric's unit, so a candidate that
-loses the vehicle on one seed in ten is worse than one that flies them all, and the optimiser never sees NaN.
+or whose metric is not finite (inf: never settled) counts as a penalty in the metric's unit, so a candidate that
+loses the vehicle on one seed in ten is worse than one that flies them all, and the optimiser never sees NaN:
+``penalty`` for a finished flight without a finite value, ``penalty * (2 - flown_s / duration)`` for a lost one
+(between ``penalty`` and twice it: a flight lost later counts less, so that among candidates that lose every
+flight - where a search starts, far from gains that fly - the optimiser still sees which way is better; a
+flight refused before its first step counts ``2 * penalty``).
 """
 
 from __future__ import annotations
@@ -34,16 +38,18 @@ class Objective:
     def label(self) -> str:
         return f"{self.metric}:{self.statistic}"
 
-    def flight_value(self, row: dict[str, Any]) -> float:
-        """One flight's contribution (module docstring)."""
+    def flight_value(self, row: dict[str, Any], duration: float) -> float:
+        """One flight's contribution (module docstring); ``duration`` [s]: the flight's, as planned."""
+        if row.get("end_reason") != FINISHED:
+            flown = row.get("flown_s", 0.0)
+            flown = flown if isinstance(flown, float) and math.isfinite(flown) else 0.0
+            return self.penalty * (2.0 - min(max(flown / duration, 0.0), 1.0))
         value = row.get(self.metric, math.nan)
-        if row.get("end_reason") != FINISHED or not math.isfinite(value):
-            return self.penalty
-        return float(value)
+        return float(value) if math.isfinite(value) else self.penalty
 
-    def of(self, rows: Sequence[dict[str, Any]]) -> float:
-        """The statistic over the flights' values."""
-        values = np.array([self.flight_value(row) for row in rows], dtype=float)
+    def of(self, rows: Sequence[dict[str, Any]], duration: float) -> float:
+        """The statistic over the flights' values (``duration`` [s]: the flights', as planned)."""
+        values = np.array([self.flight_value(row, duration) for row in rows], dtype=float)
         if self.statistic == "mean":
             return float(np.mean(values))
         if self.statistic == "median":

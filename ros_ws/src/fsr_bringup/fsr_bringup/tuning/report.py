@@ -82,8 +82,8 @@ def summary_markdown(result: TuneResult, command: str | None = None) -> str:
     lines += [
         f"- method: {result.method} (optuna), {completed} trials completed"
         + (" (**interrupted**: `--resume` continues the study)" if result.interrupted else ""),
-        f"- objective: {objective.label} over {plan.seeds} seeded conditions, minimised; a flight lost (diverged, "
-        f"or without a finite value) counts {objective.penalty:g}",
+        f"- objective: {objective.label} over {plan.seeds} seeded conditions, minimised; a flight without a finite "
+        f"value counts {objective.penalty:g}, a lost one {objective.penalty:g} x (2 - flown / duration)",
         f"- conditions: seed {plan.seed}; seeded keys: {', '.join(plan.seed_keys) or 'none'}; sampled: "
         f"{', '.join(f'{s.key} ({s.distribution} {s.first:g}, {s.second:g})' for s in plan.sample) or 'none'}",
         f"- {result.flights} flights in {result.wall_s:.1f} s", "",

@@ -72,6 +72,11 @@ class TunePlan:
     def ranges(self) -> list[Range]:
         return [r for key in self.keys for r in key.ranges]
 
+    @property
+    def duration(self) -> float:
+        """Each flight's duration [s] (the scenario's, or the one set)."""
+        return float(self.scenario.data["duration"])
+
     def values(self, params: dict[str, float]) -> dict[str, Any]:
         """The scenario values (dotted key -> value) of the optimiser's ``params``."""
         return {key.key: key.value(params) for key in self.keys}
@@ -257,7 +262,7 @@ def evaluate(plan: TunePlan, flyer: Flyer, candidates: list[dict[str, Any]], fir
     rows: list[list[dict[str, Any]]] = [[] for _ in candidates]
     for index, result in zip(owner, flyer.fly(batches), strict=True):
         rows[index] += [row for _, row in sorted(result.rows, key=lambda item: item[0])]
-    return [Evaluation(plan.objective.of(r), lost(r), r) for r in rows]
+    return [Evaluation(plan.objective.of(r, plan.duration), lost(r), r) for r in rows]
 
 
 @contextmanager
