@@ -311,8 +311,10 @@ def test_a_chunk_the_writer_thread_cannot_write_is_reported_with_the_file(tmp_pa
     writer._fast.chunks.stream = Full()  # noqa: SLF001
     stamps = np.arange(200, dtype=np.int64) * 1_000_000
     odom = cdr_pack.odometry("world_ned", "base_link_frd")
-    writer.write_block(stamps, [("/odom", None, odom.pack_rows(stamps, np.zeros((200, 13))))])
+    # raised by the first call after the thread failed: the block's next chunk if the thread failed before it, or
+    # the flush that waits for the thread
     with pytest.raises(OSError, match=f"cannot write recording '{path}': No space left on device"):
+        writer.write_block(stamps, [("/odom", None, odom.pack_rows(stamps, np.zeros((200, 13))))])
         writer.flush()
     writer._fast.chunks.stream = stream  # noqa: SLF001
     writer.close()
