@@ -38,9 +38,8 @@ from typing import Any
 
 from fsr_bringup import sweep
 from fsr_bringup.runner.scenario_check import check_scenario
-from fsr_bringup.sweeps.axes import flight_scenario
-from fsr_bringup.tuning.conditions import MAX_SEED, seed_keys
-from fsr_sim.config.scenario import Scenario, load_scenario, load_vehicle_for
+from fsr_bringup.tuning.conditions import MAX_SEED, scenario_seed_keys
+from fsr_sim.config.scenario import load_scenario, load_vehicle_for
 from fsr_sim.config.sensor_sections import IMU_SECTION, PRESETS
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.contract import FINISHED
@@ -111,14 +110,6 @@ def flight_values(flight: str, law: str, condition: Condition) -> tuple[dict[str
     return values, notes
 
 
-def _accepts(base: Scenario, key: str) -> bool:
-    try:
-        check_scenario(flight_scenario(base, {key: 1}))
-    except ConfigError:
-        return False
-    return True
-
-
 @dataclass
 class Cell:
     """One law x condition x flight over the seeds: RMS and peak position error [m] of the flights that finished
@@ -152,7 +143,7 @@ def measure(flight: str, law: str, condition: Condition, seeds: int, duration: f
         check_scenario(base)
     except ConfigError as error:
         return Cell(skipped=str(error)), [], None
-    keys = seed_keys(base.data, lambda key: _accepts(base, key))
+    keys = scenario_seed_keys(base)
     # each seed key held as an integer first, so that its draws are rounded to integers
     base = load_scenario(flight, values={**values, **dict.fromkeys(keys, 0)})
     table = sweep(base, sample=dict.fromkeys(keys, f"uniform:0:{MAX_SEED}"), n=seeds, seed=seed, duration=duration,

@@ -12,7 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from fsr_bringup.sweeps.axes import SampledKey, _current_value
+from fsr_bringup.runner.scenario_check import check_scenario
+from fsr_bringup.sweeps.axes import SampledKey, _current_value, flight_scenario
+from fsr_sim.config.scenario import Scenario
+from fsr_sim.config.validation import ConfigError
 
 # Seed keys of the sensor stages (each also set where its stage is off: it then changes nothing).
 SENSOR_SEED_KEYS = ("sensors.odometry.seed", "sensors.imu.seed")
@@ -28,6 +31,19 @@ def seed_keys(data: dict[str, Any], valid: Any) -> list[str]:
         keys += [f"disturbances.{i}.seed" for i, entry in enumerate(disturbances)
                  if isinstance(entry, dict) and entry.get("kind") == "dryden"]
     return keys
+
+
+def scenario_seed_keys(base: Scenario) -> list[str]:
+    """:func:`seed_keys` of scenario ``base``, a sensor stage's key where its validation takes a seed (1) there."""
+
+    def valid(key: str) -> bool:
+        try:
+            check_scenario(flight_scenario(base, {key: 1}))
+        except ConfigError:
+            return False
+        return True
+
+    return seed_keys(base.data, valid)
 
 
 def condition_seed(seed: int, condition: int) -> int:

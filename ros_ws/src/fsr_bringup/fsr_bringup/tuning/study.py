@@ -37,7 +37,7 @@ from fsr_bringup.sweeps.axes import SampledKey, flight_scenario, sampled_key
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
 from fsr_bringup.sweeps.run import _base_scenario
-from fsr_bringup.tuning.conditions import condition_values, seed_keys
+from fsr_bringup.tuning.conditions import condition_values, scenario_seed_keys
 from fsr_bringup.tuning.objective import DEFAULT_PENALTY, Objective, lost, parse_objective
 from fsr_bringup.tuning.space import Range, TunedKey, TuneError, key_size, parse_param, tuned_key
 from fsr_sim.config.scenario import Scenario
@@ -143,15 +143,6 @@ def _accepts(base: Scenario, values: dict[str, Any], key: str) -> bool:
     return True
 
 
-def _valid(base: Scenario, key: str) -> bool:
-    """Whether the scenario's validation takes a seed (1) at ``key``."""
-    try:
-        check_scenario(flight_scenario(base, {key: 1}))
-    except ConfigError:
-        return False
-    return True
-
-
 def _middle(r: Range) -> float:
     return math.sqrt(r.low * r.high) if r.log else 0.5 * (r.low + r.high)
 
@@ -188,7 +179,7 @@ def plan_tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str
             raise TuneError(f"--sample {item.key}: also tuned (--param)")
     goal = objective if isinstance(objective, Objective) else parse_objective(objective, penalty)
     plan = TunePlan(base, keys, goal, int(seeds), int(holdout), int(seed),
-                    seed_keys(base.data, lambda key: _valid(base, key)), drawn, band, values)
+                    scenario_seed_keys(base), drawn, band, values)
     middle = plan.values({r.name: _middle(r) for r in plan.ranges})
     try:
         check_scenario(flight_scenario(base, {**middle, **condition_values(seed, 0, plan.seed_keys, drawn)}))
