@@ -283,7 +283,8 @@ def recorded_topic_names() -> list[str]:
 def test_in_process_live_flight_runs_at_the_real_time_factor(tmp_path, decoders):
     """A 5 s flight at lockstep.real_time_factor 1 takes 5 s +- 5 %, measured where a viewer sees it: the arrival
     times of the odometry at Foxglove's client against their stamps. The first and the last arrival span the flight
-    from the client's subscription on, so start-up does not count; the pacing waits for the wall clock after each
+    from the client's subscription on, so start-up does not count (a loaded machine may take a second or two to
+    start the client: at least half of the flight is still measured); the pacing waits for the wall clock after each
     20 ms chunk, and flying a chunk takes about a millisecond, so even a machine several times slower keeps the
     schedule (a stall over 1 s restarts it and would fail the test)."""
     flight = Flight(tmp_path, "paced", "ex4_geometric", "--in-process", "--duration", "5", "--live", "0")
@@ -300,7 +301,7 @@ def test_in_process_live_flight_runs_at_the_real_time_factor(tmp_path, decoders)
     odom = seen["messages"]["/" + ODOM.name]
     stamps = np.array([stamp_ns(entry["message"]) for entry in odom]) * 1e-9
     arrivals = np.array([entry["arrival"] for entry in odom]) * 1e-3
-    assert stamps[0] < 1.0 and stamp_ns(odom[-1]["message"]) == 5_000_000_000
+    assert stamps[0] < 2.5 and stamp_ns(odom[-1]["message"]) == 5_000_000_000
     ratio = (arrivals[-1] - arrivals[0]) / (stamps[-1] - stamps[0])
     assert 0.95 <= ratio <= 1.05, f"{stamps[-1] - stamps[0]:.3f} s of flight in {arrivals[-1] - arrivals[0]:.3f} s"
     wall = float(re.search(r"simulated 5\.000 s in ([0-9.]+) s wall", output).group(1))
