@@ -10,7 +10,7 @@ distribution instead (:func:`spread_quantile`): the quantiles ``0, 1/(N-1), .., 
 bounds included - or ``(i + 1/2) / N`` of a normal, in an order shuffled per key. Ten random draws leave a
 uniform's outer tenth on one side unseen about one study in three (``0.9^10``), and an optimiser pushes its
 candidates to the edge of what flies on the conditions it sees: gains tuned that way lose the flights beyond it
-(the lightest 20 % mass errors of the walk-through, where the rotors' roll and pitch authority runs out).
+(docs/tuning.md's walk-through: the lightest masses of its +-20 %, where the roll and pitch torque runs out first).
 """
 
 from __future__ import annotations

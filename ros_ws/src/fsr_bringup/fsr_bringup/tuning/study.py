@@ -92,10 +92,11 @@ class TunePlan:
                      self.objective.metric if objective_only else None)
 
     def spec(self) -> dict[str, Any]:
-        """What makes the study this study (kept with it: a resumed study must have the same)."""
+        """What makes the study this study (kept with it: a resumed study must have the same; ``training_sample``:
+        how its training conditions give the sampled keys - one whose conditions drew them is not continued)."""
         return {"scenario": repr(self.scenario.data), "keys": repr(self.keys), "objective": self.objective.label,
                 "penalty": self.objective.penalty, "seeds": self.seeds, "seed": self.seed,
-                "sample": repr(self.sample), "band": self.band}
+                "sample": repr(self.sample), "training_sample": "spread", "band": self.band}
 
 
 @dataclass
