@@ -79,6 +79,27 @@ def test_conditions_are_the_same_for_every_candidate_and_differ_between_seeds():
     assert 1.0 <= a["plant.mass"] <= 1.4 and 0 <= a["sensors.odometry.seed"] < 2**32
 
 
+def test_training_conditions_span_each_sampled_key_and_held_out_ones_draw_it():
+    from fsr_bringup.tuning.study import plan_tune
+
+    # ten random draws of a +-20 % mass leave its lightest tenth unseen one study in three, and the tuned gains
+    # lost the held-out flights there: the training conditions take the range's quantiles, its bounds included
+    plan = plan_tune("step_disturbance", {"controller.gains.k_p": "log:1:60"}, seeds=4, holdout=50, seed=3,
+                     sample={"plant.mass": "uniform:0.96:1.44", "estimator.c0": "normal:10:2"})
+    training = [values for _, values in plan.batch({}, 0, plan.seeds).flights]
+    assert sorted(v["plant.mass"] for v in training) == pytest.approx([0.96, 1.12, 1.28, 1.44])
+    normal = sorted(v["estimator.c0"] for v in training)  # quantiles 1/8, 3/8, 5/8, 7/8 of N(10, 2)
+    assert normal == pytest.approx([10 - 2.30063, 10 - 0.63719, 10 + 0.63719, 10 + 2.30063], abs=1e-4)
+    assert len({v["sensors.odometry.seed"] for v in training}) == 4  # each its own noise
+    assert [v["plant.mass"] for v in training] != sorted(v["plant.mass"] for v in training)  # shuffled
+    # held out: independent draws of the same distribution, not the training's quantiles
+    held = [values for _, values in plan.batch({}, plan.seeds, plan.holdout).flights]
+    masses = np.array([v["plant.mass"] for v in held])
+    assert masses.min() >= 0.96 and masses.max() <= 1.44 and len(set(masses)) == 50
+    assert not set(masses) & {v["plant.mass"] for v in training}
+    assert abs(masses.mean() - 1.2) < 0.05 and abs(np.mean([v["estimator.c0"] for v in held]) - 10) < 1.0
+
+
 @pytest.fixture(scope="module")
 def grid_optimum() -> float:
     """The best RMS error of the bowl on a 6 x 6 grid of its two gains (log spaced over their ranges)."""

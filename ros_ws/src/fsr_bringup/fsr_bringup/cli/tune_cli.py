@@ -6,8 +6,9 @@ compiled flights, each candidate flown over seeded conditions, locally or on a D
         --objective position_error_rms_m:mean --out runs/tune_step
     fsr-tune step_disturbance --param ... --out runs/tune_step --resume      # continue an interrupted study
 
-Each trial is one candidate flown over ``--seeds`` conditions (the seed drives the sensor noise, the turbulence and
-every ``--sample``d key); its objective is ``METRIC[:STAT]`` (mean, median, q90 or max over the seeds) of a sweep
+Each trial is one candidate flown over ``--seeds`` conditions (the seed drives the sensor noise and the turbulence;
+each ``--sample``d key is spread over its distribution on them, its bounds included, and drawn on the held-out
+ones); its objective is ``METRIC[:STAT]`` (mean, median, q90 or max over the seeds) of a sweep
 metric, a lost flight counting ``--penalty``. optuna's CMA-ES, TPE or random search (``--method``) proposes the
 candidates; the study is kept in ``OUT/study.db``, so Ctrl-C keeps what was flown and ``--resume`` continues it.
 Writes ``OUT/best.yaml`` (the best parameters as a scenario mapping), ``trials.csv``, ``summary.md`` (the best
@@ -47,7 +48,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                         help=f"seeded conditions per candidate (default {DEFAULT_SEEDS})")
     parser.add_argument("--sample", action="append", default=[], type=argument_type(parse_sample),
                         metavar="KEY=uniform:LO:HI|normal:MEAN:STD|loguniform:LO:HI",
-                        help="a key drawn per condition (repeatable), e.g. a mass error")
+                        help="a key per condition (repeatable), e.g. a mass error: spread over its distribution on the "
+                             "training conditions (its quantiles, bounds included), drawn on the held-out ones")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="a value every flight has, as fsr-fly --set (repeatable)")
     parser.add_argument("--duration", type=float, help="override the scenario's duration [s]")

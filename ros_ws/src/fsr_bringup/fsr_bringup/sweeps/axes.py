@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import statistics
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,6 +51,22 @@ class SampledKey:
         else:
             value = math.exp(rng.uniform(math.log(self.first), math.log(self.second)))
         return int(round(value)) if self.integer else float(value)
+
+    def quantile(self, q: float) -> float | int:
+        """The distribution's value at cumulative probability ``q`` (in [0, 1] for a uniform or loguniform, whose
+        0 and 1 are the bounds; in (0, 1) for a normal)."""
+        if self.distribution == "uniform":
+            value = self.first + q * (self.second - self.first)
+        elif self.distribution == "normal":
+            value = statistics.NormalDist(self.first, self.second).inv_cdf(q) if self.second > 0.0 else self.first
+        else:
+            value = math.exp(math.log(self.first) + q * (math.log(self.second) - math.log(self.first)))
+        return int(round(value)) if self.integer else float(value)
+
+    @property
+    def bounded(self) -> bool:
+        """Whether the distribution has finite bounds (its quantiles 0 and 1)."""
+        return self.distribution != "normal"
 
 
 class SweepError(ValueError):

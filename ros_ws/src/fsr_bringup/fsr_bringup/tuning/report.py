@@ -85,7 +85,9 @@ def summary_markdown(result: TuneResult, command: str | None = None) -> str:
         f"- objective: {objective.label} over {plan.seeds} seeded conditions, minimised; a flight without a finite "
         f"value counts {objective.penalty:g}, a lost one {objective.penalty:g} x (2 - flown / duration)",
         f"- conditions: seed {plan.seed}; seeded keys: {', '.join(plan.seed_keys) or 'none'}; sampled: "
-        f"{', '.join(f'{s.key} ({s.distribution} {s.first:g}, {s.second:g})' for s in plan.sample) or 'none'}",
+        f"{', '.join(f'{s.key} ({s.distribution} {s.first:g}, {s.second:g})' for s in plan.sample) or 'none'}"
+        + (" - spread over the training conditions (quantiles, bounds included), drawn on the held-out ones"
+           if plan.sample else ""),
         f"- {result.flights} flights in {result.wall_s:.1f} s", "",
         "## Best", "",
         "| key | value |", "|---|---|",

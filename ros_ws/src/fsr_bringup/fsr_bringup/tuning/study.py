@@ -85,17 +85,18 @@ class TunePlan:
         """The flights of conditions ``first .. first+count-1`` with ``values`` (numbered by condition);
         ``objective_only``: their rows need only the objective's metric (:func:`fsr_bringup.sweeps.batch.fly_one`'s
         ``metric``)."""
-        flights = [(c, {**condition_values(self.seed, c, self.seed_keys, self.sample), **values})
+        flights = [(c, {**condition_values(self.seed, c, self.seed_keys, self.sample, self.seeds), **values})
                    for c in range(first, first + count)]
         s = self.scenario
         return Batch(s.data, s.source, str(s.base_dir), flights, self.band,
                      self.objective.metric if objective_only else None)
 
     def spec(self) -> dict[str, Any]:
-        """What makes the study this study (kept with it: a resumed study must have the same)."""
+        """What makes the study this study (kept with it: a resumed study must have the same; ``training_sample``:
+        how its training conditions give the sampled keys - one whose conditions drew them is not continued)."""
         return {"scenario": repr(self.scenario.data), "keys": repr(self.keys), "objective": self.objective.label,
                 "penalty": self.objective.penalty, "seeds": self.seeds, "seed": self.seed,
-                "sample": repr(self.sample), "band": self.band}
+                "sample": repr(self.sample), "training_sample": "spread", "band": self.band}
 
 
 @dataclass
@@ -182,7 +183,8 @@ def plan_tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str
                     scenario_seed_keys(base), drawn, band, values)
     middle = plan.values({r.name: _middle(r) for r in plan.ranges})
     try:
-        check_scenario(flight_scenario(base, {**middle, **condition_values(seed, 0, plan.seed_keys, drawn)}))
+        first = condition_values(seed, 0, plan.seed_keys, drawn, plan.seeds)
+        check_scenario(flight_scenario(base, {**middle, **first}))
     except ConfigError as error:
         raise TuneError(f"the middle of the ranges is refused: {error}") from None
     return plan
