@@ -291,11 +291,15 @@ class SimulatorNode(Node):
 
     def _await_command(self, expected_ns: int, stop: object) -> bool | None:
         """Wait (in slices) for the command stamped ``expected_ns``; None if a stop was requested."""
-        deadline = time.monotonic() + self.command_wait.budget()
+        started = time.monotonic()
+        deadline = started + self.command_wait.budget()
         while True:
             remaining = deadline - time.monotonic()
+            late = self.stale_commands
             if self._take_commands(expected_ns, max(0.0, min(remaining, WAIT_SLICE))):
                 return True
+            if self.stale_commands > late:  # a late answer: the controller is catching up (lockstep.CommandWait)
+                deadline = max(deadline, started + self.command_wait.budget_after_late_answer())
             if time.monotonic() >= deadline:
                 return False
             if stop:
