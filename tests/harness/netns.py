@@ -63,7 +63,7 @@ class NetLab:
         reason = unavailable_reason()
         if reason is not None:
             raise NetLabUnavailableError(reason)
-        tag = f"fsr{os.getpid()}"
+        self.tag = tag = f"fsr{os.getpid()}"  # every namespace of this process's labs is named tag-...
         self.switch = f"{tag}-sw"
         self.hosts = {name: f"{tag}-{name}" for name in names}
         self.ports = {name: f"p{index}" for index, name in enumerate(names, start=1)}  # bridge-side veth ends
