@@ -207,7 +207,7 @@ def test_link_loss_beyond_the_timeout_engages_the_failsafe_then_the_controller_r
     # the controller while its late answers come in (it works through the states it missed, at whatever pace the
     # machine's load gives it) until it answers one in time (docs/network.md). What stays bound to time is only
     # that this happens before the flight's end: the steps on the failsafe are taken at the degraded wait (4x the
-    # typical answer time, at least 2 ms) while the cable is out: 26-190 in the lab, of the 3000 or more left.
+    # typical answer time, at least 2 ms) while the cable is out: 19-105 in the lab, of the 3000 or more left.
     flight = ["ex4_geometric", "--duration", "4.0", "--set", "lockstep.timeout=0.5"]
     sides = fly_three_hosts(lab, domain_id, tmp_path, flight)
     recording = tmp_path / "sim" / "sim.mcap"
