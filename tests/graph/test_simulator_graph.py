@@ -9,14 +9,16 @@ import time
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import QuaternionStamped, Transform, Vector3, WrenchStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint
 
 from fsr_bringup.runner.processes import executable
+from fsr_sim.contract import ATTITUDE_CMD, REFERENCE
 from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.vehicle import load_vehicle
-from fsr_sim.ros.conversions import rotor_command, wrench_stamped
+from fsr_sim.ros.conversions import rotor_command, time_from_ns, wrench_stamped
 from fsr_sim.ros.qos import CLOCK_QOS
 from harness.graph import stamp_ns
 
@@ -169,6 +171,57 @@ def test_timeout_applies_failsafe_and_goes_on(ros_graph, scenario_file, failsafe
     else:  # thrust cut at t = 0.1 s: free fall from rest from there on
         expected = Z0 + 0.5 * GRAVITY * np.maximum(t - 0.1, 0.0) ** 2
         np.testing.assert_allclose(p[:, 2], expected, rtol=0, atol=1e-9)
+
+
+def test_a_late_reference_pauses_the_lockstep_like_a_late_command(ros_graph, scenario_file):
+    """The simulator checks each state against the controller's reference and attitude_cmd of its stamp, sent after
+    the command: when they come late (a link lost just after the command went out), the flight pauses for them and
+    the pause is the lockstep's longest wait, as for a late command."""
+    speeds, _ = hover_speeds("quadrotor_ex4")
+    path = scenario_file(duration=0.2, lockstep={"timeout": 2.0})
+    commands = ros_graph.publisher("rotor_cmd", JointState)
+    references = ros_graph.publisher(REFERENCE.name, MultiDOFJointTrajectory)
+    attitudes = ros_graph.publisher(ATTITUDE_CMD.name, QuaternionStamped)
+    sim = start_simulator(ros_graph, path)
+    late_stamp, delay = 100_000_000, 0.3  # ns, s: the state whose reference and attitude_cmd come late
+    sent_late: list[float] = []
+
+    def send_answer(stamp: int) -> None:
+        reference = MultiDOFJointTrajectory()
+        reference.header.stamp = time_from_ns(stamp)
+        point = MultiDOFJointTrajectoryPoint()
+        point.transforms = [Transform(translation=Vector3(x=0.0, y=0.0, z=Z0))]
+        reference.points = [point]
+        attitude = QuaternionStamped()
+        attitude.header.stamp = time_from_ns(stamp)
+        attitude.quaternion.w = 1.0
+        references.publish(reference)
+        attitudes.publish(attitude)
+
+    def send_late() -> None:
+        timer.cancel()
+        sent_late.append(time.monotonic())
+        send_answer(late_stamp)
+
+    timer = ros_graph.node.create_timer(delay, send_late)
+    timer.cancel()  # started by the late state's command
+
+    def answer(odom):
+        stamp = stamp_ns(odom)
+        if stamp == late_stamp:
+            timer.reset()  # the command now, the rest once the timer fires (the test node keeps spinning)
+        else:
+            send_answer(stamp)
+        return rotor_command(stamp, speeds)
+
+    flight = ros_graph.run_controller(sim, answer, commands)
+    assert_finished(flight, 200)
+    assert sent_late, "the late reference was never sent"
+    assert delay <= flight.final_status.longest_wait_s < 2.0
+    # logged with the part of the pause spent on the reference and attitude_cmd (the command came at once)
+    paused = re.search(r"lockstep paused (\S+) s at step 100 .*; reference, attitude_cmd: \S+ s more", flight.log)
+    assert paused and float(paused.group(1)) >= delay, flight.log
+    np.testing.assert_allclose(times_and_positions(flight)[1][:, 2], Z0, rtol=0, atol=1e-9)
 
 
 def test_controller_gone_simulator_finishes_alone(ros_graph, scenario_file):

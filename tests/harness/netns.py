@@ -9,8 +9,10 @@ traffic and discovery can only reach the lab's hosts. Names carry the creating p
 never collide). :meth:`NetLab.close` deletes every namespace it created (with them their links) and is
 safe to call twice; use the lab as a context manager so that happens also when a test fails.
 
-Processes run on a host with ``ip netns exec`` (:meth:`NetLab.popen`); they are the caller's to stop
-(a namespace lives on while a process is inside it). :func:`network_environment` is the environment of
+Processes run on a host with ``ip netns exec`` (:meth:`NetLab.popen`); they are the caller's to stop, and
+:meth:`NetLab.close` kills whatever still runs inside the lab's namespaces (only processes started there: a
+namespace whose name is deleted lives on, unreachable, while a process is inside it; a node of a finished
+test still tearing down would otherwise outlive its lab). :func:`network_environment` is the environment of
 a graph spread over the hosts: SUBNET discovery and UDP only (namespaces of one machine share
 ``/dev/shm``; Fast DDS's shared-memory transport would carry the data past the links otherwise, unlike
 between real machines).
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
 from collections.abc import Sequence
 
@@ -60,7 +63,7 @@ class NetLab:
         reason = unavailable_reason()
         if reason is not None:
             raise NetLabUnavailableError(reason)
-        tag = f"fsr{os.getpid()}"
+        self.tag = tag = f"fsr{os.getpid()}"  # every namespace of this process's labs is named tag-...
         self.switch = f"{tag}-sw"
         self.hosts = {name: f"{tag}-{name}" for name in names}
         self.ports = {name: f"p{index}" for index, name in enumerate(names, start=1)}  # bridge-side veth ends
@@ -112,7 +115,14 @@ class NetLab:
         _ip("link", "set", self.ports[name], "up" if up else "down", netns=self.switch)
 
     def close(self) -> None:
-        """Delete every namespace this lab created (their veth pairs and the bridge go with them)."""
+        """Kill the processes left inside the lab's namespaces, then delete every namespace this lab created
+        (their veth pairs and the bridge go with them)."""
+        for netns in self.created:
+            for pid in _ip("netns", "pids", netns, check=False).stdout.split():
+                try:
+                    os.kill(int(pid), signal.SIGKILL)
+                except ProcessLookupError:  # ended meanwhile
+                    pass
         while self.created:
             _ip("netns", "del", self.created.pop(), check=False)
 

@@ -175,12 +175,6 @@ def recorded_statuses(path: Path) -> list[dict]:
         return []
 
 
-# Known defect, not understood yet: in about half of the runs (more often after the other tests of this file) the
-# simulator does not wait while the controller's cable is out - unplugged mid-flight (at the 340th of 20000 states)
-# and no lockstep pause longer than 6 ms. Not the recording's lag (a 20 s flight shows it too), not Fast DDS's
-# shared-memory transport (a UDPv4-only profile shows it too). Kept running, so that a pass is seen (XPASS).
-@pytest.mark.xfail(reason="the lockstep sometimes does not pause while the controller's cable is out (see above)",
-                   strict=False)
 def test_brief_link_loss_pauses_the_lockstep_and_loses_nothing(lab_factory, domain_id, tmp_path):
     lab = lab_factory(["sim", "ctl", "est"])
     # After the cable is back, ARP (1 s retransmission) and DDS repair (100 ms heartbeats) can add about a second:
@@ -194,7 +188,8 @@ def test_brief_link_loss_pauses_the_lockstep_and_loses_nothing(lab_factory, doma
     assert codes == {"sim": 0, "ctl": 0, "est": 0}
     assert recorded < 5001
     final = statuses(recording)[-1]
-    # The simulator waited for the controller at least as long as the outage (simulated time stood still), and
+    # The simulator waited for the controller's answer (its command, or the reference and attitude_cmd sent right
+    # after it, whichever the outage cut off) at least as long as the outage (simulated time stood still), and
     # took no step on the failsafe, so the flight is the in-process one.
     assert final["state"] == "finished" and final["failsafe_steps"] == 0 and final["incidents"] == 0
     assert 0.25 <= final["longest_wait_s"] < 3.0, f"unplugged at the {recorded}th recorded state: {final}"
@@ -208,9 +203,11 @@ def test_link_loss_beyond_the_timeout_engages_the_failsafe_then_the_controller_r
     lab_factory, domain_id, tmp_path
 ):
     lab = lab_factory(["sim", "ctl", "est"])
-    # The cable is plugged back in once the failsafe is recorded (an event, not a time); the flight then has some
-    # 3000 steps left, several seconds of stepping at the degraded wait, for the controller to work through the
-    # states it missed and answer one in time, however loaded the machine (docs/network.md).
+    # Event-driven: the cable is plugged back in once the failsafe is recorded, and then the simulator waits for
+    # the controller while its late answers come in (it works through the states it missed, at whatever pace the
+    # machine's load gives it) until it answers one in time (docs/network.md). What stays bound to time is only
+    # that this happens before the flight's end: the steps on the failsafe are taken at the degraded wait (4x the
+    # typical answer time, at least 2 ms) while the cable is out: 19-105 in the lab, of the 3000 or more left.
     flight = ["ex4_geometric", "--duration", "4.0", "--set", "lockstep.timeout=0.5"]
     sides = fly_three_hosts(lab, domain_id, tmp_path, flight)
     recording = tmp_path / "sim" / "sim.mcap"
@@ -230,6 +227,8 @@ def test_link_loss_beyond_the_timeout_engages_the_failsafe_then_the_controller_r
     # Every state reached the controller once the link was back; it answered each (late ones are ignored).
     assert data.count("wrench_cmd") == 4001 and data.count("wrench_estimate") >= 4000
     assert final["late_commands"] > 0
+    print(f"{final['failsafe_steps']} steps on the failsafe in {final['incidents']} incident(s), "
+          f"{final['late_commands']} late command(s)")
     from fsr_bringup.analysis.metrics import flight_metrics
     from fsr_bringup.analysis.summary import summary_rows
 

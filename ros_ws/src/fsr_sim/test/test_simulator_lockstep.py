@@ -99,3 +99,15 @@ def test_degraded_wait_follows_the_typical_answer_time():
     fast.answered(0.0001)
     fast.missed(publisher_count=1)
     assert fast.budget() == 0.002  # never below recovery_wait
+
+
+def test_a_late_answer_while_degraded_waits_as_in_lockstep():
+    """A stale answer shows a controller working through the states it missed: the step waits for it up to the
+    timeout, so it catches up whatever its cycle; in lockstep or with no publisher the budget is unchanged."""
+    wait = CommandWait(timeout=0.5, recovery_wait=0.002)
+    assert wait.budget_after_late_answer() == 0.5
+    wait.missed(publisher_count=1)
+    assert wait.budget() == 0.002 and wait.budget_after_late_answer() == 0.5
+    assert wait.answered() == "recovered" and wait.budget_after_late_answer() == 0.5
+    wait.missed(publisher_count=0)
+    assert wait.mode == GONE and wait.budget_after_late_answer() == 0.0

@@ -12,8 +12,11 @@ already taken on the failsafe); a newer stamp cannot be an answer to anything pu
   times the typical wait of the answered steps if that is longer (a controller on one host answers in well
   under a millisecond; over a network, or on a loaded machine, a cycle takes longer, and a controller that
   has to work through the states it missed could never catch up with a simulator stepping faster than it
-  answers), so that a hung controller does not cost ``timeout`` per step. The first answer in time switches
-  back to ``lockstep``.
+  answers), so that a hung controller does not cost ``timeout`` per step. A late answer (a stale stamp)
+  arriving meanwhile shows the controller alive and working through the states it missed: the step then waits
+  as in ``lockstep``, up to ``timeout`` from its start (:meth:`CommandWait.budget_after_late_answer`), so the
+  controller catches up however slow its cycle is next to the simulator's (a loaded machine), instead of racing
+  it. The first answer in time switches back to ``lockstep``.
 * ``gone``: the command topic has no publisher (the controller exited); do not wait at all, so the flight
   still reaches its end. A publisher that reappears moves to ``degraded``.
 
@@ -62,6 +65,12 @@ class CommandWait:
         if self.mode == DEGRADED:
             return min(self.timeout, max(self.recovery_wait, RECOVERY_FACTOR * self.typical_wait))
         return 0.0
+
+    def budget_after_late_answer(self) -> float:
+        """Seconds to wait for the current step's command, from the start of its wait, once a late answer (a stale
+        stamp) came in during it: ``timeout`` while degraded (the controller is alive, catching up), else the
+        budget unchanged."""
+        return self.timeout if self.mode == DEGRADED else self.budget()
 
     def answered(self, waited: float | None = None) -> str | None:
         """The command arrived in time, after ``waited`` [s] if known; returns ``'recovered'`` when this ends a

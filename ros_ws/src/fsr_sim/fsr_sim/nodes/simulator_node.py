@@ -266,15 +266,15 @@ class SimulatorNode(Node):
 
     # ----- stepping ---------------------------------------------------------------------------------
     def _lockstep_step(self, stop: object) -> None:
+        waiting_since = time.monotonic()
+        command_waited, answered = 0.0, True  # the first state's command was taken before stepping
         if not self.have_command:
-            waiting_since = time.monotonic()
             answered = self._await_command(self.messages.stamp_ns, stop)
             if answered is None:
                 return  # stop requested while waiting
-            waited = time.monotonic() - waiting_since
-            self._note_wait(waited, answered)
+            command_waited = time.monotonic() - waiting_since
             if answered:
-                if self.command_wait.answered(waited) == "recovered":
+                if self.command_wait.answered(command_waited) == "recovered":
                     self.get_logger().info(
                         f"{self.command_topic}: the controller answers again at {self._where()} "
                         f"({self.command_wait.missed_steps} step(s) on the failsafe so far)"
@@ -282,17 +282,24 @@ class SimulatorNode(Node):
                     self._publish_status(RUNNING, "controller back in the loop")
             else:
                 self._on_missed(self.command_sub.get_publisher_count())
-        if self._lost_control(self.messages.stamp_ns, stop):
-            return
-        self._advance()
+        lost = self._lost_control(self.messages.stamp_ns, stop)
+        # the pause is the wait for the whole answer: a link lost between the command and the reference and
+        # attitude_cmd sent after it (or a controller slow to send them) stops the flight as long as a late command
+        self._note_wait(command_waited, time.monotonic() - waiting_since, answered)
+        if not lost:
+            self._advance()
 
     def _await_command(self, expected_ns: int, stop: object) -> bool | None:
         """Wait (in slices) for the command stamped ``expected_ns``; None if a stop was requested."""
-        deadline = time.monotonic() + self.command_wait.budget()
+        started = time.monotonic()
+        deadline = started + self.command_wait.budget()
         while True:
             remaining = deadline - time.monotonic()
+            late = self.stale_commands
             if self._take_commands(expected_ns, max(0.0, min(remaining, WAIT_SLICE))):
                 return True
+            if self.stale_commands > late:  # a late answer: the controller is catching up (lockstep.CommandWait)
+                deadline = max(deadline, started + self.command_wait.budget_after_late_answer())
             if time.monotonic() >= deadline:
                 return False
             if stop:
@@ -300,11 +307,18 @@ class SimulatorNode(Node):
             if self.command_sub.get_publisher_count() == 0:
                 return False
 
-    def _note_wait(self, waited: float, answered: bool) -> None:
-        """Keep the longest lockstep wait (a pause: slow controller, network outage) and report long ones."""
+    def _note_wait(self, command_waited: float, waited: float, answered: bool) -> None:
+        """Keep the longest lockstep wait for the controller's answer to one state (a pause: slow controller,
+        network outage) and report long ones: ``waited`` [s] for the whole answer, of which ``command_waited``
+        [s] for the command (the rest for the reference and attitude_cmd the loss-of-control check needs)."""
         self.longest_wait = max(self.longest_wait, waited)
         if answered and waited >= LONG_WAIT:
-            self.get_logger().info(f"lockstep paused {waited:.3f} s at {self._where()} for {self.command_topic}")
+            rest = "" if waited - command_waited < LONG_WAIT else (
+                f"; {REFERENCE.name}, {ATTITUDE_CMD.name}: {waited - command_waited:.3f} s more")
+            self.get_logger().info(
+                f"lockstep paused {waited:.3f} s at {self._where()} for the controller's answer "
+                f"({self.command_topic}: {command_waited:.3f} s{rest})"
+            )
 
     def _on_missed(self, publishers: int) -> None:
         event = self.command_wait.missed(publishers)
