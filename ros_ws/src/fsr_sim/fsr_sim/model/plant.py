@@ -46,7 +46,6 @@ from fsr_sim.core.aerodynamics import AeroParams
 from fsr_sim.core.rigid_body import STATE_SIZE
 from fsr_sim.core.sensors import memory_size, reset_memory
 from fsr_sim.core.surfaces import has_thrust_effects
-from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.checks import InvalidValueError, finite_array
 from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances
 from fsr_sim.model.environment import Environment, pack_surfaces, thrust_ratio_log
@@ -58,6 +57,7 @@ from fsr_sim.model.rigid_body import (
     RigidBodyState,
     pack_state,
 )
+from fsr_sim.model.rotors import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.sensors import ImuModel, OdometryNoise, pack_sensors
 from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
 from fsr_sim.model.turbulence import DrydenTurbulence, pack_turbulence
