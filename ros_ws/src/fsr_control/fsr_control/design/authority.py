@@ -1,7 +1,8 @@
 """Control authority from the model: the largest thrust, torques, angular accelerations and hover tilt the
 rotors can give at hover with the other axes kept (docs/model.md §3.2, *Authority*).
 
-Computed once (at start-up, by ``fsr-vehicle``), not per step: small linear programs
+Computed once per vehicle model at start-up, not per step (kept by :mod:`fsr_control.design.authority_cache`
+for the planner's check and the designed gains; ``fsr-vehicle`` prints it): small linear programs
 (:func:`scipy.optimize.linprog`, HiGHS) over the rotors' inputs ``x``, whose body wrench is linear,
 ``[f_b; tau_b] = M x`` (body FRD; rows ``f_x f_y f_z tau_x tau_y tau_z``; thrust ``u_T = -f_z`` [N]).
 Each number is the largest ``s`` with

@@ -11,14 +11,14 @@ alone, ``w`` its bandwidth [rad/s] (the natural frequency), ``zeta`` = :data:`DA
   larger of the vehicle's rotor and tilt time constants and :data:`DESIGN_MOTOR_TIME_CONSTANT` (30 ms), ``d``
   :data:`DESIGN_SENSOR_DELAY` (10 ms) and ``1 / (2 f_s)`` the mean age of a sample held at
   :data:`DESIGN_SENSOR_RATE` (100 Hz): 45 ms, ``w_lag = 7.4`` rad/s, which leaves about 38 deg of margin;
-* **attitude** (roll and pitch): an attitude error of :data:`ATTITUDE_ERROR` (0.1 rad) demands at most
+* **attitude** (roll and pitch): an attitude error of :data:`ATTITUDE_ERROR` (2 deg) demands at most
   :data:`AUTHORITY_SHARE` (half) of the angular acceleration the rotors give at hover about the weaker axis,
   ``w_R^2 e <= share alpha``: ``w_R = min(w_lag, sqrt(share alpha / e))``; **yaw** likewise with the yaw
   acceleration;
-* **position**, vehicles that tilt to move (thrust along ``-z_b``): horizontally :data:`CASCADE_RATIO` (4)
-  times slower than the attitude loop, ``w_xy = w_R / 4``, so that the attitude follows the thrust direction
+* **position**, vehicles that tilt to move (thrust along ``-z_b``): horizontally :data:`CASCADE_RATIO` (3)
+  times slower than the attitude loop, ``w_xy = w_R / 3``, so that the attitude follows the thrust direction
   the position loop asks for (the reference feed-forward's rates assume it does); vertically, where the
-  thrust acts at once, a position error of :data:`POSITION_ERROR` (0.5 m) demands at most half the vertical
+  thrust acts at once, a position error of :data:`POSITION_ERROR` (0.25 m) demands at most half the vertical
   acceleration the thrust range gives (the smaller of up and down), ``w_z = min(w_lag, sqrt(share a_z / e))``;
 * **position**, fully actuated vehicles (the force needs no tilt): horizontally as vertically, with the
   lateral acceleration the force set gives at level hover (the smallest of the four body directions);
