@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsr_estimation.core.metrics import sweep
-from fsr_estimation.core.observer import MomentumObserver, ObserverModel, estimate_log
+from fsr_estimation.estimator.metrics import sweep
+from fsr_estimation.estimator.observer import MomentumObserver, ObserverModel, estimate_log
 from fsr_estimation.io.flight_log import load_flight_log
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -28,7 +28,7 @@ from fsr_control.config.controller_config import controller_config
 from fsr_control.core.controller import controller_tick
 from fsr_control.flight_controller import FlightController
 from fsr_estimation.core import observer_step
-from fsr_estimation.core.observer import MomentumObserver
+from fsr_estimation.estimator.observer import MomentumObserver
 from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
 from fsr_sim.core import lockstep
 from fsr_sim.core.jit import numba

@@ -111,7 +111,7 @@ def rotorpy_changes(vehicle, aero: bool, changes: dict):  # noqa: ANN001, ANN201
 
 def commands(vehicle, seconds: float, dt: float) -> np.ndarray:  # noqa: ANN001 - a Vehicle
     """Rotor speeds (N, 4) [rad/s], fsr's rotor order (module docstring)."""
-    from fsr_sim.model.allocation import wrench_from_rotor_speed_sq
+    from fsr_sim.model.rotors import wrench_from_rotor_speed_sq
 
     t = np.arange(int(round(seconds / dt))) * dt
     frequency = 2.0 * math.pi * np.array([1.3, 0.9, 0.5])

@@ -193,3 +193,35 @@ def test_a_flight_set_up_from_the_packed_sweep_is_the_compiled_loop_of_a_full_se
         full = loop_flight(prepare_flight(flight_scenario(base, values)), DEFAULT_BAND_M)
         for field in fields(full):
             assert typeof(getattr(flight, field.name)) == typeof(getattr(full, field.name)), (values, field.name)
+
+
+@pytest.mark.parametrize("scenario, values", [("ex4_geometric", {}), ("ex4_geometric", {"actuation": "rotors"}),
+                                              ("wind_rejection", {}), ("ex5_voliro", {})])
+def test_a_recorded_flight_and_a_measured_flight_call_the_same_compiled_loop(scenario, values, monkeypatch):
+    """The in-process flight (written out, nothing measured: fsr_bringup.core.flight_measures.unmeasured) and a
+    sweep's flight measured in the loop hand fsr_bringup.core.flight_loop.fly arguments of the same numba types
+    (read-only arrays where the other has read-only ones): one compilation of the loop in fsr-compile, not two."""
+    from numba import typeof
+
+    from fsr_bringup.core import flight_loop
+    from fsr_bringup.runner.in_process_flight import prepare_flight
+    from fsr_bringup.sweeps import measured
+    from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
+    from fsr_sim.config.scenario import load_scenario
+
+    calls = []
+
+    def capture(*arguments):  # noqa: ANN002, ANN202 - the loop's arguments
+        calls.append(arguments)
+        return flight_loop.FINISHED, 0, 0
+
+    monkeypatch.setattr(flight_loop, "fly", capture)
+    monkeypatch.setattr(measured, "fly", capture)
+    scenario_values = {**values, "duration": 0.1}
+    prepare_flight(load_scenario(scenario, values=scenario_values)).fly(0, 1)
+    measured.fly_accumulated(measured.loop_flight(prepare_flight(load_scenario(scenario, values=scenario_values)),
+                                                  DEFAULT_BAND_M))
+    recorded, measuring = calls
+    assert len(recorded) == len(measuring)
+    for k, (left, right) in enumerate(zip(recorded, measuring, strict=True)):  # `what` differs, an int in both
+        assert typeof(left) == typeof(right), (k, typeof(left), typeof(right))

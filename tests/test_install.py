@@ -38,7 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("fsr_sim", "fsr_control", "fsr_estimation", "fsr_bringup")
 HELP_SCRIPTS = {  # console script -> package
     "fsr-fly": "fsr_bringup", "fsr-record": "fsr_bringup", "fsr-analyze": "fsr_bringup",
-    "fsr-vehicle": "fsr_sim", "fsr-estimate": "fsr_estimation",
+    "fsr-vehicle": "fsr_bringup", "fsr-estimate": "fsr_estimation",
 }
 NODE_SCRIPTS = {"simulator": "fsr_sim", "controller": "fsr_control", "estimator": "fsr_estimation"}
 

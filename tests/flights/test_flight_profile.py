@@ -10,7 +10,7 @@ import pytest
 
 from fsr_bringup import simulate
 from fsr_bringup.runner.in_process_flight import FlightRun
-from fsr_sim.model.gain_design import design_gains
+from fsr_control.design.gain_design import design_gains
 from fsr_sim.model.vehicle import load_vehicle
 
 # onboard-like odometry (100 Hz, 10 ms late, 1 cm, 0.5 deg, 2 cm/s) and a 30 ms motor

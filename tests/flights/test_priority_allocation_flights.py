@@ -17,7 +17,7 @@ from fsr_bringup.analysis.metrics import flight_metrics
 from fsr_bringup.analysis.summary import markdown_summary
 from fsr_bringup.runner.in_process_flight import EXIT_DIVERGED, fly_in_process
 from fsr_sim.config.scenario import load_scenario
-from fsr_sim.model.allocation import WRENCH_AXES
+from fsr_sim.model.rotors import WRENCH_AXES
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 
 GOAL = np.array((5.0, -3.0, -6.0))

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fsr_estimation.core.observer import MomentumObserver
+from fsr_estimation.estimator.observer import MomentumObserver
 
 ESTIMATOR = str(Path(sys.executable).parent / "estimator")
 EXAMPLE_MCAP = Path(__file__).resolve().parents[2] / "examples" / "ex3_flight_log.mcap"

@@ -32,6 +32,7 @@ setup(
             "fsr-compile = fsr_bringup.cli.compile_cli:main",
             "fsr-sweep = fsr_bringup.cli.sweep_cli:main",
             "fsr-tune = fsr_bringup.cli.tune_cli:main",
+            "fsr-vehicle = fsr_bringup.cli.vehicle_cli:main",
         ],
         # Scenario sections this package validates (fsr_sim.config.scenario.registered_sections).
         "fsr.scenario_sections": [

@@ -26,7 +26,6 @@ setup(
     entry_points={
         "console_scripts": [
             "simulator = fsr_sim.nodes.simulator_node:main",
-            "fsr-vehicle = fsr_sim.cli.vehicle_cli:main",
         ],
     },
 )

@@ -1,4 +1,5 @@
-"""fsr_bringup: fsr-fly (node graph or in-process), fsr-record, fsr-analyze, and the Python API.
+"""fsr_bringup: fsr-fly (node graph or in-process), fsr-record, fsr-analyze, fsr-sweep, fsr-tune, fsr-vehicle,
+fsr-compile, and the Python API.
 
 ``from fsr_bringup import simulate`` (:func:`fsr_bringup.api.simulate`), ``from fsr_bringup import sweep``
 (:func:`fsr_bringup.sweeps.run.sweep`: many flights as one table), ``from fsr_bringup import tune``

@@ -16,7 +16,7 @@ from fsr_bringup.analysis.animation_scene import NED_TO_VIEW, build_scene, view_
 from fsr_bringup.analysis.figure_options import AnimationOptions
 from fsr_bringup.analysis.load import load_flight
 from fsr_bringup.cli.analyze_cli import main as analyze_main
-from fsr_sim.model.allocation import rotor_axes
+from fsr_sim.model.rotors import rotor_axes
 from fsr_sim.recording.reader import open_recording
 
 SYNTHETIC_S = 2.0  # the synthetic flight's duration (fixtures: 2 s at 1 kHz)

@@ -31,7 +31,7 @@ from fsr_bringup.analysis.metrics import flight_metrics, tracking_errors
 from fsr_bringup.cli.analyze_cli import main as analyze_main
 from fsr_bringup.cli.fly_cli import parse_args as fly_args
 from fsr_bringup.runner.in_process_flight import fly_in_process
-from fsr_estimation.core.metrics import max_error_after, mean_absolute_error, settling_time
+from fsr_estimation.estimator.metrics import max_error_after, mean_absolute_error, settling_time
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.core.rigid_body import GRAVITY
 

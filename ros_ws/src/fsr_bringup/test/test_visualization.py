@@ -30,7 +30,7 @@ from fsr_sim.contract import (
     recording_selection,
     rotor_frame,
 )
-from fsr_sim.model.allocation import rotor_axes
+from fsr_sim.model.rotors import rotor_axes
 from fsr_sim.model.so3 import rotation_from_quaternion
 from fsr_sim.ros.message_schema import message_class
 

@@ -62,7 +62,8 @@ import numpy as np
 
 from fsr_control.core import allocation as core
 from fsr_control.nullspace import null_space_gram
-from fsr_sim.model.allocation import FixedRotorAllocator, SaturationReport, static_tilting_allocation
+from fsr_sim.contract import body_force_of_thrust
+from fsr_sim.model.rotors import SaturationReport, static_tilting_allocation, wrench_from_rotor_speed_sq
 from fsr_sim.model.vehicle import Vehicle
 
 ALLOCATION_STRATEGIES = ("clamp", "priority")
@@ -81,6 +82,35 @@ class Actuated:
     torque_body: np.ndarray
     saturated: bool
     shortfall: np.ndarray
+
+
+class FixedRotorAllocator:
+    """The pseudo-inverse allocation of fixed (untilted) rotors: wrench -> squared rotor speeds.
+
+    For a coplanar vehicle only ``[f_z, tau_x, tau_y, tau_z]`` can be produced (:attr:`rows`); the
+    pseudo-inverse of that 4 x n block gives the minimum-norm ``u_w`` (exact inverse for a quadrotor). The
+    compiled allocation (:mod:`fsr_control.core.allocation`) is packed from :attr:`inverse_6`.
+    """
+
+    def __init__(self, vehicle: Vehicle) -> None:
+        if vehicle.has_servos:
+            raise ValueError(f"FixedRotorAllocator needs fixed rotors; '{vehicle.name}' has rotors on servos")
+        self.vehicle = vehicle
+        self.allocation = wrench_from_rotor_speed_sq(vehicle)
+        self.rows = np.flatnonzero(np.any(np.abs(self.allocation) > 1e-15, axis=1))
+        self.inverse = np.linalg.pinv(self.allocation[self.rows])
+
+    @property
+    def inverse_6(self) -> np.ndarray:
+        """:attr:`inverse` as an n x 6 matrix over all wrench rows (zero columns for those not produced)."""
+        full = np.zeros((self.vehicle.rotor_count, 6))
+        full[:, self.rows] = self.inverse
+        return full
+
+    def rotor_speed_sq(self, thrust: float, torque_body: np.ndarray) -> np.ndarray:
+        """Squared speeds for a thrust ``u_T`` [N] along ``-z_b`` and a body torque [N m] (unclamped)."""
+        wrench = np.array((*body_force_of_thrust(thrust), *torque_body[:3]))
+        return self.inverse @ wrench[self.rows]
 
 
 def _checked_strategy(strategy: str) -> str:

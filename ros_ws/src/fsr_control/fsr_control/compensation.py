@@ -1,7 +1,7 @@
 """Disturbance rejection: the controller cancels the external wrench its own momentum observer estimates.
 
 ``controller.compensation: estimate`` (default ``none``) gives the flight controller a
-:class:`WrenchCompensator`. It runs a :class:`fsr_estimation.core.observer.MomentumObserver` *inside the
+:class:`WrenchCompensator`. It runs a :class:`fsr_estimation.estimator.observer.MomentumObserver` *inside the
 controller*, on the controller's nominal model (mass ``m_c``, inertia ``I_c``: the scenario's vehicle), fed
 with the controller's own input (``odom``) and its own output (the body wrench commanded after allocation,
 what ``wrench_cmd`` carries), with the scenario's ``estimator.c0`` and ``estimator.r``. With
@@ -48,8 +48,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsr_control.core import compensation as core
-from fsr_estimation.core.observer import MomentumObserver
 from fsr_estimation.core.observer_step import ObserverState
+from fsr_estimation.estimator.observer import MomentumObserver
 from fsr_sim.core.so3 import matrix_rows
 from fsr_sim.core.surfaces import CONTACT_TOLERANCE, Surfaces
 from fsr_sim.model.vehicle import Vehicle

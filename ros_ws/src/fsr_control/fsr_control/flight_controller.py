@@ -34,8 +34,8 @@ from fsr_control.core.reference import CHANNELS, DERIVATIVES, HORIZON_WIDTH
 from fsr_control.planning.feasibility import LegAdjustment
 from fsr_control.planning.trajectory import Reference, Trajectory
 from fsr_sim.core.so3 import Mat3, Vec3, matrix_rows
-from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns
 from fsr_sim.model.plant import pack_aerodynamics
+from fsr_sim.model.rotors import SaturationReport, rotor_axes, rotor_columns
 from fsr_sim.model.vehicle import Vehicle
 
 ROLL_PITCH_TOLERANCE = 1e-4  # rad: a goal for a fixed-rotor vehicle must be level (yaw only)

@@ -13,7 +13,7 @@ from fsr_control.flight_controller import FlightController
 from fsr_control.planning.trajectory import Trajectory, Waypoint
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.model.allocation import static_tilting_allocation
+from fsr_sim.model.rotors import static_tilting_allocation
 from fsr_sim.model.so3 import rotation_from_euler_zyx, vee
 from fsr_sim.model.vehicle import load_vehicle
 

@@ -37,7 +37,7 @@ def test_test_scenarios_are_valid():
 def test_type_defaults_by_vehicle_and_gains_default_to_the_profile(tmp_path):
     """No profile: ``flight``, the gains designed for the vehicle and the reference's feed-forward; ``report``:
     the report's gains (no integral) and the measured acceleration's."""
-    from fsr_sim.model.gain_design import design_gains
+    from fsr_control.design.gain_design import design_gains
     from fsr_sim.model.vehicle import load_vehicle
 
     config = controller_config(scenario_with(tmp_path, controller={}))

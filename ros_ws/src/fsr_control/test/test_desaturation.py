@@ -5,11 +5,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fsr_control.allocation import FixedRotorActuation, TiltingActuation
+from fsr_control.allocation import FixedRotorActuation, FixedRotorAllocator, TiltingActuation
 from fsr_control.core.allocation import max_scale_in_box, max_scale_in_discs
-from fsr_sim.model.allocation import (
+from fsr_sim.model.rotors import (
     SHORTFALL_TOLERANCE,
-    FixedRotorAllocator,
     SaturationReport,
     static_tilting_allocation,
     wrench_from_rotor_speed_sq,

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fsr_control.allocation import FixedRotorAllocator
 from fsr_control.config.controller_config import controller_config
 from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, design_lag, designed_gains, filter_coefficients, pack_indi
 from fsr_control.core import indi_law
+from fsr_control.design.gain_design import design_gains
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
-from fsr_sim.model.allocation import FixedRotorAllocator
-from fsr_sim.model.gain_design import design_gains
 
 INDI = ("controller.type=indi", "sensors.preset=ideal")
 

@@ -1,7 +1,7 @@
 import numpy as np
 
 from fsr_control.allocation import TiltingActuation
-from fsr_sim.model.allocation import static_tilting_allocation
+from fsr_sim.model.rotors import static_tilting_allocation
 from fsr_sim.model.vehicle import load_vehicle
 
 

@@ -9,7 +9,7 @@ from fsr_control.allocation import FixedRotorActuation, TiltingActuation
 from fsr_control.config import controller_config
 from fsr_sim.config.scenario import load_scenario
 from fsr_sim.config.validation import ConfigError
-from fsr_sim.model.allocation import WRENCH_AXES
+from fsr_sim.model.rotors import WRENCH_AXES
 from fsr_sim.model.vehicle import load_vehicle
 
 SCENARIOS = Path(__file__).parent / "scenarios"

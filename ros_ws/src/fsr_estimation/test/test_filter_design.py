@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fsr_estimation.core.filter_design import (
+from fsr_estimation.estimator.filter_design import (
     cascade_sections,
     check_filter_parameters,
     denominator_coefficients,

@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from fsr_estimation.core.metrics import (
+from fsr_estimation.estimator.metrics import (
     max_error_after,
     mean_absolute_error,
     settling_time,
@@ -11,7 +11,7 @@ from fsr_estimation.core.metrics import (
     settling_time_standard,
     sweep,
 )
-from fsr_estimation.core.observer import ObserverModel
+from fsr_estimation.estimator.observer import ObserverModel
 
 TS = 0.01
 TIME = np.arange(1001) * TS  # 10 s
@@ -77,7 +77,7 @@ def test_sweep_gives_one_result_per_pair_and_refuses_bad_orders(synthetic):
 
 
 def test_smoothed_settling_is_the_standard_one_through_the_low_pass_and_sees_through_noise():
-    from fsr_estimation.core.metrics import low_pass, settling_time_smoothed, smoothing_gain
+    from fsr_estimation.estimator.metrics import low_pass, settling_time_smoothed, smoothing_gain
 
     gain = smoothing_gain(TS)
     values = np.random.default_rng(0).normal(size=(50, 2))

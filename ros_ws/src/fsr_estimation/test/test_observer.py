@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from fsr_estimation.core.metrics import mass_change
-from fsr_estimation.core.momentum import model_momentum_rate
-from fsr_estimation.core.observer import (
+from fsr_estimation.estimator.metrics import mass_change
+from fsr_estimation.estimator.momentum import model_momentum_rate
+from fsr_estimation.estimator.observer import (
     MomentumObserver,
     ObserverModel,
     body_frame_wrench,

@@ -115,7 +115,7 @@ def test_every_term_in_a_wind_turning_and_on_tilted_rotors():
     made = plant(tilting, speeds=speeds, rotation=rotation, velocity=velocity, angular_velocity=omega,
                  turbulence=steady)
     made.set_rotor_command(speeds, tilts)
-    from fsr_sim.model.allocation import rotor_axes
+    from fsr_sim.model.rotors import rotor_axes
 
     axes = rotor_axes(tilting, tilts)
     force, torque = body_wrench(made)

@@ -17,7 +17,7 @@ def make_plant(vehicle="quadrotor_ex4", actuation="wrench", **values):
 
 def test_model_imports_neither_ros_nor_the_yaml_readers():
     """The model loads no ROS and none of fsr's configuration readers (numba itself imports PyYAML)."""
-    code = ("import sys, fsr_sim.model, fsr_sim.model.allocation; "
+    code = ("import sys, fsr_sim.model, fsr_sim.model.rotors; "
             "print(sorted(m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_parser') "
             "or m.startswith('fsr_sim.config') or m.endswith(('.msg', '_msgs'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout

@@ -1,4 +1,4 @@
-"""The sensor stage of a flight (fsr_sim.core.sensors.measure): white noise and a walking bias with the
+"""The sensor stage of a flight (fsr_sim.core.sensors.measure_odometry): white noise and a walking bias with the
 configured statistics, a delay and a rate exactly, the same seed the same flight."""
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ import numpy as np
 
 from fsr_bringup.analysis.load import RecordedFlight, RotorCommand, Wrench, zero_order_hold
 from fsr_bringup.visualization.frames import NED_TO_ENU
-from fsr_sim.model.allocation import rotor_axes
+from fsr_sim.model.rotors import rotor_axes
 from fsr_sim.model.vehicle import Vehicle
 
 NED_TO_VIEW = NED_TO_ENU  # (north, east, down) -> (east, north, up): the view is map's frame (REP 103)
@@ -103,7 +103,7 @@ def world_vectors(rotation: np.ndarray, body: np.ndarray) -> np.ndarray:
 
 def rotor_axes_body(vehicle: Vehicle, tilts: np.ndarray | None, frames: int) -> np.ndarray:
     """Thrust axes ``z_i`` (body FRD, unit), (F, n, 3), at tilt angles ``alpha`` (F, n) [rad] (NaN, or None: the
-    fixed axes ``z_0,i``): :func:`fsr_sim.model.allocation.rotor_axes`."""
+    fixed axes ``z_0,i``): :func:`fsr_sim.model.rotors.rotor_axes`."""
     axes = rotor_axes(vehicle, None if tilts is None else np.nan_to_num(tilts, nan=0.0))
     return np.broadcast_to(axes, (frames, vehicle.rotor_count, 3)).copy()
 

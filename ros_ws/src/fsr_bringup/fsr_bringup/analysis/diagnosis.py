@@ -12,7 +12,7 @@ What it gives (``metrics.json`` ``diagnosis``; the summary's *Diagnosis* section
     (``controller.feedforward: measured``, the report's) without a low-pass (``controller.acceleration_filter_hz:
     0``): the differentiated noise drives the attitude rates, the torques switch between the rotor limits;
   - a gain beyond the authority: a position or attitude gain more than :data:`GAIN_FACTOR` times the one designed
-    from the vehicle's authority (``controller.profile: flight``, :mod:`fsr_sim.model.gain_design`);
+    from the vehicle's authority (``controller.profile: flight``, :mod:`fsr_control.design.gain_design`);
   - a motor lag beside a fast observer: with ``controller.compensation: estimate``, an observer rate ``c0``
     faster than ``1 / (3 tau)`` of the rotors' time constant ``tau`` (``plant.rotor_time_constant``): the
     estimate cancels the lag's own error.
@@ -28,7 +28,7 @@ import numpy as np
 
 from fsr_bringup.analysis.load import RecordedFlight
 from fsr_sim.contract import DIVERGED, SIM_STATUS, SimStatus
-from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
+from fsr_sim.model.rotors import SHORTFALL_TOLERANCE, WRENCH_AXES
 
 SATURATED_SHARE = 0.05  # a flight with more of its steps at a rotor limit gets a diagnosis
 GAIN_FACTOR = 2.0  # a gain this many times the designed one (on some axis) is beyond the authority
@@ -51,7 +51,7 @@ def _first_shortfall(flight: RecordedFlight) -> dict[str, Any] | None:
 def _gain_causes(flight: RecordedFlight) -> list[dict[str, str]]:
     """Gains more than GAIN_FACTOR times those designed from the vehicle (rotor actuation only: a wrench has no
     authority limit)."""
-    from fsr_sim.model.gain_design import design_gains
+    from fsr_control.design.gain_design import design_gains
 
     controller, config = flight.controller, flight.config
     if controller is None or config is None or config.actuation != "rotors":

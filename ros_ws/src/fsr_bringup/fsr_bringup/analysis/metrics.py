@@ -19,7 +19,7 @@ Saturation counts the rotor commands at or beyond the vehicle's limits (speed ``
 ``>= rotor_speed_max``, tilt ``|alpha| >= tilt_angle_max``). The online wrench estimate (body FRD) is
 compared with the *effective truth* (:mod:`fsr_bringup.analysis.effective`: external wrench + surface-effect
 thrust change + contact + model mismatch, what the observer must converge to) with the functions of
-``fsr-estimate`` (:mod:`fsr_estimation.core.metrics`): settling time per channel (standard or the report's
+``fsr-estimate`` (:mod:`fsr_estimation.estimator.metrics`): settling time per channel (standard or the report's
 definition), MAE over the whole flight, max error after ``after`` (default: the last 5 s) and RMS error after
 a settling time; the pure external wrench (``wrench_truth``) is reported next to it. Thrust ratios
 ``T / T_OGE`` near the ground and the ceiling follow the odometry through the scenario's environment
@@ -51,8 +51,8 @@ from fsr_bringup.analysis.diagnosis import diagnosis
 from fsr_bringup.analysis.effective import effective_wrench, thrust_ratio_series
 from fsr_bringup.analysis.load import RecordedFlight, load_flight, zero_order_hold
 from fsr_control.planning.trajectory import mid_path, mid_path_note
-from fsr_estimation.core import metrics as estimator_metrics
-from fsr_estimation.core.metrics import DEFAULT_LAST_SECONDS
+from fsr_estimation.estimator import metrics as estimator_metrics
+from fsr_estimation.estimator.metrics import DEFAULT_LAST_SECONDS
 from fsr_sim.contract import (
     ATTITUDE_CMD,
     FINISHED,
@@ -66,8 +66,8 @@ from fsr_sim.contract import (
     SimStatus,
     resolve,
 )
-from fsr_sim.model.allocation import SHORTFALL_TOLERANCE, WRENCH_AXES
 from fsr_sim.model.environment import contact_mask
+from fsr_sim.model.rotors import SHORTFALL_TOLERANCE, WRENCH_AXES
 from fsr_sim.model.so3 import relative_rotation_angles
 from fsr_sim.recording.reader import Recording
 
@@ -282,7 +282,7 @@ def wrench_comparison(flight: RecordedFlight, settle_time: float = DEFAULT_SETTL
     Per channel (``fx fy fz tx ty tz``): settling time (``settling``: ``standard``, ``report`` or ``smoothed``;
     and ``settling_time_smoothed_s``, the ``smoothed`` one, whatever ``settling`` is), MAE over
     the flight, max error at time >= ``after`` [s] (default: the last 5 s), RMS error after ``settle_time``
-    (at most half the flight), all with :mod:`fsr_estimation.core.metrics` on the estimate's samples where
+    (at most half the flight), all with :mod:`fsr_estimation.estimator.metrics` on the estimate's samples where
     the effective truth is defined. None without ``wrench_estimate``; without the scenario's estimator model
     only the external-wrench comparison is given.
     """

@@ -20,7 +20,7 @@ from fsr_bringup.analysis.figure_options import ANIMATION_FORMATS, AnimationOpti
 from fsr_sim.cli.arguments import ArgumentParser, argument_type
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
-# fsr_estimation.core.metrics.SETTLING_DEFINITIONS (imported lazily)
+# fsr_estimation.estimator.metrics.SETTLING_DEFINITIONS (imported lazily)
 SETTLING_CHOICES = ("standard", "report", "smoothed")
 PROGRESS_EVERY_S = 0.25  # s between updates of the animation's progress line (as fsr-fly's)
 

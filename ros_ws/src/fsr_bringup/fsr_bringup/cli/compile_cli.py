@@ -106,7 +106,7 @@ def _node_calls() -> None:
     from fsr_control.config.controller_config import controller_config
     from fsr_control.flight_controller import FlightController, seconds_from_ns
     from fsr_control.nodes.packets import ControllerPackets
-    from fsr_estimation.core.stamped import StampedEstimator
+    from fsr_estimation.estimator.stamped import StampedEstimator
     from fsr_sim.config.scenario import load_scenario, plant_from_config, simulation_config
     from fsr_sim.core import lockstep
     from fsr_sim.core.odometry import PUBLISHED_SIZE
@@ -141,10 +141,10 @@ def _python_api() -> None:
     """The Python API's shells: the plant, the laws, the allocations, the observer, rotations."""
     from fsr_control.allocation import FixedRotorActuation, TiltingActuation, WrenchActuation
     from fsr_control.planning.flatness import flat_attitude_rates
-    from fsr_estimation.core.observer import MomentumObserver
+    from fsr_estimation.estimator.observer import MomentumObserver
     from fsr_sim.model import Plant, load_vehicle, so3
-    from fsr_sim.model.allocation import SaturationReport, clamp_rotor_speeds
     from fsr_sim.model.disturbances import constant
+    from fsr_sim.model.rotors import SaturationReport, clamp_rotor_speeds
 
     quad, tilting = load_vehicle("quadrotor_ex4"), load_vehicle("tilting_quadrotor_ex5")
     plant = Plant(quad, disturbances=[constant((1.0, 0.0, 0.0))], attitude_rpy_deg=(1.0, 2.0, 3.0))

@@ -1,6 +1,6 @@
 """Effective truth: the wrench the momentum observer must converge to, one control step at a time (compiled core).
 
-The observer (docs/model.md §3.8, :mod:`fsr_estimation.core.momentum`) does not estimate the injected external
+The observer (docs/model.md §3.8, :mod:`fsr_estimation.estimator.momentum`) does not estimate the injected external
 wrench alone: it estimates everything its model misses. With its model mass ``m_e`` and inertia ``I_e``
 and the commanded body wrench ``(f_c, tau_c)`` (``wrench_cmd``), its force residual over the control step
 ``[t_k, t_k+1]`` is (world NED, ``e3`` down, ``a_k = (v_k+1 - v_k) / T_s``)::

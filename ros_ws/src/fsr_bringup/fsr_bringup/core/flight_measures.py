@@ -99,7 +99,7 @@ class MeasureParams(NamedTuple):
     inertia_delta: np.ndarray  # (3, 3): the model's minus the plant's
     gravity: float  # m/s^2
     tolerance: float  # the estimate's settling band, relative to |truth|
-    smoothing_gain: float  # the smoothed settling time's low-pass gain per sample (fsr_estimation.core.metrics)
+    smoothing_gain: float  # the smoothed settling time's low-pass gain per sample (fsr_estimation.estimator.metrics)
     late_from: float  # s: the RMS error from here
     last_from: float  # s: the final truth is the mean from here
     lagging: bool  # rotors: the actual speeds (tilts) act, not the commanded ones (actuator dynamics)
@@ -109,12 +109,14 @@ class MeasureParams(NamedTuple):
     ceiling: Surfaces  # ... with the ground's effect off
 
 
-def unmeasured(surfaces: Surfaces) -> MeasureParams:
-    """Measurement parameters that measure nothing (a flight only written out), of the types of a measured
-    flight's (one compiled loop for both); ``surfaces`` the plant's."""
-    zero = np.zeros((3, 3))
-    return MeasureParams(0.0, False, 0.0, 0.0, 0.0, False, 0.0, 0.0, False, 1.0, 1.0, zero, zero, 0.0, 0.0, 0.0,
-                         0.0, 0.0, False, False, False, surfaces, surfaces)
+def unmeasured(plant: PlantParams) -> MeasureParams:
+    """Measurement parameters that measure nothing (a flight only written out), of the numba types of a measured
+    flight's, so that one compilation of the loop serves both: the packed ``plant``'s inertia (read-only, as
+    the vehicle's that a measured flight takes) and surfaces, a zero model mismatch (a fresh array, as the
+    measured one)."""
+    return MeasureParams(0.0, False, 0.0, 0.0, 0.0, False, 0.0, 0.0, False, 1.0, 1.0, plant.inertia,
+                         np.zeros((3, 3)), 0.0, 0.0, 0.0, 0.0, 0.0, False, False, False, plant.surfaces,
+                         plant.surfaces)
 
 
 @jit

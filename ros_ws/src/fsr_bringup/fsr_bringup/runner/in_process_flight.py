@@ -239,7 +239,7 @@ class FlightSetup:
     estimation: Any  # fsr_estimation.config.estimator_config.EstimatorConfig
     plant: Any  # fsr_sim.model.plant.Plant
     controller: FlightController
-    observer: Any  # fsr_estimation.core.observer.MomentumObserver
+    observer: Any  # fsr_estimation.estimator.observer.MomentumObserver
     steps: int
     period_ns: int
     arrays: FlightArrays
@@ -277,7 +277,7 @@ class FlightSetup:
             self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
             self.estimation.enabled, self.estimation.rotor_state, self.observer.params, self.observer.state, first,
             last, self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, a.states, a.published,
-            a.actuators, a.control, a.estimates, unmeasured(self.plant.params.surfaces), self.plant.params,
+            a.actuators, a.control, a.estimates, unmeasured(self.plant.params), self.plant.params,
             self.plant.core_state, a.rotor_rows, a.acc)
 
     def flown(self, outcome: int, k: int) -> int:
@@ -335,7 +335,7 @@ def prepare_flight(scenario: Any, max_steps: int | None = None, arrays: FlightAr
     """Validate ``scenario`` (a :class:`Scenario`, or the runner's checked scenario holding one) into the packed
     objects of one flight of its duration (or ``max_steps``), writing into ``arrays`` if they fit."""
     from fsr_estimation.config.estimator_config import estimator_config
-    from fsr_estimation.core.observer import MomentumObserver
+    from fsr_estimation.estimator.observer import MomentumObserver
 
     scenario = getattr(scenario, "scenario", scenario)
     sim = simulation_config(scenario)

@@ -21,7 +21,7 @@ Columns (:data:`METRIC_COLUMNS`; NaN where a metric does not apply, e.g. no esti
   window: 5 s, at most half the flight) and ``estimate_settling_s`` (the slowest channel whose final truth is at least
   :data:`SIGNIFICANT_WRENCH` to stay within 3 % of it; inf: one never does; NaN: no such channel) and
   ``estimate_force_settling_s`` (the slowest such force channel, ``smoothed``: the estimate and the truth through
-  a first-order low-pass of 0.1 s, :mod:`fsr_estimation.core.metrics`; with sensor noise the raw error never stays
+  a first-order low-pass of 0.1 s, :mod:`fsr_estimation.estimator.metrics`; with sensor noise the raw error never stays
   within 3 %, and with an actuator lag the torque's truth holds the lag's error of a noisy command).
 """
 
@@ -38,11 +38,11 @@ from fsr_bringup.analysis.load import RecordedFlight, zero_order_hold
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, LIMIT_TOLERANCE, MEAN_WINDOW_S, WRENCH_AXES
 from fsr_bringup.core import flight_measures as core
 from fsr_control.core import controller as layout
-from fsr_estimation.core.metrics import TOLERANCE, smoothing_gain
+from fsr_estimation.estimator.metrics import TOLERANCE, smoothing_gain
 from fsr_sim.contract import FINISHED
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.model.allocation import SHORTFALL_TOLERANCE
 from fsr_sim.model.environment import pack_surfaces
+from fsr_sim.model.rotors import SHORTFALL_TOLERANCE
 
 DEFAULT_BAND_M = 0.01  # m: the position band of settling_time_s
 SIGNIFICANT_WRENCH = 1e-3  # N, N m: a channel whose final effective truth is smaller has no settling time

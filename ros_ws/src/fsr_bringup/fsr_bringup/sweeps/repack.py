@@ -19,7 +19,7 @@ initial states. A flight is then set up from them in three steps:
 3. Pack. Each changed config field is packed by the start-up's packing function of the arrays it is packed into
    (:data:`PLANT_PACKING`: the plant's mass properties, sensors, disturbances and turbulence; the controller's
    law, :func:`fsr_control.flight_controller.make_control_law`, for a change among the config fields that law's
-   packing reads - traced once per sweep, not listed; the observer, :class:`fsr_estimation.core.observer.
+   packing reads - traced once per sweep, not listed; the observer, :class:`fsr_estimation.estimator.observer.
    MomentumObserver`); every state is put back to its initial values (the plant's made anew from its params).
    A change no packing here covers (another vehicle property, the allocation, an estimator filter the
    controller's own observer has too) sets the flight up in full. A change of what the controller reads of the
@@ -48,7 +48,7 @@ from fsr_bringup.sweeps.measured import LoopFlight, loop_flight
 from fsr_control.config.controller_config import controller_settings
 from fsr_control.flight_controller import make_control_law
 from fsr_estimation.config.estimator_config import estimator_config
-from fsr_estimation.core.observer import MomentumObserver
+from fsr_estimation.estimator.observer import MomentumObserver
 from fsr_sim.config.scenario import Scenario, disturbances_from_section, plant_vehicle_from_section, set_value
 from fsr_sim.config.sensor_sections import sensors_from_section
 from fsr_sim.config.validation import ConfigError, Section

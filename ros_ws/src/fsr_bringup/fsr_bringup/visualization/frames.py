@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fsr_sim.contract import BODY_FLU_FRAME, BODY_FRAME, MAP_FRAME, WORLD_FRAME, frame_prefix, rotor_frame
-from fsr_sim.model.allocation import rotor_axes
+from fsr_sim.model.rotors import rotor_axes
 from fsr_sim.model.so3 import quaternion_from_rotation
 from fsr_sim.model.vehicle import Vehicle
 from fsr_sim.ros.cdr_pack import StampedNumbers, Template

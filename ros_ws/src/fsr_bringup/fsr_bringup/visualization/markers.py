@@ -27,8 +27,8 @@ import numpy as np
 
 from fsr_bringup.visualization.frames import axis_quaternions
 from fsr_sim.contract import WORLD_FRAME
-from fsr_sim.model.allocation import rotor_axes
 from fsr_sim.model.environment import Environment
+from fsr_sim.model.rotors import rotor_axes
 from fsr_sim.model.so3 import rotations_from_quaternions
 from fsr_sim.model.vehicle import Vehicle
 from fsr_sim.ros.cdr_pack import StampedNumbers, Template

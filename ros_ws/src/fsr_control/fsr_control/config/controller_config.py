@@ -7,7 +7,7 @@ controller:
                                     # (thrust along -z_b, from the IMU and the rotors' speeds) | a law of
                                     # fsr_control.controllers.catalog.LAWS; default by vehicle
   profile: flight                   # flight (default): gains designed from the vehicle
-                                    # (fsr_sim.model.gain_design), geometric feedforward: reference |
+                                    # (fsr_control.design.gain_design), geometric feedforward: reference |
                                     # report: the report's gains, geometric feedforward: measured
   gains: {k_p: [20, 20, 100], k_v: [20, 20, 100], k_r: [10, 10, 100], k_w: [10, 10, 100]}
                                     # any given here replaces the profile's; geometric also k_i [N/(m s)]
@@ -56,6 +56,7 @@ from fsr_control.config.trajectory_config import (
 )
 from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.controllers.catalog import LAWS
+from fsr_control.design.gain_design import INTEGRAL_LIMIT_SHARE
 from fsr_control.planning.feasibility import (
     DEFAULT_FEASIBILITY,
     InfeasibleReferenceError,
@@ -67,7 +68,6 @@ from fsr_control.planning.trajectory import Trajectory, Waypoint
 from fsr_sim.config.scenario import Scenario, SimulationConfig, load_vehicle_for, simulation_config
 from fsr_sim.config.validation import ConfigError, Section, checked_spd
 from fsr_sim.model.environment import pack_surfaces
-from fsr_sim.model.gain_design import INTEGRAL_LIMIT_SHARE
 from fsr_sim.model.vehicle import Vehicle
 
 SECONDARY_TYPES = ("none", "min_peak_speed")

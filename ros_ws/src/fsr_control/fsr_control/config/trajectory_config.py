@@ -35,7 +35,7 @@ trajectory:
   # every kind
   goal_duration: 10.0               # travel time [s] of a goal received at run time (`goal` topic)
   authority_margin: 0.7             # in (0, 1]: the share of the model's authority at hover
-                                    # (fsr_sim.model.authority) that references may use
+                                    # (fsr_control.design.authority) that references may use
   feasibility: stretch              # a leg, goal or path beyond it, with rotor actuation: stretch (a leg's angle
                                     # shaped or the leg lengthened, a path flown slower) | warn (flown as
                                     # written) | refuse (exit 2 before take-off)
@@ -70,7 +70,7 @@ from fsr_sim.model.so3 import rotation_from_euler_zyx
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_GOAL_DURATION = 10.0  # s
-DEFAULT_AUTHORITY_MARGIN = 0.7  # share of the model's authority at hover (fsr_sim.model.authority)
+DEFAULT_AUTHORITY_MARGIN = 0.7  # share of the model's authority at hover (fsr_control.design.authority)
 COMMON_KEYS = ("kind", "goal_duration", "authority_margin", "feasibility")
 PATH_KEYS = ("ramp", "yaw", "approach_duration")  # minsnap, circle, lissajous
 KIND_KEYS = {  # the keys of each kind besides COMMON_KEYS

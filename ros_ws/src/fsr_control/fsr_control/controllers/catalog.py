@@ -15,7 +15,7 @@ import numpy as np
 
 from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.core import geometric_law, indi_law, laws, voliro_law
-from fsr_sim.model.gain_design import design_gains
+from fsr_control.design.gain_design import design_gains
 from fsr_sim.model.vehicle import Vehicle
 
 if TYPE_CHECKING:
@@ -36,7 +36,7 @@ class LawType:
         ``controller.gains`` takes these names (and ``optional_gains``).
     designed_gains : callable
         ``designed_gains(vehicle) -> dict`` of the same names: the gains of ``controller.profile: flight``,
-        designed from the nominal vehicle (:mod:`fsr_sim.model.gain_design`).
+        designed from the nominal vehicle (:mod:`fsr_control.design.gain_design`).
     pack : callable
         ``pack(vehicle, config) -> params``: the law's own parameters (its field of ``LawParams``) from the
         validated configuration (:class:`~fsr_control.config.controller_config.ControllerConfig`).

@@ -16,7 +16,7 @@ from ``a_dot`` and ``a_ddot``; ``controller.feedforward`` says where those come 
   2018; the default of ``controller.profile: flight``): from the reference alone, ``a_dot = m p_dddot_d``,
   ``a_ddot = m p_ddddot_d`` (and the yaw's rate and acceleration). No measured acceleration enters the torque,
   so sensor noise, a motor lag or a force step reach it only through the PD terms. The attitude loop must then
-  be faster than the position loop (several times: :mod:`fsr_sim.model.gain_design` designs such gains from
+  be faster than the position loop (several times: :mod:`fsr_control.design.gain_design` designs such gains from
   the vehicle), since ``R_d`` turning with the feedback is left to the attitude feedback.
 * ``measured`` (the report's law, ``controller.profile: report``): the exact rates of this ``R_d``, with
   ``a_dot = -K_p e_v - K_v e_a + m p_dddot_d`` and ``a_ddot = -K_p e_a - K_v e_j + m p_ddddot_d``, where the

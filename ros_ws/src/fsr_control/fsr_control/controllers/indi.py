@@ -61,8 +61,8 @@ from scipy.linalg import expm
 from fsr_control.controllers.common import CompiledLaw, law_matrices
 from fsr_control.controllers.geometric import OPTIONAL_GAINS
 from fsr_control.core import indi_law, laws
-from fsr_sim.model.allocation import wrench_from_rotor_speed_sq
-from fsr_sim.model.gain_design import design_gains
+from fsr_control.design.gain_design import design_gains
+from fsr_sim.model.rotors import wrench_from_rotor_speed_sq
 from fsr_sim.model.vehicle import Vehicle
 
 DEFAULT_FILTER_HZ = 30.0  # controller.filter_hz: the low-pass on every measured signal [Hz]
@@ -86,7 +86,7 @@ def design_lag(vehicle: Vehicle, filter_hz: float = DEFAULT_FILTER_HZ, period: f
 
 def designed_gains(vehicle: Vehicle) -> dict[str, np.ndarray]:
     """The gains of ``controller.profile: flight``: the geometric law's designed from the vehicle
-    (:func:`fsr_sim.model.gain_design.design_gains`) for INDI's own lag (:func:`design_lag`: the vehicle's motor
+    (:func:`fsr_control.design.gain_design.design_gains`) for INDI's own lag (:func:`design_lag`: the vehicle's motor
     and the default filter, not the 30 ms motor and the odometry's delay the geometric law is designed for),
     without the integral (``k_i = 0``): the increment removes a constant external force itself, and an
     integral would only wind up during the transient and overshoot."""

@@ -52,7 +52,7 @@ from fsr_sim.contract import (
     ROTOR_STATE,
     SIM_STATUS,
 )
-from fsr_sim.model.allocation import WRENCH_AXES
+from fsr_sim.model.rotors import WRENCH_AXES
 from fsr_sim.nodes.commands import RotorCommandReader
 from fsr_sim.ros import cdr_read
 from fsr_sim.ros.conversions import odometry_state_from_bytes

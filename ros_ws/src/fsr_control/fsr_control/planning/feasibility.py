@@ -12,14 +12,14 @@ A leg's reference (position ``p(t)`` world NED, an angle ``theta(t)`` about a fi
 * full attitude (fully actuated): the reference's ``R_d``, ``omega_d = a theta'``, ``omega_dot_d = a theta''``,
   the body force ``f_b = m R_d^T (p'' - g e3)``, its magnitude ``|f_b|`` (the thrust) and its tilt from
   ``-z_b``, ``acos(-f_z / |f_b|)``; ``f_b`` must lie in the vehicle's force set (the forces with zero torque
-  its rotors give in each body direction, :class:`fsr_sim.model.authority.ForceSet`): a tilting vehicle
+  its rotors give in each body direction, :class:`fsr_control.design.authority.ForceSet`): a tilting vehicle
   gives less force sideways than along ``-z_b``;
 
 and in both the body torque ``tau = I omega_dot_d + omega_d x I omega_d`` (with thrust along ``-z_b`` its yaw
 part holds the heading's ``I_zz psi''`` and the yaw rate the attitude picks up while tilted about two axes at
 once: 0.23 N m on quadrotor_ex4 for 6.2 m in 4 s, beyond its 0.155 N m). The leg is sampled at
 :data:`SAMPLES` times over each channel's duration; its peaks must lie within the authority scaled by the
-margin (:mod:`fsr_sim.model.authority`): the thrust within ``[thrust_min, thrust_max]`` (fully actuated: the
+margin (:mod:`fsr_control.design.authority`): the thrust within ``[thrust_min, thrust_max]`` (fully actuated: the
 body force within the force set), ``|tau_k|`` within the torque about body axis ``k``, and (fully actuated) the
 tilt within ``tilt_max``. Each axis is compared with
 what the rotors give about it alone at hover thrust, so a leg that asks for several axes at once near their
@@ -45,9 +45,9 @@ import numpy as np
 
 from fsr_control.core import reference as core
 from fsr_control.core.flatness import ATTITUDE_OK, attitude_from_thrust_vector
+from fsr_control.design.authority import Authority, ForceSet
+from fsr_control.design.authority_cache import model_authority, model_force_set
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.model.authority import Authority, ForceSet
-from fsr_sim.model.authority_cache import model_authority, model_force_set
 from fsr_sim.model.vehicle import Vehicle
 
 FEASIBILITY_MODES = ("stretch", "warn", "refuse")  # trajectory.feasibility

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsr_estimation.core.metrics import CHANNELS, SETTLING_DEFINITIONS, SweepResult, sweep
-from fsr_estimation.core.observer import ObserverModel
+from fsr_estimation.estimator.metrics import CHANNELS, SETTLING_DEFINITIONS, SweepResult, sweep
+from fsr_estimation.estimator.observer import ObserverModel
 from fsr_estimation.io.flight_log import CSV_COLUMNS_HELP, FlightLog, FlightLogError, load_flight_log
 from fsr_sim.cli.arguments import exit_codes_text
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK

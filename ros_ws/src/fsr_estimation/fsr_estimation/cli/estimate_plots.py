@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402 - the backend must be chosen first
 import numpy as np  # noqa: E402
 
-from fsr_estimation.core.metrics import CHANNELS, SweepResult  # noqa: E402
+from fsr_estimation.estimator.metrics import CHANNELS, SweepResult  # noqa: E402
 from fsr_estimation.io.flight_log import FlightLog  # noqa: E402
 
 LABELS = {"fx": "f_x [N]", "fy": "f_y [N]", "fz": "f_z [N]", "tx": "tau_x [N m]", "ty": "tau_y [N m]",

@@ -1,1 +1,1 @@
-"""Momentum observer algorithms (numpy/scipy only, no rclpy)."""
+"""The momentum observer's compiled step (numba; :mod:`fsr_estimation.core.observer_step`)."""

@@ -1,7 +1,7 @@
 """The momentum observer per sample (compiled core, :mod:`fsr_sim.core.jit`).
 
 Discrete recursion (all states zero at k = 0), with ``K_1 .. K_r`` from
-:func:`fsr_estimation.core.filter_design.gain_chain`:
+:func:`fsr_estimation.estimator.filter_design.gain_chain`:
 
     gamma_1[k+1] = gamma_1[k] + K_1 ((q[k+1] - q[k]) - T_s (w_hat[k] + b_k))
     gamma_j[k+1] = gamma_j[k] + K_j T_s (gamma_{j-1}[k] - w_hat[k]),   j = 2..r
@@ -13,8 +13,8 @@ lean form ``M = Q^T I_b Q`` and ``C^T eta_dot = Q_dot^T I_b omega`` (the other t
 ``-Q^T I_b (omega x omega)``, is zero). ``w_hat = [f_e (world NED) [N]; tau_e (Euler-angle coordinates) [N m]]``;
 in the body frame (comparable with ``wrench_truth``): force ``R_b^T f_e``, torque ``Q(eta)^-T tau_e``.
 
-The node's :class:`fsr_estimation.core.stamped.StampedEstimator`, the controller's compensation and the
-in-process loop all run these functions; :class:`fsr_estimation.core.observer.MomentumObserver` is their
+The node's :class:`fsr_estimation.estimator.stamped.StampedEstimator`, the controller's compensation and the
+in-process loop all run these functions; :class:`fsr_estimation.estimator.observer.MomentumObserver` is their
 Python shell.
 """
 

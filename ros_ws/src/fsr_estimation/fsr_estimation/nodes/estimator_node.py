@@ -4,7 +4,7 @@ Subscribes ``odom`` (nav_msgs/Odometry) and ``wrench_cmd`` (geometry_msgs/Wrench
 ``estimator.input: measured`` where the simulator publishes it, ``rotor_state`` (sensor_msgs/JointState: the
 rotors' speeds and tilts, through the nominal allocation, :func:`fsr_sim.core.rotors.measured_rotor_wrench`)
 instead -- and hands them to
-:class:`fsr_estimation.core.stamped.StampedEstimator` (pairing by header stamp, sample-period checks and
+:class:`fsr_estimation.estimator.stamped.StampedEstimator` (pairing by header stamp, sample-period checks and
 resets on gaps live there), then publishes each estimate as ``wrench_estimate`` (WrenchStamped, body FRD:
 force ``R_b^T f_e``, torque ``Q^-T tau_e``, stamped with the pair's stamp) and ``mass_estimate`` (Float64,
 kg).
@@ -31,7 +31,7 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
-from fsr_estimation.core.stamped import Estimate, StampedEstimator
+from fsr_estimation.estimator.stamped import Estimate, StampedEstimator
 from fsr_estimation.nodes.estimator_params import PARAMETER_NAMES, USAGE, node_settings
 from fsr_estimation.nodes.packets import EstimatePackets
 from fsr_sim.contract import MASS_ESTIMATE, ODOM, ROTOR_STATE, WRENCH_CMD, WRENCH_ESTIMATE

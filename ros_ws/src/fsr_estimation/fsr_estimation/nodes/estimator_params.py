@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from fsr_estimation.config.estimator_config import DEFAULT_C0, DEFAULT_R, EstimatorConfig, estimator_config
-from fsr_estimation.core.filter_design import check_filter_parameters
+from fsr_estimation.estimator.filter_design import check_filter_parameters
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError, Section, checked_spd
 from fsr_sim.contract import (
@@ -34,7 +34,7 @@ from fsr_sim.contract import (
     SIM_STATUS,
     WRENCH_CMD,
 )
-from fsr_sim.model.allocation import actuation_matrix
+from fsr_sim.model.rotors import actuation_matrix
 from fsr_sim.ros.node_usage import NodeUsage, Parameter
 from fsr_sim.ros.recorder_match import RECORDED_TOPICS
 

@@ -4,7 +4,7 @@ writes them): ``wrench_estimate`` (WrenchStamped, ``base_link_frd``, the pair's 
 
 from __future__ import annotations
 
-from fsr_estimation.core.stamped import Estimate
+from fsr_estimation.estimator.stamped import Estimate
 from fsr_sim.contract import MASS_ESTIMATE, WRENCH_ESTIMATE
 from fsr_sim.ros import cdr_pack
 

@@ -7,9 +7,10 @@
     plant.state.position, plant.state.rotation
 
 Modules: :mod:`~fsr_sim.model.frames` (NED/FRD), :mod:`~fsr_sim.model.so3` (rotations),
-:mod:`~fsr_sim.model.vehicle`, :mod:`~fsr_sim.model.allocation`, :mod:`~fsr_sim.model.environment`,
-:mod:`~fsr_sim.model.disturbances`, :mod:`~fsr_sim.model.rigid_body`, :mod:`~fsr_sim.model.plant`,
-:mod:`~fsr_sim.model.authority` (what the rotors give at hover; imports scipy, so not imported here).
+:mod:`~fsr_sim.model.vehicle`, :mod:`~fsr_sim.model.rotors` (the rotors' wrench, limits and saturation record),
+:mod:`~fsr_sim.model.environment`, :mod:`~fsr_sim.model.disturbances`, :mod:`~fsr_sim.model.rigid_body`,
+:mod:`~fsr_sim.model.plant`. What the controller derives from the model (the allocation, the authority, the
+designed gains) is in :mod:`fsr_control`.
 Importing this package imports no rclpy and reads no YAML (``load_vehicle`` reads its file on call); the
 per-step models are the compiled core of :mod:`fsr_sim.core`.
 """

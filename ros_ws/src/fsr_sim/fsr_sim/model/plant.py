@@ -12,8 +12,9 @@ stage. Two actuation modes:
   the vehicle's first-order lags (the speeds and tilts integrated within the RK4 stages, docs/model.md);
   ``f_b = sum c_f r_i |w_i| w_i z_i``, ``tau_b = sum |w_i| w_i (c_f r_i p_i x z_i - k_i c_m z_i)`` with the
   thrust ratio ``r_i`` of :mod:`fsr_sim.model.environment` (drag torque is not scaled).
-* ``wrench``: the commanded body wrench directly, ``f_b`` and ``tau_b`` (the report's exercises 3 and 4 use
-  ``f_b = -u_T e3``); surfaces then only act through contact.
+* ``wrench``: the commanded body wrench ``f_b`` and ``tau_b`` directly (the report's exercises 3 and 4 use
+  ``f_b = -u_T e3``) - or, with a rotor time constant, each component lagging its command by that first-order
+  lag (the rotors' speed lag linearised about hover); surfaces then only act through contact.
 
 Built from plain Python values::
 
@@ -46,7 +47,6 @@ from fsr_sim.core.aerodynamics import AeroParams
 from fsr_sim.core.rigid_body import STATE_SIZE
 from fsr_sim.core.sensors import memory_size, reset_memory
 from fsr_sim.core.surfaces import has_thrust_effects
-from fsr_sim.model.allocation import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.checks import InvalidValueError, finite_array
 from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances
 from fsr_sim.model.environment import Environment, pack_surfaces, thrust_ratio_log
@@ -58,6 +58,7 @@ from fsr_sim.model.rigid_body import (
     RigidBodyState,
     pack_state,
 )
+from fsr_sim.model.rotors import SaturationReport, rotor_axes, rotor_columns, tilt_basis
 from fsr_sim.model.sensors import ImuModel, OdometryNoise, pack_sensors
 from fsr_sim.model.so3 import rotation_from_euler_zyx, rotation_from_quaternion
 from fsr_sim.model.turbulence import DrydenTurbulence, pack_turbulence
@@ -409,9 +410,10 @@ class Plant:
 
     # ----- commands ---------------------------------------------------------------------------------
     def set_rotor_command(self, speeds: ArrayLike, tilts: ArrayLike | None = None) -> bool:
-        """Apply rotor speeds [rad/s], shape (n,) (and tilts [rad], shape (n,), for a tilting vehicle), held
-        until the next command; speeds are clamped to the vehicle's limits. Returns True if anything
-        saturated (recorded in :attr:`saturation`).
+        """Command rotor speeds [rad/s], shape (n,) (and tilts [rad], shape (n,), for a tilting vehicle), held
+        until the next command: the rotors take them at once, or follow them through the vehicle's first-order
+        lags. Speeds are clamped to the vehicle's limits; returns True if anything saturated (recorded in
+        :attr:`saturation`).
 
         Raises
         ------
@@ -426,8 +428,9 @@ class Plant:
         return bool(core.set_rotor_command(self.params, self.core_state, speeds, tilt_array, with_tilts))
 
     def set_wrench(self, force_body: ArrayLike, torque_body: ArrayLike) -> None:
-        """Apply a body wrench (``actuation: wrench``): force [N] and torque [N m], body FRD, held until the
-        next command. The report's thrust ``u_T`` is ``force_body = [0, 0, -u_T]``."""
+        """Command a body wrench (``actuation: wrench``): force [N] and torque [N m], body FRD, held until the
+        next command; it acts at once, or lagging by the rotor time constant (module docstring). The report's
+        thrust ``u_T`` is ``force_body = [0, 0, -u_T]``."""
         if self.actuation != "wrench":
             raise RuntimeError("set_wrench needs actuation='wrench' (this plant takes rotor speeds)")
         wrench = np.concatenate((finite_array(force_body, (3,), "force_body"),
@@ -444,7 +447,7 @@ class Plant:
         return thrust_of(float(self.core_state.wrench_command[2]))
 
     def cut_thrust(self) -> None:
-        """Failsafe: all rotors stopped / zero wrench."""
+        """Failsafe: all rotors commanded to stop / zero wrench (with a rotor lag they spin down)."""
         core.cut_thrust(self.params, self.core_state)
 
     # ----- dynamics ---------------------------------------------------------------------------------

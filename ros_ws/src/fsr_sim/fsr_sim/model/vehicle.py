@@ -189,7 +189,7 @@ class Vehicle:
         """The rotors can produce any body wrench (the allocation has rank 6): canted fixed rotors or servos. Such
         a vehicle can hold any attitude (the Voliro controller); the others produce thrust along ``-z_b`` and a
         torque (the geometric controller). Worked out once per object (it is frozen)."""
-        from fsr_sim.model.allocation import actuation_matrix  # allocation imports this module
+        from fsr_sim.model.rotors import actuation_matrix  # allocation imports this module
 
         return bool(np.linalg.matrix_rank(actuation_matrix(self), tol=1e-9) == 6)
 

@@ -1,7 +1,8 @@
 """Momentum-based external wrench observer (docs/model.md §3.8, report exercise 3).
 
 Discrete recursion (all states zero at k = 0), with ``K_1 .. K_r`` from
-:func:`fsr_estimation.core.filter_design.gain_chain` and ``q``, ``b`` from :mod:`fsr_estimation.core.momentum`:
+:func:`fsr_estimation.estimator.filter_design.gain_chain` and ``q``, ``b`` from
+:mod:`fsr_estimation.estimator.momentum`:
 
     gamma_1[k+1] = gamma_1[k] + K_1 ((q[k+1] - q[k]) - T_s (w_hat[k] + b_k))
     gamma_j[k+1] = gamma_j[k] + K_j T_s (gamma_{j-1}[k] - w_hat[k]),   j = 2..r
@@ -25,8 +26,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from fsr_estimation.core import observer_step as core
-from fsr_estimation.core.filter_design import cascade_sections, check_filter_parameters, gain_chain
-from fsr_estimation.core.momentum import observer_input
+from fsr_estimation.estimator.filter_design import cascade_sections, check_filter_parameters, gain_chain
+from fsr_estimation.estimator.momentum import observer_input
 from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.model.checks import symmetric_positive_definite
 from fsr_sim.model.so3 import euler_rate_matrix, rotation_from_euler_zyx

@@ -1,4 +1,4 @@
-"""A vehicle's authority (:mod:`fsr_sim.model.authority`) and, if fully actuated, its force set, computed once per
+"""A vehicle's authority (:mod:`fsr_control.design.authority`) and, if fully actuated, its force set, computed once per
 vehicle model and kept on disk.
 
 The planner checks every leg against the authority at each start (every node, every in-process flight, every
@@ -22,9 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
+from fsr_control.design import authority as authority_module
+from fsr_control.design.authority import Authority, ForceSet, authority, force_set
 from fsr_sim.core.jit import fsr_cache
-from fsr_sim.model import allocation
-from fsr_sim.model.authority import Authority, ForceSet, authority, force_set
+from fsr_sim.model import rotors
 from fsr_sim.model.vehicle import Vehicle
 
 _MEMORY: dict[str, tuple[Authority, ForceSet | None]] = {}
@@ -37,10 +38,10 @@ def cache_folder() -> Path:
 
 
 def vehicle_key(vehicle: Vehicle) -> str:
-    """Hash of every field of ``vehicle`` and of the sources of the authority and the allocation it uses."""
+    """Hash of every field of ``vehicle`` and of the sources of the authority and of the rotors' wrench it uses."""
     digest = hashlib.sha256()
-    for module in ("authority.py", "allocation.py"):
-        digest.update((Path(allocation.__file__).parent / module).read_bytes())
+    for module in (authority_module, rotors):
+        digest.update(Path(module.__file__).read_bytes())
     for field in dataclasses.fields(vehicle):
         value = getattr(vehicle, field.name)
         digest.update(field.name.encode())
@@ -49,13 +50,13 @@ def vehicle_key(vehicle: Vehicle) -> str:
 
 
 def model_authority(vehicle: Vehicle) -> Authority:
-    """The model's :class:`~fsr_sim.model.authority.Authority` of ``vehicle`` (margin 1): from memory, the
+    """The model's :class:`~fsr_control.design.authority.Authority` of ``vehicle`` (margin 1): from memory, the
     disk cache, or computed (and then kept in both)."""
     return _entry(vehicle)[0]
 
 
 def model_force_set(vehicle: Vehicle) -> ForceSet | None:
-    """The :class:`~fsr_sim.model.authority.ForceSet` of ``vehicle`` if it is fully actuated (else None), kept
+    """The :class:`~fsr_control.design.authority.ForceSet` of ``vehicle`` if it is fully actuated (else None), kept
     like :func:`model_authority`."""
     return _entry(vehicle)[1]
 

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_estimation.core.observer import MomentumObserver, _vector
 from fsr_estimation.core.observer_step import euler_inputs
+from fsr_estimation.estimator.observer import MomentumObserver, _vector
 from fsr_sim.core.so3 import matrix_rows
 
 MAX_PENDING = 1000  # unpaired stamps kept per stream (about 1 s at 1 kHz; the node keeps a whole stream queue)

@@ -33,9 +33,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fsr_estimation.core.filter_design import check_filter_parameters
-from fsr_estimation.core.momentum import observer_input
-from fsr_estimation.core.observer import ObserverModel, filter_observer_input
+from fsr_estimation.estimator.filter_design import check_filter_parameters
+from fsr_estimation.estimator.momentum import observer_input
+from fsr_estimation.estimator.observer import ObserverModel, filter_observer_input
 
 CHANNELS = ("fx", "fy", "fz", "tx", "ty", "tz")
 SETTLING_DEFINITIONS = ("standard", "report", "smoothed")

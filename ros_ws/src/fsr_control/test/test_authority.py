@@ -1,4 +1,4 @@
-"""The authority numbers (fsr_sim.model.authority) against hand calculations from the vehicles' parameters.
+"""The authority numbers (fsr_control.design.authority) against hand calculations from the vehicles' parameters.
 
 Notation: hover squared speed ``u_h = m g / (n c_f)``, limits ``u_min = w_min^2``, ``u_max = w_max^2``, the room
 for a differential ``d = min(u_max - u_h, u_h - u_min)``, arm length ``L``. Body FRD: a rotor at ``p`` pushing
@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from fsr_control.design.authority import authority, force_directions, force_set, largest_along, rotor_inputs
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.model.allocation import wrench_from_rotor_speed_sq
-from fsr_sim.model.authority import authority, force_directions, force_set, largest_along, rotor_inputs
+from fsr_sim.model.rotors import wrench_from_rotor_speed_sq
 from fsr_sim.model.vehicle import load_vehicle
 
 TORQUES = ("roll_torque", "pitch_torque", "yaw_torque")

@@ -7,11 +7,11 @@ Markdown by default; ``--json`` prints an object with ``mass``, ``inertia`` (3x3
 (6 x n, squared rotor speeds -> body wrench, rows f_x f_y f_z tau_x tau_y tau_z), for a coplanar vehicle
 also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a tilting vehicle
 ``allocation_static`` (6 x 2n, docs/model.md §3.2); ``authority`` is what the rotors give at hover at margin 1
-(the model's limits, :mod:`fsr_sim.model.authority`): ``thrust_min``, ``thrust_max`` [N], ``roll_torque``,
+(the model's limits, :mod:`fsr_control.design.authority`): ``thrust_min``, ``thrust_max`` [N], ``roll_torque``,
 ``pitch_torque``, ``yaw_torque`` [N m], ``roll_acceleration``, ``pitch_acceleration``, ``yaw_acceleration``
 [rad/s^2] and ``tilt_max`` [rad] (null unless fully actuated); null, with the reason in ``authority_error``, for a
 vehicle that cannot hover. ``designed_gains`` are the loop bandwidths [rad/s] and gains of ``controller.profile:
-flight`` (:mod:`fsr_sim.model.gain_design`): ``attitude``, ``yaw``, ``horizontal``, ``vertical``, what set each
+flight`` (:mod:`fsr_control.design.gain_design`): ``attitude``, ``yaw``, ``horizontal``, ``vertical``, what set each
 (``limits``), the lag designed for (``lag_s``), ``wrench_gains`` (the geometric law's, N/m ... N m s/rad) and
 ``acceleration_gains`` (the Voliro law's, 1/s^2 and 1/s); null when the authority is.
 """
@@ -23,16 +23,16 @@ import sys
 
 import numpy as np
 
+from fsr_control.design.authority import Authority, authority
+from fsr_control.design.gain_design import CASCADE_RATIO, GainDesign, design_gains
 from fsr_sim.cli.arguments import ArgumentParser
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_OK
-from fsr_sim.model.allocation import (
+from fsr_sim.model.rotors import (
     octocopter_allocation_4x8,
     static_tilting_allocation,
     wrench_from_rotor_speed_sq,
 )
-from fsr_sim.model.authority import Authority, authority
-from fsr_sim.model.gain_design import CASCADE_RATIO, GainDesign, design_gains
 from fsr_sim.model.vehicle import ROTOR_AERODYNAMICS, Vehicle, load_vehicle
 
 WRENCH_ROWS = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")

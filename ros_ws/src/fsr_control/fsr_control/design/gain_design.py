@@ -1,5 +1,5 @@
 """Loop gains designed from a vehicle's model: its mass, inertia and the authority of its rotors at hover
-(:mod:`fsr_sim.model.authority`), made robust to a lagging motor and delayed onboard sensors
+(:mod:`fsr_control.design.authority`), made robust to a lagging motor and delayed onboard sensors
 (docs/control.md, *Gains designed from the vehicle*).
 
 Each loop is designed as the second-order error dynamics ``e'' + 2 zeta w e' + w^2 e = 0`` it would have
@@ -11,14 +11,14 @@ alone, ``w`` its bandwidth [rad/s] (the natural frequency), ``zeta`` = :data:`DA
   larger of the vehicle's rotor and tilt time constants and :data:`DESIGN_MOTOR_TIME_CONSTANT` (30 ms), ``d``
   :data:`DESIGN_SENSOR_DELAY` (10 ms) and ``1 / (2 f_s)`` the mean age of a sample held at
   :data:`DESIGN_SENSOR_RATE` (100 Hz): 45 ms, ``w_lag = 7.4`` rad/s, which leaves about 38 deg of margin;
-* **attitude** (roll and pitch): an attitude error of :data:`ATTITUDE_ERROR` (0.1 rad) demands at most
+* **attitude** (roll and pitch): an attitude error of :data:`ATTITUDE_ERROR` (2 deg) demands at most
   :data:`AUTHORITY_SHARE` (half) of the angular acceleration the rotors give at hover about the weaker axis,
   ``w_R^2 e <= share alpha``: ``w_R = min(w_lag, sqrt(share alpha / e))``; **yaw** likewise with the yaw
   acceleration;
-* **position**, vehicles that tilt to move (thrust along ``-z_b``): horizontally :data:`CASCADE_RATIO` (4)
-  times slower than the attitude loop, ``w_xy = w_R / 4``, so that the attitude follows the thrust direction
+* **position**, vehicles that tilt to move (thrust along ``-z_b``): horizontally :data:`CASCADE_RATIO` (3)
+  times slower than the attitude loop, ``w_xy = w_R / 3``, so that the attitude follows the thrust direction
   the position loop asks for (the reference feed-forward's rates assume it does); vertically, where the
-  thrust acts at once, a position error of :data:`POSITION_ERROR` (0.5 m) demands at most half the vertical
+  thrust acts at once, a position error of :data:`POSITION_ERROR` (0.25 m) demands at most half the vertical
   acceleration the thrust range gives (the smaller of up and down), ``w_z = min(w_lag, sqrt(share a_z / e))``;
 * **position**, fully actuated vehicles (the force needs no tilt): horizontally as vertically, with the
   lateral acceleration the force set gives at level hover (the smallest of the four body directions);
@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsr_sim.model.authority import Authority, ForceSet
+from fsr_control.design.authority import Authority, ForceSet
 from fsr_sim.model.vehicle import Vehicle
 
 DAMPING = 0.8  # zeta of every loop
@@ -142,7 +142,7 @@ def _bounded(cap: float, acceleration: float, error: float) -> tuple[float, str]
 
 def lateral_acceleration(vehicle: Vehicle, force_set: ForceSet) -> float:
     """The smallest of the largest body forces along ``+-x``, ``+-y`` a fully actuated vehicle adds to its level
-    hover force with zero torque (its force set, :class:`~fsr_sim.model.authority.ForceSet`), over its mass
+    hover force with zero torque (its force set, :class:`~fsr_control.design.authority.ForceSet`), over its mass
     [m/s^2]."""
     reach = []
     for direction in np.vstack((np.eye(3)[:2], -np.eye(3)[:2])):
@@ -161,7 +161,7 @@ def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set
     vehicle : Vehicle
         The nominal model.
     authority : Authority, optional
-        Its authority at margin 1 (default: :func:`fsr_sim.model.authority_cache.model_authority`).
+        Its authority at margin 1 (default: :func:`fsr_control.design.authority_cache.model_authority`).
     force_set : ForceSet, optional
         A fully actuated vehicle's force set (default: the cached one); unused otherwise.
     lag : float, optional
@@ -171,7 +171,7 @@ def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set
     -------
     GainDesign
     """
-    from fsr_sim.model.authority_cache import model_authority, model_force_set
+    from fsr_control.design.authority_cache import model_authority, model_force_set
 
     authority = model_authority(vehicle) if authority is None else authority
     lag = design_lag(vehicle) if lag is None else float(lag)

@@ -1,6 +1,6 @@
 import json
 
-from fsr_sim.cli.vehicle_cli import main
+from fsr_bringup.cli.vehicle_cli import main
 
 
 def test_json_has_the_documented_fields(capsys):
@@ -47,7 +47,7 @@ def test_bad_argument_is_one_line_exit_2(capsys):
 def test_json_and_markdown_print_the_authority_at_margin_1(capsys):
     import pytest
 
-    from fsr_sim.model.authority import authority
+    from fsr_control.design.authority import authority
     from fsr_sim.model.vehicle import load_vehicle
 
     for name in ("quadrotor_ex4", "octocopter", "tilting_quadrotor_ex5"):

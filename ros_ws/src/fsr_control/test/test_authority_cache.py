@@ -1,4 +1,4 @@
-"""The authority kept per vehicle model (fsr_sim.model.authority_cache): the computed numbers, from memory or
+"""The authority kept per vehicle model (fsr_control.design.authority_cache): the computed numbers, from memory or
 disk, never stale for a changed vehicle, and an unwritable or corrupt cache only costs the computation."""
 
 from __future__ import annotations
@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsr_sim.model import authority_cache, load_vehicle
-from fsr_sim.model.authority import authority, force_set
+from fsr_control.design import authority_cache
+from fsr_control.design.authority import authority, force_set
+from fsr_sim.model import load_vehicle
 
 
 @pytest.fixture

@@ -1,7 +1,8 @@
 """Control authority from the model: the largest thrust, torques, angular accelerations and hover tilt the
 rotors can give at hover with the other axes kept (docs/model.md §3.2, *Authority*).
 
-Computed once (at start-up, by ``fsr-vehicle``), not per step: small linear programs
+Computed once per vehicle model at start-up, not per step (kept by :mod:`fsr_control.design.authority_cache`
+for the planner's check and the designed gains; ``fsr-vehicle`` prints it): small linear programs
 (:func:`scipy.optimize.linprog`, HiGHS) over the rotors' inputs ``x``, whose body wrench is linear,
 ``[f_b; tau_b] = M x`` (body FRD; rows ``f_x f_y f_z tau_x tau_y tau_z``; thrust ``u_T = -f_z`` [N]).
 Each number is the largest ``s`` with
@@ -24,9 +25,9 @@ A torque or an angular acceleration is solved for both signs of ``d`` and the sm
 The inputs ``x`` and their limits:
 
 * fixed rotors: ``x_i = c_f u_w,i`` [N], the rotor's thrust, with ``c_f w_min^2 <= x_i <= c_f w_max^2`` (a box:
-  the LP is exact); ``M`` is :func:`~fsr_sim.model.allocation.wrench_from_rotor_speed_sq` over ``c_f``.
+  the LP is exact); ``M`` is :func:`~fsr_sim.model.rotors.wrench_from_rotor_speed_sq` over ``c_f``.
 * rotors on servos: ``x = [u_v1, u_l1, ...]`` [N] of the static allocation
-  (:func:`~fsr_sim.model.allocation.static_tilting_allocation`), rotor ``i``'s thrust ``c_f u_w,i =
+  (:func:`~fsr_sim.model.rotors.static_tilting_allocation`), rotor ``i``'s thrust ``c_f u_w,i =
   |(u_v,i, u_l,i)|`` at tilt ``alpha_i = atan2(u_l,i, u_v,i)``. The feasible set per rotor is the annulus
   sector ``c_f w_min^2 <= |(u_v, u_l)| <= c_f w_max^2``, ``|alpha| <= tilt_angle_max``; the LP uses a convex
   polygon inside it, so every number is one the rotors can really give (an inner approximation):
@@ -66,12 +67,12 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from fsr_sim.model.allocation import (
+from fsr_sim.model.frames import E3
+from fsr_sim.model.rotors import (
     rotor_commands_from_static,
     static_tilting_allocation,
     wrench_from_rotor_speed_sq,
 )
-from fsr_sim.model.frames import E3
 from fsr_sim.model.so3 import rotation_exp
 from fsr_sim.model.vehicle import Vehicle
 

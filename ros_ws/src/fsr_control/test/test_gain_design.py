@@ -1,4 +1,4 @@
-"""Gains designed from the vehicle (fsr_sim.model.gain_design): each loop's bandwidth follows the vehicle's
+"""Gains designed from the vehicle (fsr_control.design.gain_design): each loop's bandwidth follows the vehicle's
 authority, its motor and its layout as the rules say, and the gains follow the bandwidths."""
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fsr_sim.cli.vehicle_cli import main
-from fsr_sim.model import gain_design
-from fsr_sim.model.authority import authority
-from fsr_sim.model.authority_cache import model_force_set
-from fsr_sim.model.gain_design import design_gains
+from fsr_bringup.cli.vehicle_cli import main
+from fsr_control.design import gain_design
+from fsr_control.design.authority import authority
+from fsr_control.design.authority_cache import model_force_set
+from fsr_control.design.gain_design import design_gains
 from fsr_sim.model.vehicle import load_vehicle
 
 QUAD = load_vehicle("quadrotor_ex4")

@@ -1,8 +1,7 @@
 import numpy as np
 import pytest
 
-from fsr_sim.model.allocation import (
-    FixedRotorAllocator,
+from fsr_sim.model.rotors import (
     SaturationReport,
     clamp_rotor_speeds,
     octocopter_allocation_4x8,
@@ -35,16 +34,6 @@ def test_octocopter_gq_equals_the_report_entry_by_entry():
 def test_force_rows_of_a_coplanar_vehicle_are_zero():
     allocation = wrench_from_rotor_speed_sq(load_vehicle("octocopter"))
     assert np.all(allocation[:2] == 0.0)
-
-
-@pytest.mark.parametrize("name", ["octocopter", "quadrotor_ex4"])
-def test_fixed_rotor_round_trip_wrench_speeds_wrench(name):
-    v = load_vehicle(name)
-    thrust, torque = 1.1 * v.weight, np.array((0.05, -0.03, 0.01))
-    speeds, excess = clamp_rotor_speeds(v, FixedRotorAllocator(v).rotor_speed_sq(thrust, torque))
-    assert not excess.any()
-    wrench = wrench_from_rotor_speed_sq(v) @ (speeds**2)
-    np.testing.assert_allclose(wrench, [0, 0, -thrust, *torque], atol=1e-10)
 
 
 def test_tilting_round_trip_wrench_static_rotor_commands_wrench():
@@ -81,8 +70,3 @@ def test_clamp_and_saturation_report_name_the_worst_rotor():
     assert not report.record(0.5, np.zeros(4))
     assert (report.count, report.first_time, report.worst_rotor) == (1, 0.25, 2)
     assert report.as_dict()["per_rotor"] == {"2": 1, "3": 1}
-
-
-def test_fixed_allocator_refuses_tilting_vehicle():
-    with pytest.raises(ValueError, match="fixed rotors"):
-        FixedRotorAllocator(load_vehicle("tilting_quadrotor_ex5"))

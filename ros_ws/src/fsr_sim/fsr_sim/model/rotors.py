@@ -1,4 +1,6 @@
-"""Control allocation built from rotor geometry (docs/model.md §3.2): never a hand-typed matrix.
+"""The rotors' physics from their geometry (docs/model.md §3.2): the body wrench of rotor commands (the allocation
+matrices, never hand-typed), the speed limits and the record of their saturation. The inverse, the controller's
+allocation of a wrench to rotor commands, is :mod:`fsr_control.allocation` (docs/architecture.md, *Layers*).
 
 Per rotor ``i`` with position ``p_i`` (body FRD), spin ``k_i``, axis ``z_i = Rot(a_i, alpha_i) z_0,i`` (``z_0,i`` its
 fixed thrust axis, ``-e3`` unless canted)
@@ -22,7 +24,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_sim.contract import body_force_of_thrust
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.model.vehicle import Vehicle
 
@@ -199,32 +200,3 @@ def clamp_rotor_speeds(vehicle: Vehicle, speed_sq: np.ndarray) -> tuple[np.ndarr
     speeds, excess = np.empty_like(flat), np.empty_like(flat)
     core_rotors.clamped_speeds(flat, vehicle.rotor_speed_min, vehicle.rotor_speed_max, speeds, excess)
     return speeds.reshape(speed_sq.shape), excess.reshape(speed_sq.shape)
-
-
-class FixedRotorAllocator:
-    """The pseudo-inverse allocation of fixed (untilted) rotors: wrench -> squared rotor speeds.
-
-    For a coplanar vehicle only ``[f_z, tau_x, tau_y, tau_z]`` can be produced (:attr:`rows`); the
-    pseudo-inverse of that 4 x n block gives the minimum-norm ``u_w`` (exact inverse for a quadrotor). The
-    controller's compiled allocation (:mod:`fsr_control.core.allocation`) is packed from :attr:`inverse_6`.
-    """
-
-    def __init__(self, vehicle: Vehicle) -> None:
-        if vehicle.has_servos:
-            raise ValueError(f"FixedRotorAllocator needs fixed rotors; '{vehicle.name}' has rotors on servos")
-        self.vehicle = vehicle
-        self.allocation = wrench_from_rotor_speed_sq(vehicle)
-        self.rows = np.flatnonzero(np.any(np.abs(self.allocation) > 1e-15, axis=1))
-        self.inverse = np.linalg.pinv(self.allocation[self.rows])
-
-    @property
-    def inverse_6(self) -> np.ndarray:
-        """:attr:`inverse` as an n x 6 matrix over all wrench rows (zero columns for those not produced)."""
-        full = np.zeros((self.vehicle.rotor_count, 6))
-        full[:, self.rows] = self.inverse
-        return full
-
-    def rotor_speed_sq(self, thrust: float, torque_body: np.ndarray) -> np.ndarray:
-        """Squared speeds for a thrust ``u_T`` [N] along ``-z_b`` and a body torque [N m] (unclamped)."""
-        wrench = np.array((*body_force_of_thrust(thrust), *torque_body[:3]))
-        return self.inverse @ wrench[self.rows]
