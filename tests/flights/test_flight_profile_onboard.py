@@ -28,9 +28,9 @@ def test_the_figure8_flies_within_10_cm_on_onboard_sensors_in_turbulence():
 
 
 def test_the_figure8_on_odometry_alone_keeps_the_law_of_before():
-    """``controller.imu: false``: the law flies on ``odom`` with the gains designed for its delay, as before (the
+    """``controller.use_imu: false``: the law flies on ``odom`` with the gains designed for its delay, as before (the
     figure-8 with the true state: 0.168 m RMS)."""
-    run = simulate("figure8_hummingbird", set={"sensors.preset": "ideal", "controller.imu": False})
+    run = simulate("figure8_hummingbird", set={"sensors.preset": "ideal", "controller.use_imu": False})
     assert run.end_reason == "finished"
     assert abs(position_rms(run) - 0.168) < 0.002
 

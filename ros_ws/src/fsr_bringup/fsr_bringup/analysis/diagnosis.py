@@ -57,7 +57,7 @@ def _gain_causes(flight: RecordedFlight) -> list[dict[str, str]]:
     if controller is None or config is None or config.actuation != "rotors":
         return []
     try:
-        design = design_gains(config.vehicle, lag=design_lag(config.vehicle, controller.imu))
+        design = design_gains(config.vehicle, lag=design_lag(config.vehicle, controller.use_imu))
     except ValueError:
         return []
     designed = design.wrench_gains() if controller.type == "geometric" else design.acceleration_gains()

@@ -14,7 +14,7 @@ controller:
                                     # (>= 0: 3 numbers or a symmetric positive semi-definite 3x3; 0: none)
   feedforward: reference            # geometric: where R_d's rates come from: reference (jerk, snap) |
                                     # measured (the measured acceleration: the report's); default by profile
-  imu: true                         # geometric: fly on the IMU: damp with the gyro and, where odom is a
+  use_imu: true                     # geometric: fly on the IMU: damp with the gyro and, where odom is a
                                     # measurement, fly on the IMU-bridged estimate of the state; its designed
                                     # gains have no odometry delay to survive; default: flight profile with
                                     # sensors.imu (report: false)
@@ -119,7 +119,7 @@ class ControllerConfig:
     rotor_state: bool = False  # the simulator publishes rotor_state (the rotors' measured speeds)
     odometry_measured: bool = False  # odom is a measurement (noisy, late or slow), not the true state
     odometry_delay_steps: int = 0  # steps odom's samples are late by (sensors.odometry)
-    imu: bool = False  # geometric: the law flies on the IMU (controller.imu)
+    use_imu: bool = False  # geometric: the law flies on the IMU (controller.use_imu)
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
@@ -202,12 +202,12 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
     profile = controller.string("profile", PROFILES[0], choices=PROFILES)
     imu = False
     if controller_type == "geometric":
-        imu = controller.boolean("imu", profile == "flight" and sim.imu.enabled)
+        imu = controller.boolean("use_imu", profile == "flight" and sim.imu.enabled)
         if imu and not sim.imu.enabled:
-            raise controller.error("imu", "the vehicle has no IMU: set sensors.imu (e.g. sensors.preset: onboard) "
-                                          "or controller.imu: false")
-    elif controller.has("imu"):
-        raise controller.error("imu", f"only the geometric law has it, not {controller_type}")
+            raise controller.error("use_imu", "the vehicle has no IMU: set sensors.imu (e.g. sensors.preset: onboard) "
+                                          "or controller.use_imu: false")
+    elif controller.has("use_imu"):
+        raise controller.error("use_imu", f"only the geometric law has it, not {controller_type}")
     gains = _gains(controller.section("gains"), controller_type, profile, vehicle, imu)
     canted = vehicle.fully_actuated and not vehicle.has_servos  # fixed rotors: clamped rotor by rotor
     allocation = controller.string("allocation", "clamp" if canted else DEFAULT_ALLOCATION,
@@ -272,7 +272,7 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
             "allocation": allocation, "compensation": compensation, "air_mode": air_mode,
             "acceleration_filter_hz": acceleration_filter_hz, "aerodynamics": aerodynamics, "filter_hz": filter_hz,
             "odometry_measured": odometry.enabled or odometry.delay_steps > 0 or odometry.every_steps > 1,
-            "odometry_delay_steps": odometry.delay_steps, "imu": imu}
+            "odometry_delay_steps": odometry.delay_steps, "use_imu": imu}
 
 
 def controller_config(scenario: Scenario) -> ControllerConfig:

@@ -37,7 +37,7 @@ class LawType:
     designed_gains : callable
         ``designed_gains(vehicle, imu) -> dict`` of the same names: the gains of ``controller.profile: flight``,
         designed from the nominal vehicle (:mod:`fsr_sim.model.gain_design`); ``imu``: the law flies on the
-        IMU (``controller.imu``: no odometry delay in its loops).
+        IMU (``controller.use_imu``: no odometry delay in its loops).
     pack : callable
         ``pack(vehicle, config) -> params``: the law's own parameters (its field of ``LawParams``) from the
         validated configuration (:class:`~fsr_control.config.controller_config.ControllerConfig`).
@@ -71,7 +71,7 @@ class LawType:
 
 def _pack_geometric(vehicle: Vehicle, config: ControllerConfig) -> geometric_law.GeometricParams:
     return geometric.pack_geometric(vehicle, config.gains, config.feedforward, config.acceleration_filter_hz,
-                                    config.integral_limit, config.imu, config.control_period,
+                                    config.integral_limit, config.use_imu, config.control_period,
                                     config.odometry_measured, config.odometry_delay_steps)
 
 

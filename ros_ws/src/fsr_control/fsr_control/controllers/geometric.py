@@ -44,7 +44,7 @@ lagging motor, the aerodynamics of the rotors' speeds), and its rates in ``R_d``
 attitude that lost control in every flight under sensor noise. The aerodynamics model's prediction
 (``controller.aerodynamics: model``), a function of the reference alone, turns ``R_d`` with its rates.
 
-**State** (``controller.imu``, the flight profile's default on a vehicle with an IMU): the attitude loop damps
+**State** (``controller.use_imu``, the flight profile's default on a vehicle with an IMU): the attitude loop damps
 with the gyro (the IMU's angular velocity, not ``odom``'s, which is late and averaged over its period) and,
 where ``odom`` is a measurement (noisy, late or held), the law flies on the IMU-bridged estimate of the pose and
 velocity at the current step (:func:`fsr_control.core.imu_bridge.bridged_state`, INDI's): the designed gains
