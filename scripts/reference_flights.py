@@ -9,7 +9,9 @@ recorded field sampled every ``--every`` steps (and at the last step) into one `
 written by the commit before the compiled flight core (86fe002), so the core is held to the code it replaced;
 the flights of the scenarios that name no ``controller.profile`` (octo_ground_effect, ceiling_approach,
 step_disturbance, wind_rejection and their variants) were written again when their default became the flight
-profile (reference feed-forward, gains designed for the vehicle), with the ``*_flight`` and ``*_onboard`` keys.
+profile (reference feed-forward, gains designed for the vehicle), with the ``*_flight`` and ``*_onboard`` keys;
+their compensated flights (``step_disturbance_compensated``, ``wind_rejection_compensated``) again when the flight
+profile stopped turning ``R_d`` with the compensated estimate's rates.
 ``--only KEY ...`` flies those keys and keeps every other key of an existing ``--out`` file as it is.
 """
 

@@ -99,12 +99,14 @@ def test_ex5_holds_pose_under_a_constant_world_wrench():
 
 def test_the_flight_profile_keeps_the_benefit_of_compensation():
     """The defaults (``controller.profile: flight``): compensation still cuts the gusts' error (measured: wind
-    RMS 0.104 -> 0.027 m, peak 0.205 -> 0.074 m; step RMS 0.228 -> 0.082 m, peak 0.535 -> 0.253 m)."""
+    RMS 0.104 -> 0.057 m, peak 0.205 -> 0.159 m; step RMS 0.228 -> 0.092 m, peak 0.535 -> 0.282 m). Less than
+    while the estimate's rates turned ``R_d`` (wind 0.027 m, step 0.082 m RMS), which lost control in every
+    flight under sensor noise (tests/flights/test_flight_profile_onboard.py)."""
     for name in ("wind_rejection", "step_disturbance"):
         off, on = fly(name), fly(name, ON)
         assert off.end_reason == on.end_reason == "finished"
         rms_off, rms_on = (np.sqrt(np.mean(position_error(run) ** 2)) for run in (off, on))
-        assert rms_on * 2.5 < rms_off and position_error(on).max() * 2.0 < position_error(off).max()
+        assert rms_on * 1.5 < rms_off and position_error(on).max() * 1.2 < position_error(off).max()
 
 
 def test_wind_rejection_gust_and_sinusoid():

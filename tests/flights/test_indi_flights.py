@@ -3,9 +3,9 @@ hover through a step of external force and torque and tracks paths at speed on t
 
 Measured (the Hummingbird, its 5 ms motor measured on ``rotor_state``, INDI's gains designed for it): a 1.1 N
 force and 0.015 N m torque step (5..10 s) peaks at 0.020 m and is held within 1e-8 m at its end (the geometric
-law of the flight profile, whose integral meets it: 0.485 m peak, 0.073 m at 10 s); a 3 m/s circle of 1.5 m is
-tracked within 0.0046 m RMS (0.131 m for the geometric law), a lissajous at up to 3.8 m/s within 0.0040 m RMS
-(0.091 m).
+law of the flight profile on the same IMU, whose integral meets it: 0.200 m peak, 0.007 m at 10 s); a 3 m/s
+circle of 1.5 m is tracked within 0.0046 m RMS (0.080 m for the geometric law without its aerodynamics model,
+0.009 m with it), a lissajous at up to 3.8 m/s within 0.0040 m RMS (0.053 m, 0.008 m).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@ measured speeds (``rotor_state``) instead of the commanded wrench, so a motor la
 disturbance (docs/estimation.md, *Compensation under rotor lag*).
 
 Measured with a 50 ms motor, ``c0 = 100``, ``r = 1``: wind_rejection (the report's law, 7 s) ends 55 m off with the
-commanded input and 2.2e-4 m off with the measured one; step_disturbance (the flight profile) crashes with the
-commanded input and ends 5.5e-3 m off with the measured one.
+commanded input and 2.2e-4 m off with the measured one; step_disturbance (the flight profile) ends 3.4e-3 m off
+with the commanded input and 4.5e-3 m with the measured one.
 """
 
 from __future__ import annotations
@@ -35,13 +35,14 @@ def test_wind_rejection_with_a_50ms_motor_holds_with_the_measured_input():
     assert final_error(flown["measured"]) < 1e-3
 
 
-def test_step_disturbance_with_a_50ms_motor_holds_with_the_measured_input():
-    """The flight profile (the scenario's default): the commanded input crashes, the measured one holds."""
-    commanded = fly("step_disturbance", *FAST_OBSERVER, "estimator.input=commanded")
-    measured = fly("step_disturbance", *FAST_OBSERVER, "estimator.input=measured")
-    assert commanded.end_reason == "diverged"
-    assert measured.end_reason == "finished"
-    assert final_error(measured) < 0.01
+def test_step_disturbance_with_a_50ms_motor_holds_with_either_input():
+    """The flight profile (the scenario's default), whose ``R_d`` does not turn with the estimate's rates: both
+    inputs hold (measured: final 3.4e-3 m commanded, 4.5e-3 m measured; the commanded input crashed while the
+    estimate's rates turned ``R_d``)."""
+    for source in ("commanded", "measured"):
+        run = fly("step_disturbance", *FAST_OBSERVER, f"estimator.input={source}")
+        assert run.end_reason == "finished", source
+        assert final_error(run) < 0.01, source
 
 
 def test_without_motor_lag_measured_is_the_commanded_input():

@@ -71,7 +71,11 @@ class CompensationConfig:
     time (``physics_dt * physics_substeps``); surfaces: the contact rule's geometry (the environment around the
     nominal vehicle, :func:`fsr_sim.model.environment.pack_surfaces`); measured: the observer takes the rotors'
     measured speeds and tilts (``rotor_state``, ``estimator.input: measured``) through the nominal allocation
-    instead of the commanded wrench (False: the command, also where the rotors do not lag).
+    instead of the commanded wrench (False: the command, also where the rotors do not lag); rates: the
+    estimate's differences are handed to the law with it (the geometric law's ``feedforward: measured`` turns
+    ``R_d`` with them; False: zero, ``R_d``'s rates the reference's alone: the estimate holds what the command
+    itself causes - a rotor lag, the aerodynamics of the rotors' speeds - and its rates in ``R_d`` close a loop
+    through the attitude that loses control under sensor noise).
     """
 
     c0: float
@@ -79,6 +83,7 @@ class CompensationConfig:
     control_period: float
     surfaces: Surfaces
     measured: bool = False
+    rates: bool = True
 
 
 class CompensationReport:
@@ -120,7 +125,7 @@ def pack_compensation(config: CompensationConfig | None, vehicle: Vehicle) -> tu
         surfaces = pack_surfaces(Environment(), vehicle)
     params = core.CompensationParams(config is not None, observer.params, observer.sample_time,
                                      config is not None and config.r >= 2, surfaces,
-                                     config is not None and config.measured)
+                                     config is not None and config.measured, config is None or config.rates)
     state = core.CompensationState(observer.state, np.zeros((3, 3)), np.eye(3), np.zeros(core.MEMORY_SIZE))
     return params, state
 

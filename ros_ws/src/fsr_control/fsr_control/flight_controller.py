@@ -164,7 +164,7 @@ class FlightController:
         self.last_stamp = start_time
         self._imu, self._rotors = np.zeros(6), np.zeros(vehicle.rotor_count)  # when not measured
         law_type = LAWS[config.type]
-        self.needs_imu = law_type.needs_imu  # the law reads the IMU (imu)
+        self.needs_imu = law_type.needs_imu or config.use_imu  # the law reads the IMU (imu)
         measured_input = config.compensation is not None and config.compensation.measured
         # the law or the compensation's observer reads the rotors' measured speeds (rotor_state), where published
         self.needs_rotor_state = config.rotor_state and (law_type.needs_rotor_state or measured_input)

@@ -175,3 +175,38 @@ def test_authority_margin_defaults_to_0_7_and_is_checked(tmp_path):
             controller_config(scenario_with(tmp_path, trajectory={**trajectory, "authority_margin": value}))
         assert error.value.key == "trajectory.authority_margin"
         assert reason in str(error.value) and "scenario.yaml" in str(error.value)
+
+
+def test_the_flight_profile_flies_on_the_imu_where_the_vehicle_has_one(tmp_path):
+    """``controller.use_imu`` defaults to the flight profile on a vehicle with an IMU; its designed gains then have no
+    odometry delay to survive (the motor's 30 ms and half an IMU sample: 30.5 ms); the report's profile, a vehicle
+    without an IMU or ``use_imu: false`` keep the law on ``odom``; the compensated estimate's rates reach ``R_d``
+    only with the measured feed-forward."""
+    from fsr_control.design.gain_design import design_gains, design_lag
+    from fsr_sim.model.vehicle import load_vehicle
+
+    octocopter = load_vehicle("octocopter")
+    assert design_lag(octocopter, imu=True) == pytest.approx(0.0305)
+    onboard = {"preset": "onboard"}
+    config = controller_config(scenario_with(tmp_path, "ex4_wrench.yaml", vehicle="octocopter", sensors=onboard,
+                                             controller={}))
+    assert config.use_imu and config.odometry_measured
+    designed = design_gains(octocopter, lag=0.0305).wrench_gains()
+    np.testing.assert_array_equal(config.gains["k_r"], designed["k_r"])
+    assert design_gains(octocopter, lag=0.0305).attitude > design_gains(octocopter).attitude
+    for sensors, controller in (({"preset": "mocap"}, {}), (onboard, {"profile": "report"}),
+                                (onboard, {"use_imu": False}), (None, {})):
+        config = controller_config(scenario_with(tmp_path, "ex4_wrench.yaml", vehicle="octocopter", sensors=sensors,
+                                                 controller=controller))
+        assert not config.use_imu
+        if controller.get("profile") != "report":
+            np.testing.assert_array_equal(config.gains["k_r"], design_gains(octocopter).wrench_gains()["k_r"])
+    with pytest.raises(ConfigError, match=r"controller\.use_imu: the vehicle has no IMU"):
+        controller_config(scenario_with(tmp_path, controller={"use_imu": True}))
+    with pytest.raises(ConfigError, match=r"controller\.use_imu: only the geometric law has it, not voliro"):
+        controller_config(scenario_with(tmp_path, "ex5_voliro.yaml", controller={"use_imu": True}))
+    estimator = {"enabled": True}
+    flight = controller_config(scenario_with(tmp_path, estimator=estimator, controller={"compensation": "estimate"}))
+    report = controller_config(scenario_with(tmp_path, estimator=estimator,
+                                             controller={"compensation": "estimate", "profile": "report"}))
+    assert not flight.compensation.rates and report.compensation.rates

@@ -14,6 +14,10 @@ controller:
                                     # (>= 0: 3 numbers or a symmetric positive semi-definite 3x3; 0: none)
   feedforward: reference            # geometric: where R_d's rates come from: reference (jerk, snap) |
                                     # measured (the measured acceleration: the report's); default by profile
+  use_imu: true                     # geometric: fly on the IMU: damp with the gyro and, where odom is a
+                                    # measurement, fly on the IMU-bridged estimate of the state; its designed
+                                    # gains have no odometry delay to survive; default: flight profile with
+                                    # sensors.imu (report: false)
   integral_limit: 2.94              # geometric and indi, with k_i: bound [N] on |K_i int e_p| (default: 0.25 m g)
   filter_hz: 30                     # indi: cutoff [Hz] of the second-order low-pass on every measured signal
                                     # (below the Nyquist frequency of the control rate)
@@ -115,6 +119,7 @@ class ControllerConfig:
     rotor_state: bool = False  # the simulator publishes rotor_state (the rotors' measured speeds)
     odometry_measured: bool = False  # odom is a measurement (noisy, late or slow), not the true state
     odometry_delay_steps: int = 0  # steps odom's samples are late by (sensors.odometry)
+    use_imu: bool = False  # geometric: the law flies on the IMU (controller.use_imu)
 
     def trajectory(self, vehicle: Vehicle, actuation: str, position: np.ndarray, rotation: np.ndarray,
                    start_time: float = 0.0) -> Trajectory:
@@ -126,9 +131,10 @@ class ControllerConfig:
                           start_time=start_time, limits=limits, feasibility=self.feasibility, path=self.path)
 
 
-def _gains(section: Section, controller_type: str, profile: str, vehicle: Vehicle) -> dict[str, np.ndarray]:
+def _gains(section: Section, controller_type: str, profile: str, vehicle: Vehicle,
+           imu: bool = False) -> dict[str, np.ndarray]:
     """``controller.gains``: each given gain checked, the others the profile's (the report's, or designed from
-    ``vehicle``; an optional gain the report's profile lacks is zero)."""
+    ``vehicle`` for a law that flies on the IMU or not; an optional gain the report's profile lacks is zero)."""
     law = LAWS[controller_type]
     names = (*law.default_gains, *law.optional_gains)
     given = {name: section.raw(name) for name in names if section.raw(name) is not None}
@@ -137,7 +143,7 @@ def _gains(section: Section, controller_type: str, profile: str, vehicle: Vehicl
         defaults = {name: law.default_gains.get(name, np.zeros((3, 3))) for name in names}
     else:
         try:
-            defaults = law.designed_gains(vehicle)
+            defaults = law.designed_gains(vehicle, imu)
         except ValueError as error:  # a vehicle that cannot hover
             raise ConfigError(section.prefix, f"the flight profile's gains cannot be designed: {error}",
                               section.source) from None
@@ -151,9 +157,12 @@ def _gains(section: Section, controller_type: str, profile: str, vehicle: Vehicl
     return gains
 
 
-def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> CompensationConfig | None:
+def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle,
+                  feedforward: str = geometric.MEASURED_FEEDFORWARD) -> CompensationConfig | None:
     """``controller.compensation``: None for ``none``; for ``estimate`` the observer's filter (the scenario's
-    ``estimator`` c0 and r), sample time and the contact surfaces. Refused when the estimator is off."""
+    ``estimator`` c0 and r), sample time and the contact surfaces, and whether the estimate's rates turn ``R_d``
+    (the geometric law's ``feedforward: measured`` only: with ``reference`` its rates are the reference's
+    alone). Refused when the estimator is off."""
     mode = controller.string("compensation", "none", choices=COMPENSATION_MODES)
     if mode == "none":
         return None
@@ -169,7 +178,8 @@ def _compensation(scenario: Scenario, controller: Section, vehicle: Vehicle) -> 
         raise controller.error("compensation", f"estimator.c0 * control period must be <= {MAX_C0_PERIOD:g} with "
                                                f"compensation (the compensated loop diverges from about 1), got "
                                                f"{estimation.c0:g} * {sim.control_period:g} s; lower estimator.c0")
-    return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces, estimation.rotor_state)
+    return CompensationConfig(estimation.c0, estimation.r, sim.control_period, surfaces, estimation.rotor_state,
+                              rates=feedforward == geometric.MEASURED_FEEDFORWARD)
 
 
 def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationConfig) -> dict[str, Any]:
@@ -190,7 +200,15 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
         raise controller.error("type", f"{controller_type} allocates its 6-D wrench to the rotors: it needs "
                                        "'actuation: rotors'")
     profile = controller.string("profile", PROFILES[0], choices=PROFILES)
-    gains = _gains(controller.section("gains"), controller_type, profile, vehicle)
+    imu = False
+    if controller_type == "geometric":
+        imu = controller.boolean("use_imu", profile == "flight" and sim.imu.enabled)
+        if imu and not sim.imu.enabled:
+            raise controller.error("use_imu", "the vehicle has no IMU: set sensors.imu (e.g. sensors.preset: onboard) "
+                                          "or controller.use_imu: false")
+    elif controller.has("use_imu"):
+        raise controller.error("use_imu", f"only the geometric law has it, not {controller_type}")
+    gains = _gains(controller.section("gains"), controller_type, profile, vehicle, imu)
     canted = vehicle.fully_actuated and not vehicle.has_servos  # fixed rotors: clamped rotor by rotor
     allocation = controller.string("allocation", "clamp" if canted else DEFAULT_ALLOCATION,
                                    choices=ALLOCATION_STRATEGIES)
@@ -235,7 +253,7 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
         if secondary.exponent % 2:
             raise objective.error("exponent", f"must be an even integer >= 4, got {secondary.exponent}")
         objective.reject_unknown()
-    compensation = _compensation(scenario, controller, vehicle)
+    compensation = _compensation(scenario, controller, vehicle, feedforward)
     if compensation is not None and law.needs_imu:
         raise controller.error("compensation", f"{controller_type} cancels the external wrench its sensors measure "
                                                "itself: use controller.compensation: none")
@@ -254,7 +272,7 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
             "allocation": allocation, "compensation": compensation, "air_mode": air_mode,
             "acceleration_filter_hz": acceleration_filter_hz, "aerodynamics": aerodynamics, "filter_hz": filter_hz,
             "odometry_measured": odometry.enabled or odometry.delay_steps > 0 or odometry.every_steps > 1,
-            "odometry_delay_steps": odometry.delay_steps}
+            "odometry_delay_steps": odometry.delay_steps, "use_imu": imu}
 
 
 def controller_config(scenario: Scenario) -> ControllerConfig:

@@ -15,7 +15,7 @@ import numpy as np
 
 from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.core import geometric_law, indi_law, laws, voliro_law
-from fsr_control.design.gain_design import design_gains
+from fsr_control.design.gain_design import design_gains, design_lag
 from fsr_sim.model.vehicle import Vehicle
 
 if TYPE_CHECKING:
@@ -35,8 +35,9 @@ class LawType:
         Gain name -> (3, 3) array: the report's gains (``controller.profile: report``); a scenario's
         ``controller.gains`` takes these names (and ``optional_gains``).
     designed_gains : callable
-        ``designed_gains(vehicle) -> dict`` of the same names: the gains of ``controller.profile: flight``,
-        designed from the nominal vehicle (:mod:`fsr_control.design.gain_design`).
+        ``designed_gains(vehicle, imu) -> dict`` of the same names: the gains of ``controller.profile: flight``,
+        designed from the nominal vehicle (:mod:`fsr_control.design.gain_design`); ``imu``: the law flies on the
+        IMU (``controller.use_imu``: no odometry delay in its loops).
     pack : callable
         ``pack(vehicle, config) -> params``: the law's own parameters (its field of ``LawParams``) from the
         validated configuration (:class:`~fsr_control.config.controller_config.ControllerConfig`).
@@ -57,7 +58,7 @@ class LawType:
 
     kind: int
     default_gains: dict[str, np.ndarray]
-    designed_gains: Callable[[Vehicle], dict[str, np.ndarray]]
+    designed_gains: Callable[[Vehicle, bool], dict[str, np.ndarray]]
     pack: Callable[[Vehicle, ControllerConfig], NamedTuple]
     memory_size: int
     fully_actuated: bool
@@ -70,7 +71,8 @@ class LawType:
 
 def _pack_geometric(vehicle: Vehicle, config: ControllerConfig) -> geometric_law.GeometricParams:
     return geometric.pack_geometric(vehicle, config.gains, config.feedforward, config.acceleration_filter_hz,
-                                    config.integral_limit)
+                                    config.integral_limit, config.use_imu, config.control_period,
+                                    config.odometry_measured, config.odometry_delay_steps)
 
 
 def _pack_voliro(vehicle: Vehicle, config: ControllerConfig) -> voliro_law.VoliroParams:
@@ -83,12 +85,14 @@ def _pack_indi(vehicle: Vehicle, config: ControllerConfig) -> indi_law.IndiParam
 
 
 LAWS: dict[str, LawType] = {
-    "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS, lambda vehicle: design_gains(vehicle).wrench_gains(),
+    "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS,
+                         lambda vehicle, imu: design_gains(vehicle, lag=design_lag(vehicle, imu)).wrench_gains(),
                          _pack_geometric, geometric_law.MEMORY_SIZE, fully_actuated=False,
                          optional_gains=geometric.OPTIONAL_GAINS),
-    "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS, lambda vehicle: design_gains(vehicle).acceleration_gains(),
+    "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS,
+                      lambda vehicle, imu: design_gains(vehicle).acceleration_gains(),
                       _pack_voliro, voliro_law.MEMORY_SIZE, fully_actuated=True),
-    "indi": LawType(laws.INDI, geometric.DEFAULT_GAINS, indi.designed_gains,
+    "indi": LawType(laws.INDI, geometric.DEFAULT_GAINS, lambda vehicle, imu: indi.designed_gains(vehicle),
                     _pack_indi, indi_law.MEMORY_SIZE, fully_actuated=False, optional_gains=geometric.OPTIONAL_GAINS,
                     needs_imu=True, needs_rotor_state=True),
 }

@@ -14,8 +14,9 @@ from typing import Protocol
 
 import numpy as np
 
-from fsr_control.core import laws
+from fsr_control.core import imu_bridge, laws
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
+from fsr_control.core.imu_bridge import BridgeParams
 from fsr_control.core.law_terms import INERTIA
 from fsr_control.core.reference import HORIZON_WIDTH, ReferenceSample
 from fsr_control.planning.trajectory import Reference
@@ -26,6 +27,7 @@ Compensation = tuple[Vec3, Vec3, Vec3, Vec3]
 """The estimated external wrench a law cancels (:mod:`fsr_control.compensation`): ``(f_hat, tau_hat, f_hat_dot,
 f_hat_ddot)``: force [N] world NED, torque [N m] body FRD, the force's first and second time differences
 [N/s, N/s^2] (world; the geometric law turns ``R_d`` with them)."""
+BRIDGE_CORRECTION = 0.2  # the share of the difference to a new odom sample the IMU-bridged estimate takes
 
 
 @dataclass
@@ -102,6 +104,16 @@ def law_matrices(vehicle: Vehicle, gains: dict[str, np.ndarray], names: tuple[st
         raise ValueError(f"gains {missing} missing (got {sorted(gains)})")
     matrices = [vehicle.inertia, *(gains.get(name, np.zeros((3, 3))) for name in names)]
     return np.ascontiguousarray([np.asarray(matrix, dtype=float).reshape(3, 3) for matrix in matrices])
+
+
+def pack_bridge(enabled: bool, period: float, delay_steps: int) -> BridgeParams:
+    """The IMU bridge's parameters (:mod:`fsr_control.core.imu_bridge`): ``enabled`` where ``odom`` is a
+    measurement, the control ``period`` [s] it integrates the IMU over and the steps ``delay_steps`` odom's samples
+    are late by, each new sample taking :data:`BRIDGE_CORRECTION` of its difference to the estimate."""
+    if not 0 <= delay_steps < imu_bridge.HISTORY:
+        raise ValueError(f"the IMU-bridged estimate bridges an odometry delay of at most {imu_bridge.HISTORY - 1} "
+                         f"steps, got {delay_steps}")
+    return BridgeParams(bool(enabled), float(period), int(delay_steps), BRIDGE_CORRECTION)
 
 
 class CompiledLaw:

@@ -37,8 +37,18 @@ back so that ``|K_i int e_p| <= controller.integral_limit`` [N] (a clamp on its 
 at a step after the allocation fell short of the commanded thrust or roll/pitch torque (conditional
 integration: the rotors at a limit; yaw giving way does not count).
 With ``controller.compensation: estimate`` the estimated external wrench is cancelled: ``a -= f_hat`` (world)
-before ``u_T`` and ``z_bd`` (and its rates in ``a_dot``, ``a_ddot``, either feed-forward), ``tau_b -= tau_hat``
-(body); see :mod:`fsr_control.compensation`.
+before ``u_T`` and ``z_bd``, ``tau_b -= tau_hat`` (body); see :mod:`fsr_control.compensation`. With the measured
+feed-forward the estimate's rates enter ``a_dot``, ``a_ddot`` (the report's law); with the reference
+feed-forward ``R_d``'s rates stay the reference's alone: the estimate holds what the command itself causes (a
+lagging motor, the aerodynamics of the rotors' speeds), and its rates in ``R_d`` closed a loop through the
+attitude that lost control in every flight under sensor noise. The aerodynamics model's prediction
+(``controller.aerodynamics: model``), a function of the reference alone, turns ``R_d`` with its rates.
+
+**State** (``controller.use_imu``, the flight profile's default on a vehicle with an IMU): the attitude loop damps
+with the gyro (the IMU's angular velocity, not ``odom``'s, which is late and averaged over its period) and,
+where ``odom`` is a measurement (noisy, late or held), the law flies on the IMU-bridged estimate of the pose and
+velocity at the current step (:func:`fsr_control.core.imu_bridge.bridged_state`, INDI's): the designed gains
+then have no odometry delay to survive (:func:`fsr_control.design.gain_design.design_lag`).
 Report gains: ``K_p = K_v = diag(20, 20, 100)``, ``K_R = K_w = diag(10, 10, 100)``.
 
 The law is written once, in the compiled core (:func:`fsr_control.core.geometric_law.geometric_law`).
@@ -48,7 +58,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.controllers.common import CompiledLaw, law_matrices, pack_bridge
 from fsr_control.core import geometric_law, laws
 from fsr_sim.model.vehicle import Vehicle
 
@@ -64,18 +74,26 @@ MEASURED_FEEDFORWARD, REFERENCE_FEEDFORWARD = FEEDFORWARDS
 
 
 def pack_geometric(vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: str = MEASURED_FEEDFORWARD,
-                   acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0) -> geometric_law.GeometricParams:
+                   acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0, imu: bool = False,
+                   period: float = 0.0, odometry_measured: bool = False,
+                   delay_steps: int = 0) -> geometric_law.GeometricParams:
     """The core's parameters of the geometric law (module docstring): ``gains`` ``k_p``, ``k_v``, ``k_r``,
     ``k_w`` and optionally ``k_i`` (3, 3), the ``feedforward`` of its rates, the cutoff [Hz] of the low-pass on
-    the measured acceleration (0: none) and the bound [N] on the integral's force."""
+    the measured acceleration (0: none) and the bound [N] on the integral's force; with ``imu`` the law flies on
+    the IMU: the gyro's rate and, where ``odom`` is a measurement (``odometry_measured``, its samples
+    ``delay_steps`` late), the IMU-bridged estimate at the control ``period`` [s]."""
     if feedforward not in FEEDFORWARDS:
         raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
     matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
     integral = bool(np.any(matrices[geometric_law.K_I] != 0.0))
     if integral and not integral_limit > 0.0:
         raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
+    bridge = imu and odometry_measured
+    if bridge and not period > 0.0:
+        raise ValueError(f"the IMU-bridged estimate needs a control period > 0 s, got {period}")
     return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
-                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz))
+                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz),
+                                         bool(imu), pack_bridge(bridge, period, delay_steps if bridge else 0))
 
 
 class GeometricController(CompiledLaw):
@@ -95,6 +113,10 @@ class GeometricController(CompiledLaw):
         compensated estimate's rates); 0: none.
     integral_limit : float
         Bound [N] on the integral's force (needed with a non-zero ``k_i``).
+    imu, period, odometry_measured, delay_steps
+        Fly on the IMU (module docstring, "State"): ``compute(..., imu=...)`` then takes its angular velocity
+        and specific force (6,); with ``odometry_measured`` the estimate bridges ``odom``'s ``delay_steps`` at
+        the control ``period`` [s].
 
     ``compute(reference, position, rotation, velocity_world, angular_velocity_body, compensation=None)``
     returns the body wrench ``[0, 0, -u_T]`` [N], ``tau_b`` [N m] and ``rotation_commanded = R_d``. With a
@@ -107,9 +129,11 @@ class GeometricController(CompiledLaw):
     """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: str = MEASURED_FEEDFORWARD,
-                 acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0) -> None:
+                 acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0, imu: bool = False,
+                 period: float = 0.0, odometry_measured: bool = False, delay_steps: int = 0) -> None:
         if vehicle.fully_actuated:
             raise ValueError(f"the geometric controller is for vehicles that produce thrust along -z_b and a torque; "
                              f"'{vehicle.name}' is fully actuated (use voliro)")
-        own = pack_geometric(vehicle, gains, feedforward, acceleration_filter_hz, integral_limit)
+        own = pack_geometric(vehicle, gains, feedforward, acceleration_filter_hz, integral_limit, imu, period,
+                             odometry_measured, delay_steps)
         super().__init__(laws.law_params(laws.GEOMETRIC, own), geometric_law.MEMORY_SIZE)

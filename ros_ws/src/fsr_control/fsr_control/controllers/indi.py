@@ -38,9 +38,10 @@ compensation). The law needs the IMU (``sensors.imu``).
 
 **Rates and state.** ``omega`` above is the gyro's (the IMU's angular velocity), not ``odom``'s. Where ``odom`` is
 a measurement (noisy, late or held: ``predict``) the law flies on its own estimate of the current pose and
-velocity: the IMU integrated step to step, moved at each new ``odom`` sample by :data:`CORRECTION` of its
-difference to the estimate of the step it measured (``delay_steps`` back) - the delay and the hold bridged, the
-noise averaged (:func:`fsr_control.core.indi_law._estimate`).
+velocity: the IMU integrated step to step, moved at each new ``odom`` sample by
+:data:`~fsr_control.controllers.common.BRIDGE_CORRECTION` of its difference to the estimate of the step it measured
+(``delay_steps`` back) - the delay and the hold bridged, the noise averaged
+(:func:`fsr_control.core.imu_bridge.bridged_state`, shared with the geometric law of the flight profile).
 
 **Filter.** ``y'' = w_n^2 (u - y) - 2 zeta w_n y'``, ``w_n = 2 pi filter_hz``, ``zeta = 1/sqrt(2)``
 (Butterworth), discretised exactly for an input held over the control period ``T``: ``x_k = Phi x_(k-1) +
@@ -58,7 +59,7 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
-from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.controllers.common import CompiledLaw, law_matrices, pack_bridge
 from fsr_control.controllers.geometric import OPTIONAL_GAINS
 from fsr_control.core import indi_law, laws
 from fsr_control.design.gain_design import design_gains
@@ -71,7 +72,6 @@ DESIGN_PERIOD = 0.001  # s: the control period the designed gains assume (the sc
 # rotors in an axial flow: a hard braking) the loop gain rises with it. A quarter more lag designed for: the
 # Hummingbird's race loses 2 of 20 flights under onboard sensors and gusts without it, none with it.
 LAG_MARGIN = 1.25
-CORRECTION = 0.2  # the share of the difference to a new odom sample the estimate takes (indi_law._estimate)
 FILTER_DAMPING = 1.0 / math.sqrt(2.0)  # Butterworth
 
 
@@ -118,9 +118,6 @@ def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, 
     ``k_r``, ``k_w``, optionally ``k_i``), the filter's cutoff [Hz] at the control ``period`` [s], whether the
     rotors' speeds are measured (``rotor_state``), the bound [N] on the integral's force, and whether ``odom``
     is a measurement to bridge with the IMU (``predict``) whose samples are ``delay_steps`` steps late."""
-    if not 0 <= delay_steps < indi_law.HISTORY:
-        raise ValueError(f"INDI's estimate bridges an odometry delay of at most {indi_law.HISTORY - 1} steps, got "
-                         f"{delay_steps}")
     if vehicle.fully_actuated or vehicle.has_servos:
         raise ValueError(f"INDI is for fixed rotors that produce thrust along -z_b; '{vehicle.name}' is not")
     matrices = law_matrices(vehicle, gains, indi_law.MATRICES[1:], OPTIONAL_GAINS)
@@ -130,7 +127,7 @@ def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, 
     return indi_law.IndiParams(float(vehicle.mass), matrices, integral, float(integral_limit),
                                filter_coefficients(filter_hz, period),
                                np.ascontiguousarray(wrench_from_rotor_speed_sq(vehicle)), float(vehicle.c_f),
-                               bool(rotor_state), float(period), bool(predict), int(delay_steps), CORRECTION)
+                               bool(rotor_state), pack_bridge(predict, period, delay_steps))
 
 
 class IndiController(CompiledLaw):

@@ -41,6 +41,7 @@ class CompensationParams(NamedTuple):
     smooth: bool  # r >= 2: the estimate's second difference is used
     surfaces: Surfaces  # the contact rule's geometry
     measured: bool  # the observer takes the rotors' measured wrench (rotor_state) instead of the commanded one
+    rates: bool  # the estimate's rates are handed to the law (False: zero, R_d's rates the reference's alone)
 
 
 class CompensationState(NamedTuple):
@@ -56,7 +57,7 @@ def compensation_estimate(params: CompensationParams, state: CompensationState, 
     """The estimate of the previous stamp for the state at ``stamp`` [s], or inactive (in contact, first step,
     after a gap: the observer is restarted). The rates are backward differences of the last estimates (zero
     until there are two, three); the second difference only for ``r >= 2`` (with ``r = 1`` the estimate's rate
-    jumps with every step of its input, so its second difference is an impulse)."""
+    jumps with every step of its input, so its second difference is an impulse); zero unless ``params.rates``."""
     memory = state.memory
     period = params.period
     if memory[HAS_LAST_STAMP] != 0.0 and abs(stamp - memory[LAST_STAMP] - period) > PERIOD_TOLERANCE * period:
@@ -93,6 +94,8 @@ def compensation_estimate(params: CompensationParams, state: CompensationState, 
         acceleration = ((b[0] - 2.0 * a[0] + c[0]) * scale, (b[1] - 2.0 * a[1] + c[1]) * scale,
                         (b[2] - 2.0 * a[2] + c[2]) * scale)
     torque = mat_t_vec3(matrix_rows(state.rate_inverse), (w[3], w[4], w[5]))  # Q^-T tau_e (body)
+    if not params.rates:
+        return Compensation(True, (w[0], w[1], w[2]), torque, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     return Compensation(True, (w[0], w[1], w[2]), torque, rate, acceleration)
 
 

@@ -12,7 +12,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from fsr_control.core import imu_bridge
 from fsr_control.core.flatness import attitude_from_thrust_vector
+from fsr_control.core.imu_bridge import BridgeParams, bridged_state
 from fsr_control.core.law_terms import INERTIA, Compensation, linear_feedback, matrix_at
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.jit import jit_inline
@@ -34,20 +36,23 @@ class GeometricParams(NamedTuple):
     reference_feedforward: bool  # w_d, w_dot_d from the reference (True) or the measured acceleration (False)
     acceleration_cutoff: float  # [Hz] of the first-order low-pass on the measured acceleration and on the
     # compensated estimate's rates (0: none)
+    gyro: bool  # the attitude loop takes the IMU's angular velocity (the gyro) instead of odom's
+    bridge: BridgeParams  # enabled: fly on the IMU-bridged estimate of the pose and velocity (imu_bridge)
 
     @classmethod
     def unused(cls) -> GeometricParams:
         """Placeholder parameters, for a controller that flies another law."""
-        return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False, 0.0, False, 0.0)
+        return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False, 0.0, False, 0.0, False, BridgeParams.unused())
 
 
 # memory entries: the previous sample, its filtered measured acceleration and the filtered rates of the
-# compensated estimate (vectors: 3 entries), the position error's integral [m s] and whether the last command
-# fell short on the axes the position loop acts through (thrust, roll and pitch torque)
+# compensated estimate (vectors: 3 entries), the position error's integral [m s], whether the last command
+# fell short on the axes the position loop acts through (thrust, roll and pitch torque), then the IMU bridge's
 HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY, FILTERED_ACCELERATION = 0, 1, 2, 5
 HAS_FILTERED_RATES, FILTERED_FORCE_RATE, FILTERED_FORCE_ACCELERATION = 8, 9, 12
 INTEGRAL, INTEGRAL_HOLD = 15, 18
-MEMORY_SIZE = 19
+BRIDGE = 19
+MEMORY_SIZE = BRIDGE + imu_bridge.MEMORY_SIZE
 
 
 @jit_inline
@@ -199,6 +204,21 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
         tau_hat = compensation.torque
         torque = (torque[0] - tau_hat[0], torque[1] - tau_hat[1], torque[2] - tau_hat[2])
     return status, (0.0, 0.0, -thrust), torque, rotation_desired
+
+
+@jit_inline
+def flown_state(params: GeometricParams, memory, position: Vec3, rotation: Mat3, velocity_world: Vec3,  # noqa: ANN001
+                angular_velocity: Vec3, imu) -> tuple:  # noqa: ANN001
+    """``(position, R rows, velocity world, angular velocity body)`` the law flies on: ``odom``'s, or where the
+    law takes the IMU (``imu`` (6,): angular velocity [rad/s], specific force [m/s^2], body FRD) its gyro's rate
+    and, where ``odom`` is a measurement, the IMU-bridged estimate of this step
+    (:func:`fsr_control.core.imu_bridge.bridged_state`)."""
+    if params.bridge.enabled:
+        position, rotation, velocity_world = bridged_state(params.bridge, memory, BRIDGE, position, rotation,
+                                                           velocity_world, imu)
+    if params.gyro:
+        angular_velocity = (imu[0], imu[1], imu[2])
+    return position, rotation, velocity_world, angular_velocity
 
 
 @jit_inline

@@ -15,28 +15,29 @@ its compensation (:func:`fsr_control.core.geometric_law.geometric_law`); the rat
 reference's alone (its jerk and snap): nothing measured is differentiated into them.
 
 The attitude loop damps with the gyro (the IMU's angular velocity, not ``odom``'s). Where ``odom`` is a
-measurement (``IndiParams.predict``: noisy, late or slower than the control rate), the law flies on its own
-estimate of the pose and velocity at the current step (:func:`_estimate`): the IMU integrated (strapdown) from
-step to step, corrected at each new ``odom`` sample towards it by the share ``IndiParams.correction`` of the
-difference to the estimate of the step that sample measured (``IndiParams.delay`` steps back), so that the
-sample's delay and hold are bridged by the IMU and its noise is averaged.
+measurement (``IndiParams.bridge``: noisy, late or slower than the control rate), the law flies on its own
+estimate of the pose and velocity at the current step, the IMU bridge the geometric law of the flight profile
+flies on as well (:func:`fsr_control.core.imu_bridge.bridged_state`, kept in the geometric law's memory): the IMU
+integrated (strapdown) from step to step, corrected at each new ``odom`` sample towards it by the share
+``BridgeParams.correction`` of the difference to the estimate of the step that sample measured
+(``BridgeParams.delay`` steps back), so that the sample's delay and hold are bridged by the IMU and its noise is
+averaged.
 """
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
 from fsr_control.core import geometric_law as geometric
 from fsr_control.core.geometric_law import GeometricParams
+from fsr_control.core.imu_bridge import BridgeParams, bridged_state
 from fsr_control.core.law_terms import INERTIA, Compensation, matrix_at
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.jit import jit_inline
-from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.core.rotors import measured_rotor_wrench
-from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_mat3, mat_vec3
+from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_vec3
 
 MATRICES = geometric.MATRICES  # the geometric law's: inertia, K_p, K_v, K_i, K_R, K_W
 FILTER_SIZE = 6  # IndiParams.filter: Phi (2 x 2, row by row), then Gamma (2)
@@ -51,16 +52,13 @@ class IndiParams(NamedTuple):
     allocation: np.ndarray  # (6, n) nominal wrench per signed squared rotor speed [N, N m per (rad/s)^2]
     c_f: float  # thrust coefficient [N s^2]
     rotor_state: bool  # the rotors' speeds are measured (rotor_state); False: the previous command's wrench
-    period: float  # [s] the control period (the estimate's integration step)
-    predict: bool  # odom is a measurement: fly on the IMU-propagated estimate (_estimate); False: odom as it is
-    delay: int  # steps odom's samples are late by (<= HISTORY - 1)
-    correction: float  # in (0, 1]: the share of the difference to a new odom sample the estimate takes
+    bridge: BridgeParams  # enabled: odom is a measurement, fly on the IMU-bridged estimate (imu_bridge)
 
     @classmethod
     def unused(cls) -> IndiParams:
         """Placeholder parameters, for a controller that flies another law."""
         return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False, 0.0, np.zeros(FILTER_SIZE), np.zeros((6, 0)), 0.0,
-                   False, 0.0, False, 0, 0.0)
+                   False, BridgeParams.unused())
 
 
 # memory after the geometric law's: whether the filter holds a sample, whether a command was recorded, the
@@ -71,17 +69,7 @@ COMMAND = geometric.MEMORY_SIZE + 2
 FILTERS = COMMAND + 6
 ANGULAR_VELOCITY, SPECIFIC_FORCE, ROTOR_FORCE, ROTOR_TORQUE = range(4)
 FILTER_STATES = 6  # per signal: 3 values, then 3 rates
-# the estimate (IndiParams.predict): whether it is started, the step count, the last odom sample (position,
-# velocity world, R row by row: POSE_SIZE), the previous step's IMU sample, then the estimate of each of the last
-# HISTORY steps (the step k at slot k % HISTORY, the current one last written)
-POSE_SIZE = 15
-HISTORY = 64  # steps of estimates kept: the longest odometry delay bridged is HISTORY - 1 steps
-HAS_ESTIMATE = FILTERS + 4 * FILTER_STATES
-ESTIMATE_STEP = HAS_ESTIMATE + 1
-LAST_SAMPLE = ESTIMATE_STEP + 1
-PREVIOUS_IMU = LAST_SAMPLE + POSE_SIZE
-ESTIMATES = PREVIOUS_IMU + 6
-MEMORY_SIZE = ESTIMATES + HISTORY * POSE_SIZE
+MEMORY_SIZE = FILTERS + 4 * FILTER_STATES  # the estimate (IndiParams.bridge) is in the geometric law's part
 
 
 @jit_inline
@@ -101,124 +89,14 @@ def _filtered(params: IndiParams, memory, signal: int, value: Vec3, first: bool)
 
 
 @jit_inline
-def _exp_rows(x: float, y: float, z: float) -> Mat3:
-    """``Exp([x, y, z])``: the rotation by the rotation vector (Rodrigues)."""
-    angle = math.sqrt(x * x + y * y + z * z)
-    if angle < 1e-9:
-        a, b = 1.0, 0.5
-    else:
-        a, b = math.sin(angle) / angle, (1.0 - math.cos(angle)) / (angle * angle)
-    return ((1.0 - b * (y * y + z * z), -a * z + b * x * y, a * y + b * x * z),
-            (a * z + b * x * y, 1.0 - b * (x * x + z * z), -a * x + b * y * z),
-            (-a * y + b * x * z, a * x + b * y * z, 1.0 - b * (x * x + y * y)))
-
-
-@jit_inline
-def _mat_mat3(a: Mat3, b: Mat3) -> Mat3:
-    return ((a[0][0] * b[0][0] + a[0][1] * b[1][0] + a[0][2] * b[2][0],
-             a[0][0] * b[0][1] + a[0][1] * b[1][1] + a[0][2] * b[2][1],
-             a[0][0] * b[0][2] + a[0][1] * b[1][2] + a[0][2] * b[2][2]),
-            (a[1][0] * b[0][0] + a[1][1] * b[1][0] + a[1][2] * b[2][0],
-             a[1][0] * b[0][1] + a[1][1] * b[1][1] + a[1][2] * b[2][1],
-             a[1][0] * b[0][2] + a[1][1] * b[1][2] + a[1][2] * b[2][2]),
-            (a[2][0] * b[0][0] + a[2][1] * b[1][0] + a[2][2] * b[2][0],
-             a[2][0] * b[0][1] + a[2][1] * b[1][1] + a[2][2] * b[2][1],
-             a[2][0] * b[0][2] + a[2][1] * b[1][2] + a[2][2] * b[2][2]))
-
-
-@jit_inline
-def _put_pose(memory, at: int, position: Vec3, velocity: Vec3, rotation: Mat3) -> None:  # noqa: ANN001
-    for i in range(3):
-        memory[at + i], memory[at + 3 + i] = position[i], velocity[i]
-        for j in range(3):
-            memory[at + 6 + 3 * i + j] = rotation[i][j]
-
-
-@jit_inline
-def _pose(memory, at: int) -> tuple:  # noqa: ANN001
-    """``(position, velocity, R rows)`` stored from ``at``."""
-    r = at + 6
-    return ((memory[at], memory[at + 1], memory[at + 2]), (memory[at + 3], memory[at + 4], memory[at + 5]),
-            ((memory[r], memory[r + 1], memory[r + 2]), (memory[r + 3], memory[r + 4], memory[r + 5]),
-             (memory[r + 6], memory[r + 7], memory[r + 8])))
-
-
-@jit_inline
-def _estimate(params: IndiParams, memory, position: Vec3, rotation: Mat3, velocity_world: Vec3,  # noqa: ANN001
-              imu) -> tuple:  # noqa: ANN001
-    """``(position, R rows, velocity world)`` of the vehicle at this step (module docstring), from ``odom``'s
-    sample (held, ``params.delay`` steps late) and the IMU (``imu``: angular velocity [rad/s], specific force
-    [m/s^2], body FRD, of this step).
-
-    Propagation over the period ``T`` (trapezoidal, the previous and this IMU sample ``(w', s')``, ``(w, s)``):
-    ``R <- R Exp((w' + w) T / 2)``, ``v <- v + (R' s' + R s) T / 2 + g e3 T``, ``p <- p + (v' + v) T / 2``.
-    A new sample (any number differs from the last one) measures the step ``k - delay``: with the estimate
-    ``(p_k', v_k', R_k')`` kept for that step, the correction ``c = correction`` moves the estimate of that step
-    and of every later one by ``c (p_o - p_k')``, ``c (v_o - v_k')`` and ``R <- Exp(c theta) R`` with
-    ``Exp(theta) = R_o R_k'^T`` (small angles: ``theta`` the vee of the skew part)."""
-    gyro = (imu[0], imu[1], imu[2])
-    specific_force = (imu[3], imu[4], imu[5])
-    if memory[HAS_ESTIMATE] == 0.0:
-        memory[HAS_ESTIMATE], memory[ESTIMATE_STEP] = 1.0, 0.0
-        _put_pose(memory, LAST_SAMPLE, position, velocity_world, rotation)
-        _put_pose(memory, ESTIMATES, position, velocity_world, rotation)
-        for i in range(6):
-            memory[PREVIOUS_IMU + i] = imu[i]
-        return position, rotation, velocity_world
-    step = int(memory[ESTIMATE_STEP])
-    p, v, r = _pose(memory, ESTIMATES + POSE_SIZE * (step % HISTORY))
-    dt = params.period
-    gyro_p = (memory[PREVIOUS_IMU], memory[PREVIOUS_IMU + 1], memory[PREVIOUS_IMU + 2])
-    force_p = (memory[PREVIOUS_IMU + 3], memory[PREVIOUS_IMU + 4], memory[PREVIOUS_IMU + 5])
-    r_new = _mat_mat3(r, _exp_rows(0.5 * dt * (gyro_p[0] + gyro[0]), 0.5 * dt * (gyro_p[1] + gyro[1]),
-                                   0.5 * dt * (gyro_p[2] + gyro[2])))
-    a_p, a_n = mat_vec3(r, force_p), mat_vec3(r_new, specific_force)
-    v_new = (v[0] + 0.5 * dt * (a_p[0] + a_n[0]), v[1] + 0.5 * dt * (a_p[1] + a_n[1]),
-             v[2] + 0.5 * dt * (a_p[2] + a_n[2]) + GRAVITY * dt)
-    p_new = (p[0] + 0.5 * dt * (v[0] + v_new[0]), p[1] + 0.5 * dt * (v[1] + v_new[1]),
-             p[2] + 0.5 * dt * (v[2] + v_new[2]))
-    step += 1
-    memory[ESTIMATE_STEP] = float(step)
-    _put_pose(memory, ESTIMATES + POSE_SIZE * (step % HISTORY), p_new, v_new, r_new)
-    for i in range(6):
-        memory[PREVIOUS_IMU + i] = imu[i]
-    last_p, last_v, last_r = _pose(memory, LAST_SAMPLE)
-    new = False
-    for i in range(3):
-        if position[i] != last_p[i] or velocity_world[i] != last_v[i]:
-            new = True
-        for j in range(3):
-            if rotation[i][j] != last_r[i][j]:
-                new = True
-    if new:
-        _put_pose(memory, LAST_SAMPLE, position, velocity_world, rotation)
-        back = min(params.delay, step, HISTORY - 1)
-        p_k, v_k, r_k = _pose(memory, ESTIMATES + POSE_SIZE * ((step - back) % HISTORY))
-        c = params.correction
-        dp = (c * (position[0] - p_k[0]), c * (position[1] - p_k[1]), c * (position[2] - p_k[2]))
-        dv = (c * (velocity_world[0] - v_k[0]), c * (velocity_world[1] - v_k[1]),
-              c * (velocity_world[2] - v_k[2]))
-        e = mat_t_mat3(r_k, rotation)  # R_k'^T R_o; R_o R_k'^T = R_k' e R_k'^T: the world-frame angle
-        body = (0.5 * (e[2][1] - e[1][2]), 0.5 * (e[0][2] - e[2][0]), 0.5 * (e[1][0] - e[0][1]))
-        world = mat_vec3(r_k, body)
-        turn = _exp_rows(c * world[0], c * world[1], c * world[2])
-        for k in range(step - back, step + 1):
-            at = ESTIMATES + POSE_SIZE * (k % HISTORY)
-            pk, vk, rk = _pose(memory, at)
-            _put_pose(memory, at, (pk[0] + dp[0], pk[1] + dp[1], pk[2] + dp[2]),
-                      (vk[0] + dv[0], vk[1] + dv[1], vk[2] + dv[2]), _mat_mat3(turn, rk))
-    p_now, v_now, r_now = _pose(memory, ESTIMATES + POSE_SIZE * (step % HISTORY))
-    return p_now, r_now, v_now
-
-
-@jit_inline
 def indi_law(params: IndiParams, memory, t: float, reference: ReferenceSample, position: Vec3,  # noqa: ANN001
              rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, imu, speeds, tilts) -> tuple:  # noqa: ANN001
     """``(status, [0, 0, -u_T], tau_b, R_d)`` of INDI (:mod:`fsr_control.controllers.indi`): ``imu`` (6,) the
     IMU's angular velocity [rad/s] and specific force [m/s^2] (body FRD), ``speeds``, ``tilts`` (n,) the rotors'
     (``rotor_state``)."""
-    if params.predict:
-        position, rotation, velocity_world = _estimate(params, memory, position, rotation, velocity_world, imu)
+    if params.bridge.enabled:
+        position, rotation, velocity_world = bridged_state(params.bridge, memory, geometric.BRIDGE, position, rotation,
+                                                           velocity_world, imu)
     m = params.mass
     inertia = matrix_at(params.matrices, INERTIA)
     gyro = (imu[0], imu[1], imu[2])
@@ -250,7 +128,7 @@ def indi_law(params: IndiParams, memory, t: float, reference: ReferenceSample, p
     # R_d's rates from the reference alone: the increment's rate is not fed forward (a rate of the measured
     # force turns R_d with every rotor-speed change the aerodynamics feel, a loop that tumbles the vehicle)
     increment = Compensation(True, mat_vec3(rotation, external_body), external_torque, zero, zero)
-    own = GeometricParams(m, params.matrices, params.integral, params.integral_limit, True, 0.0)
+    own = GeometricParams(m, params.matrices, params.integral, params.integral_limit, True, 0.0, True, params.bridge)
     return geometric.geometric_law(own, memory, t, reference, position, rotation, velocity_world, gyro, increment)
 
 
@@ -263,4 +141,5 @@ def indi_allocated(params: IndiParams, memory, force: Vec3, torque: Vec3, shortf
     memory[c + 3], memory[c + 4], memory[c + 5] = torque
     memory[HAS_COMMAND] = 1.0
     geometric.geometric_allocated(GeometricParams(params.mass, params.matrices, params.integral,
-                                                  params.integral_limit, True, 0.0), memory, shortfall)
+                                                  params.integral_limit, True, 0.0, True, params.bridge),
+                                  memory, shortfall)

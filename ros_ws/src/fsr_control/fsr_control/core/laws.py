@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from typing import NamedTuple, get_type_hints
 
-from fsr_control.core.geometric_law import GeometricParams, geometric_allocated, geometric_law
+from fsr_control.core.geometric_law import GeometricParams, flown_state, geometric_allocated, geometric_law
 from fsr_control.core.indi_law import IndiParams, indi_allocated, indi_law
 from fsr_control.core.law_terms import NO_COMPENSATION, Compensation, linear_feedback
 from fsr_control.core.reference import ReferenceSample
@@ -77,6 +77,8 @@ def control_law(params: LawParams, memory, horizon, t: float, reference: Referen
         return indi_law(params.indi, memory, t, reference, position, rotation, velocity_world, angular_velocity,
                         imu, speeds, tilts)
     # a new law: its branch here, e.g. ``if params.kind == MY_LAW: return my_law(params.my_law, horizon, ...)``
+    position, rotation, velocity_world, angular_velocity = flown_state(params.geometric, memory, position, rotation,
+                                                                       velocity_world, angular_velocity, imu)
     return geometric_law(params.geometric, memory, t, reference, position, rotation, velocity_world,
                          angular_velocity, compensation)
 

@@ -10,7 +10,10 @@ alone, ``w`` its bandwidth [rad/s] (the natural frequency), ``zeta`` = :data:`DA
   Every loop is kept below ``w_lag = 1 / (LAG_FACTOR L)``, ``L = tau + d + 1 / (2 f_s)``: ``tau`` the
   larger of the vehicle's rotor and tilt time constants and :data:`DESIGN_MOTOR_TIME_CONSTANT` (30 ms), ``d``
   :data:`DESIGN_SENSOR_DELAY` (10 ms) and ``1 / (2 f_s)`` the mean age of a sample held at
-  :data:`DESIGN_SENSOR_RATE` (100 Hz): 45 ms, ``w_lag = 7.4`` rad/s, which leaves about 38 deg of margin;
+  :data:`DESIGN_SENSOR_RATE` (100 Hz): 45 ms, ``w_lag = 7.4`` rad/s, which leaves about 38 deg of margin.
+  A law that damps with the gyro and flies on the IMU-bridged estimate of the state (the geometric law of the
+  flight profile on a vehicle with an IMU) has no odometry delay: ``L = tau + T_imu / 2`` (30.5 ms, ``w_lag
+  = 10.9`` rad/s);
 * **attitude** (roll and pitch): an attitude error of :data:`ATTITUDE_ERROR` (2 deg) demands at most
   :data:`AUTHORITY_SHARE` (half) of the angular acceleration the rotors give at hover about the weaker axis,
   ``w_R^2 e <= share alpha``: ``w_R = min(w_lag, sqrt(share alpha / e))``; **yaw** likewise with the yaw
@@ -43,6 +46,7 @@ from fsr_sim.model.vehicle import Vehicle
 DAMPING = 0.8  # zeta of every loop
 DESIGN_MOTOR_TIME_CONSTANT = 0.03  # s: the slowest motor the gains are designed for (a real vehicle's)
 DESIGN_SENSOR_DELAY = 0.01  # s: onboard odometry's delay
+DESIGN_IMU_PERIOD = 0.001  # s: the IMU's sample, at the scenarios' 1 kHz control rate
 DESIGN_SENSOR_RATE = 100.0  # Hz: onboard odometry's rate (a sample is held half a period on average)
 LAG_FACTOR = 3.0  # every bandwidth <= 1 / (LAG_FACTOR * total lag)
 AUTHORITY_SHARE = 0.5  # of the angular / linear acceleration at hover a reference error may demand
@@ -127,10 +131,14 @@ class GainDesign:
                 "acceleration_gains": {name: value.tolist() for name, value in self.acceleration_gains().items()}}
 
 
-def design_lag(vehicle: Vehicle) -> float:
+def design_lag(vehicle: Vehicle, imu: bool = False) -> float:
     """The lag [s] the gains are designed for: the slower of the vehicle's motor (or servo) and
-    :data:`DESIGN_MOTOR_TIME_CONSTANT`, plus the onboard sensor delay and half a sample period."""
+    :data:`DESIGN_MOTOR_TIME_CONSTANT`, plus the onboard sensor delay and half a sample period; with ``imu`` (the
+    law damps with the gyro and flies on the IMU-bridged estimate of the state: no odometry delay) half an IMU
+    sample (:data:`DESIGN_IMU_PERIOD`) instead."""
     motor = max(vehicle.rotor_time_constant, vehicle.tilt_time_constant, DESIGN_MOTOR_TIME_CONSTANT)
+    if imu:
+        return motor + 0.5 * DESIGN_IMU_PERIOD
     return motor + DESIGN_SENSOR_DELAY + 0.5 / DESIGN_SENSOR_RATE
 
 
