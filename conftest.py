@@ -46,13 +46,13 @@ def _no_node_without_the_graph_mark(request: pytest.FixtureRequest, monkeypatch:
         monkeypatch.setenv(FORBID_NODES_ENV, "1")
 
 
-@pytest.fixture(autouse=True)
-def _alone_when_marked(request: pytest.FixtureRequest):
+@pytest.hookimpl(wrapper=True, tryfirst=True)  # outside pytest-timeout's: waiting for the lock is not timed
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> object:
     """Under pytest-xdist: every test holds the run's lock shared, a test marked ``alone`` holds it exclusively
-    (it waits for the running tests to end, and none starts before it ends). Without xdist: nothing to do."""
+    (it waits for the running tests to end, and none starts before it ends), through its set-up, call and
+    teardown. Without xdist: nothing to do."""
     run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
     if not run:
-        yield
-        return
-    with TestLock(run, exclusive=request.node.get_closest_marker("alone") is not None):
-        yield
+        return (yield)
+    with TestLock(run, exclusive=item.get_closest_marker("alone") is not None):
+        return (yield)
