@@ -8,6 +8,7 @@ lock that runs a test marked ``alone`` (it measures itself against the wall cloc
 import os
 
 import pytest
+from _pytest.nodeid import coerce_node_id
 
 from fsr_sim.ros.runtime import FORBID_NODES_ENV
 from harness.alone import TestLock
@@ -16,15 +17,15 @@ pytest_plugins = ["harness.fixtures"]  # tests/harness (tests/ is on pytest's py
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the xdist_group marks
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     for item in items:
         if item.get_closest_marker("graph") or item.get_closest_marker("install"):
             item.add_marker(pytest.mark.slow)
     if os.environ.get("PYTEST_XDIST_WORKER"):
-        for_workers(items)
+        for_workers(items, getattr(config.option, "loadgroup", False))
 
 
-def for_workers(items: list[pytest.Item]) -> None:
+def for_workers(items: list[pytest.Item], loadgroup: bool) -> None:
     """Under pytest-xdist (``--dist loadgroup``, pyproject.toml): the tests of a module with a module-scoped
     fixture (a flight, figures) are one group, run on one worker (the fixture made once); and the modules with
     slow tests come first, so that the end of the run is short tests that even out the workers. Every worker
@@ -38,6 +39,11 @@ def for_workers(items: list[pytest.Item]) -> None:
         if item.get_closest_marker("slow"):
             slow_modules.add(item.nodeid.split("::")[0])
     items.sort(key=lambda item: item.nodeid.split("::")[0] not in slow_modules)  # stable: modules stay whole
+    if loadgroup:  # the group in the test's id, which the scheduler reads: what pytest-xdist 3.8 does itself by
+        for item in items:  # setting Node._nodeid, which pytest 9 no longer reads (the id is Node._id)
+            groups = sorted({str(mark.args[0]) for mark in item.iter_markers("xdist_group")})
+            if groups and "@" not in item.nodeid.rpartition("]")[2]:
+                item._id = coerce_node_id(f"{item.nodeid}@{'_'.join(groups)}")  # noqa: SLF001
 
 
 @pytest.fixture(autouse=True)
