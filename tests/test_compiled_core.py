@@ -53,11 +53,23 @@ print(json.dumps([np.concatenate([run.state[-1]] + [values.sum(axis=0) for value
 """
 
 
-def final_states(disable_jit: bool) -> np.ndarray:
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1" if disable_jit else "0"}
-    out = subprocess.run([sys.executable, "-c", FINAL_STATES, json.dumps(FLIGHTS)], env=env, capture_output=True,
-                         text=True, check=True, timeout=280).stdout
-    return [np.array(row) for row in json.loads(out)]
+def compiled_and_cpython(script: str, argument: str, timeout: float = 280.0) -> tuple[list, list]:
+    """The JSON that ``script`` prints, compiled and under CPython (NUMBA_DISABLE_JIT=1): both processes at once
+    (each is one core's work)."""
+    processes = [subprocess.Popen([sys.executable, "-c", script, argument], stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL,
+                                  env={**os.environ, "NUMBA_DISABLE_JIT": disable})
+                 for disable in ("0", "1")]
+    try:
+        outputs = [process.communicate(timeout=timeout) for process in processes]
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    for process, (_, err) in zip(processes, outputs, strict=True):
+        assert process.returncode == 0, err
+    return json.loads(outputs[0][0]), json.loads(outputs[1][0])
 
 
 @pytest.mark.slow
@@ -66,7 +78,8 @@ def test_compiled_and_cpython_flights_are_bit_identical():
     of whole flights (ex3, ex4 with rotors, ex5, the octocopter through its ground effect; turbulence, actuator
     dynamics and the sensor stages: the sums of an IMU's measured and true samples too; the Hummingbird with
     every aerodynamic term in a gusty wind)."""
-    compiled, python = final_states(False), final_states(True)
+    compiled, python = ([np.array(row) for row in rows]
+                        for rows in compiled_and_cpython(FINAL_STATES, json.dumps(FLIGHTS)))
     assert len(compiled[4]) == 13 + 9  # the flight with an IMU
     for a, b in zip(compiled, python, strict=True):
         assert np.array_equal(a, b), np.abs(a - b).max()
@@ -89,11 +102,7 @@ SWEEP_FLIGHTS = (("ex4_geometric", {"duration": 0.3}, {"plant.mass": 1.3}),  # w
 def test_a_sweep_flight_measured_in_the_loop_is_the_same_compiled_and_under_cpython():
     """The loop that measures a sweep's flight as it flies (fsr_bringup.core.flight_measures): the same row
     compiled and under CPython."""
-    rows = []
-    for disable in ("0", "1"):
-        out = subprocess.run([sys.executable, "-c", SWEEP_ROWS, json.dumps(SWEEP_FLIGHTS)], capture_output=True,
-                             env={**os.environ, "NUMBA_DISABLE_JIT": disable}, text=True, check=True, timeout=280)
-        rows.append(json.loads(out.stdout))
+    rows = compiled_and_cpython(SWEEP_ROWS, json.dumps(SWEEP_FLIGHTS))
     for compiled, python in zip(*rows, strict=True):
         assert compiled.keys() == python.keys()
         for key, value in compiled.items():

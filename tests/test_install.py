@@ -56,13 +56,32 @@ def ros_env(domain_id: int, **extra: str) -> dict[str, str]:
     return env
 
 
+def run_at_once(commands: dict[str, list[str]], env: dict[str, str],
+                timeout: float = 120.0) -> dict[str, subprocess.CompletedProcess]:
+    """``run`` for every command, all started at once (each is mostly its own imports: one core's work)."""
+    processes = {name: subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                        stdin=subprocess.DEVNULL) for name, argv in commands.items()}
+    try:
+        results = {}
+        for name, process in processes.items():
+            stdout, stderr = process.communicate(timeout=timeout)
+            results[name] = subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
+        return results
+    finally:
+        for process in processes.values():
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+
+
 def check_scripts_start(script: Callable[[str], Path], env: dict[str, str]) -> None:
     """``--help`` of each command-line tool exits 0; each node refuses an unknown scenario with exit 2."""
-    for name in HELP_SCRIPTS:
-        result = run([str(script(name)), "--help"], env)
+    helps = run_at_once({name: [str(script(name)), "--help"] for name in HELP_SCRIPTS}, env)
+    refusals = run_at_once({name: [str(script(name)), "--ros-args", "-p", "scenario:=no_such_scenario"]
+                            for name in NODE_SCRIPTS}, env)
+    for name, result in helps.items():
         assert result.returncode == 0 and "usage:" in result.stdout, f"{name} --help:\n{result.stderr}"
-    for name in NODE_SCRIPTS:
-        result = run([str(script(name)), "--ros-args", "-p", "scenario:=no_such_scenario"], env)
+    for name, result in refusals.items():
         assert result.returncode == 2, f"{name}: exit {result.returncode}\n{result.stdout}{result.stderr}"
         assert "unknown scenario 'no_such_scenario'" in result.stderr, result.stderr
 

@@ -17,7 +17,7 @@ the commands as written, to keep the run short:
   the installed modules are not byte-compiled, only their cache files are left out); the node runs
   with ``NUMBA_DISABLE_JIT=1`` (not compiling a core of its own) and flies 0.5 s against the repository's
   simulator in a leased ROS domain;
-* ``bash scripts/setup.sh && .venv/bin/python -m pytest`` is not run: it is this test suite (CI runs it
+* ``bash scripts/setup.sh && .venv/bin/python -m pytest -n 2`` is not run: it is this test suite (CI runs it
   as ``.ci/run``), running it here would recurse.
 """
 
@@ -77,7 +77,7 @@ SINGLE = [c for block in BLOCKS if block is not BY_HAND and block is not COMPANI
 def test_the_readme_has_the_commands_this_test_expects():
     every = [c for block in BLOCKS for c in block]
     assert every[0] == "bash scripts/setup.sh && .venv/bin/fsr-fly ex3_estimation --out runs/ex3_estimation.mcap"
-    assert every[1] == "bash scripts/setup.sh && .venv/bin/python -m pytest"
+    assert every[1] == "bash scripts/setup.sh && .venv/bin/python -m pytest -n 2"
     assert len(SINGLE) >= 10 and len(BY_HAND) == 5 and len(COMPANION) == 3
     assert len(MY_FLIGHT) == 1
     readme = TEXTS[0]  # what a new user needs, the rest in docs/ (linked from it)
@@ -85,7 +85,7 @@ def test_the_readme_has_the_commands_this_test_expects():
     assert all(f"(docs/{page.name})" in readme for page in DOCUMENTS[1:]), "a docs page the README does not link"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")  # (this module's only; not module-scoped: conftest.py groups those for xdist)
 def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("readme")
     for name in LINKED:
@@ -110,8 +110,32 @@ def test_my_flight_yaml_example_is_a_valid_scenario(workdir):
     simulation_config(scenario), controller_config(scenario), estimator_config(scenario)  # every key valid
 
 
+def recordings(command: str) -> set[str]:
+    """The recordings (``runs/....mcap``) a command writes or reads."""
+    return set(re.findall(r"runs/\S+?\.mcap", command))
+
+
+def chains(single: list[str]) -> list:
+    """``single`` as parameters; commands linked by a recording (one writes what another reads, also through a
+    third) share an xdist group, so that pytest-xdist runs them on one worker (one scratch folder), in order."""
+    group = list(range(len(single)))
+
+    def root(i: int) -> int:
+        while group[i] != i:
+            i = group[i]
+        return i
+
+    for i, command in enumerate(single):
+        for j in range(i):
+            if recordings(command) & recordings(single[j]):
+                group[root(i)] = root(j)
+    linked = {root(i) for i in range(len(single)) for j in range(len(single)) if i != j and root(i) == root(j)}
+    return [pytest.param(command, marks=pytest.mark.xdist_group(f"readme-{root(i)}")) if root(i) in linked
+            else command for i, command in enumerate(single)]
+
+
 @pytest.mark.graph  # fsr-fly flies node graphs
-@pytest.mark.parametrize("command", SINGLE)
+@pytest.mark.parametrize("command", chains(SINGLE))
 def test_readme_command_runs(workdir, command):
     env = {k: v for k, v in os.environ.items() if k not in ("ROS_DOMAIN_ID", "PYTHONPATH")}
     result = subprocess.run(["bash", "-c", as_run(command)], cwd=workdir, env=env, capture_output=True,

@@ -279,6 +279,7 @@ def recorded_topic_names() -> list[str]:
     return sorted(recorded_topics())
 
 
+@pytest.mark.alone  # the pace measured on the wall clock (+-5 %)
 @pytest.mark.slow
 def test_in_process_live_flight_runs_at_the_real_time_factor(tmp_path, decoders):
     """A 5 s flight at lockstep.real_time_factor 1 takes 5 s +- 5 %, measured where a viewer sees it: the arrival
