@@ -22,9 +22,8 @@ get ``ex3_estimation_noisy``'s parasitic drag under Dryden.
 Seeds: each flight's random sources - the sensor stages' seeds and the Dryden entry's, the keys fsr-tune's
 conditions seed (:func:`fsr_bringup.tuning.conditions.seed_keys`) - are sampled per flight, each its own
 integer in ``[0, 2^32)`` (``numpy.random.default_rng(--seed)``); every law of a flight and condition flies the
-same draws (common random numbers). The IMU a sensor seed adds where the preset has none (an ideal one) is not
-flown on by the geometric law (``controller.use_imu: false``). Nothing here is a test: the numbers are what the
-flights measure.
+same draws (common random numbers); the IMU's seed only where the condition has an IMU. Nothing here is a test:
+the numbers are what the flights measure.
 """
 
 from __future__ import annotations
@@ -100,9 +99,6 @@ def flight_values(flight: str, law: str, condition: Condition) -> tuple[dict[str
     if law_type == "indi" and IMU_SECTION not in PRESETS[condition.preset]:
         values[f"sensors.{IMU_SECTION}"] = dict(PRESETS["onboard"][IMU_SECTION])
         notes.append("INDI under mocap: the onboard preset's IMU (BMI088)")
-    elif law_type == "geometric" and IMU_SECTION not in PRESETS[condition.preset]:
-        # the IMU seed key adds an ideal IMU where the preset has none: the condition's law does not fly on it
-        values["controller.use_imu"] = False
     if condition.motor:
         values["plant.rotor_time_constant"] = MOTOR_S
     if condition.dryden:

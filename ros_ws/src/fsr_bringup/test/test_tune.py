@@ -14,7 +14,7 @@ import pytest
 
 from fsr_bringup import sweep, tune
 from fsr_bringup.sweeps.metrics import RANKABLE_METRICS
-from fsr_bringup.tuning.conditions import condition_values
+from fsr_bringup.tuning.conditions import IMU_SEED_KEY, ODOMETRY_SEED_KEY, condition_values, scenario_seed_keys
 from fsr_bringup.tuning.objective import Objective, parse_objective
 from fsr_bringup.tuning.space import SAME, Range, TuneError, parse_param, tuned_key
 from fsr_bringup.tuning.study import GENERATION
@@ -77,6 +77,20 @@ def test_conditions_are_the_same_for_every_candidate_and_differ_between_seeds():
     assert a == condition_values(7, 3, ["sensors.odometry.seed"], mass)
     assert a != condition_values(7, 4, ["sensors.odometry.seed"], mass)
     assert 1.0 <= a["plant.mass"] <= 1.4 and 0 <= a["sensors.odometry.seed"] < 2**32
+
+
+def test_a_seed_key_never_adds_a_sensor_the_scenario_has_not():
+    """The IMU's seed, set alone, would add an (ideal) IMU that the flight profile's law flies on: a condition under
+    motion capture (no IMU) seeds the odometry only; under the onboard preset the IMU as well."""
+    from fsr_bringup.runner.scenario_check import check_scenario
+    from fsr_bringup.sweeps.axes import flight_scenario
+    from fsr_sim.config.scenario import load_scenario
+
+    mocap = load_scenario("step_disturbance", values={"sensors.preset": "mocap"})
+    assert scenario_seed_keys(mocap) == [ODOMETRY_SEED_KEY]
+    assert not check_scenario(flight_scenario(mocap, {ODOMETRY_SEED_KEY: 5})).simulation.imu.enabled
+    onboard = load_scenario("step_disturbance", values={"sensors.preset": "onboard"})
+    assert scenario_seed_keys(onboard) == [ODOMETRY_SEED_KEY, IMU_SEED_KEY]
 
 
 def test_training_conditions_span_each_sampled_key_and_held_out_ones_draw_it():

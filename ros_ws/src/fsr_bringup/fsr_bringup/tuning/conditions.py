@@ -25,8 +25,10 @@ from fsr_bringup.sweeps.axes import SampledKey, _current_value, flight_scenario
 from fsr_sim.config.scenario import Scenario
 from fsr_sim.config.validation import ConfigError
 
-# Seed keys of the sensor stages (each also set where its stage is off: it then changes nothing).
-SENSOR_SEED_KEYS = ("sensors.odometry.seed", "sensors.imu.seed")
+# Seed keys of the sensor stages: the odometry's also set where its noise is off (it then changes nothing), the
+# IMU's only where the scenario has an IMU (set alone, the key would add one, ideal, that the laws then fly on).
+ODOMETRY_SEED_KEY, IMU_SEED_KEY = "sensors.odometry.seed", "sensors.imu.seed"
+SENSOR_SEED_KEYS = (ODOMETRY_SEED_KEY, IMU_SEED_KEY)
 MAX_SEED = 2**32 - 1
 SPREAD_STREAM = 0x5BEAD  # the first entropy word of the training spread's shuffles (a condition's is the seed)
 
@@ -43,9 +45,13 @@ def seed_keys(data: dict[str, Any], valid: Any) -> list[str]:
 
 
 def scenario_seed_keys(base: Scenario) -> list[str]:
-    """:func:`seed_keys` of scenario ``base``, a sensor stage's key where its validation takes a seed (1) there."""
+    """:func:`seed_keys` of scenario ``base``: a sensor stage's key where its validation takes a seed (1) there,
+    the IMU's only where ``base`` has an IMU."""
+    has_imu = check_scenario(base).simulation.imu.enabled
 
     def valid(key: str) -> bool:
+        if key == IMU_SEED_KEY and not has_imu:
+            return False
         try:
             check_scenario(flight_scenario(base, {key: 1}))
         except ConfigError:
