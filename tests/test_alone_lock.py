@@ -35,10 +35,12 @@ def wait_held(process: subprocess.Popen) -> float:
 
 
 def released(process: subprocess.Popen) -> float:
-    """When ``process`` let the lock go, once it has exited."""
-    out, _ = process.communicate(timeout=30)
-    assert process.returncode == 0
-    word, when = out.split()
+    """When ``process`` let the lock go, once it has exited. Read through the same buffered stream as
+    :func:`wait_held` (``communicate`` with a timeout reads the pipe itself and would miss a line that stream
+    already buffered: both lines arrive in one read when this process is scheduled late)."""
+    word, when = process.stdout.readline().split()
+    assert process.wait(timeout=30) == 0
+    process.stdout.close()
     assert word == "released"
     return float(when)
 
