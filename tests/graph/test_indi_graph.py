@@ -1,6 +1,7 @@
-"""Measured inputs over DDS: INDI (the controller subscribes ``imu`` and ``rotor_state``) and the estimator on the
-rotors' measured speeds (``estimator.input: measured``: it subscribes ``rotor_state`` instead of ``wrench_cmd``)
-fly the node graph as the in-process loop flies them, to 1e-9."""
+"""Measured inputs over DDS: INDI (the controller subscribes ``imu`` and ``rotor_state``), the geometric law on the
+IMU (``controller.use_imu``) and the estimator on the rotors' measured speeds (``estimator.input: measured``: it
+subscribes ``rotor_state`` instead of ``wrench_cmd``) fly the node graph as the in-process loop flies them, to
+1e-9."""
 
 from __future__ import annotations
 
@@ -48,6 +49,8 @@ def stamped_rows(path: Path, topic: str) -> np.ndarray:
     ["controller.type=indi", "sensors.preset=ideal", STEP],  # imu only (quadrotor_ex4: no motor lag)
     ["estimator.input=measured", "controller.compensation=estimate", "plant.rotor_time_constant=0.05",
      "estimator.c0=100", STEP],  # the estimator node and the compensating observer on rotor_state
+    ["sensors.preset=onboard", "vehicle=hummingbird", STEP],  # the flight profile's geometric law on the IMU,
+    # bridging the late, noisy odometry (controller.use_imu)
 ])
 def test_measured_inputs_in_the_graph_agree_with_the_in_process_loop(tmp_path, sets):
     graph, local = tmp_path / "graph.mcap", tmp_path / "local.mcap"
