@@ -26,9 +26,9 @@ setup(
     tests_require=["pytest"],
     entry_points={
         "console_scripts": [
-            "fsr-fly = fsr_bringup.cli.fly_cli:main",
+            "fsr-fly = fsr_bringup.cli.entry_points:fly",
             "fsr-record = fsr_bringup.recording.recorder_node:main",
-            "fsr-analyze = fsr_bringup.cli.analyze_cli:main",
+            "fsr-analyze = fsr_bringup.cli.entry_points:analyze",
             "fsr-compile = fsr_bringup.cli.compile_cli:main",
             "fsr-sweep = fsr_bringup.cli.sweep_cli:main",
             "fsr-tune = fsr_bringup.cli.tune_cli:main",

@@ -201,7 +201,7 @@ def test_a_wrench_actuated_flight_has_no_rotor_saturation_to_report(tmp_path: Pa
 def test_the_figures_are_drawn_in_workers_that_were_not_forked_from_this_process(synthetic_recording: Path,
                                                                                  tmp_path: Path, monkeypatch) -> None:
     """Python 3.12+ warns when a process that runs threads forks: the figures' workers come from a fork server."""
-    from fsr_bringup.analysis.figures import Run, make_figures
+    from fsr_bringup.analysis.figure_jobs import Run, make_figures
 
     def no_fork() -> int:
         raise AssertionError("the analysis forked this process")

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from fsr_bringup.analysis.effective import effective_wrench
+from fsr_bringup.analysis.figure_jobs import make_figures
 from fsr_bringup.analysis.figures import (
     FLOORS,
     FONT_PT,
@@ -23,7 +24,6 @@ from fsr_bringup.analysis.figures import (
     FigureOptions,
     Run,
     errors_figure,
-    make_figures,
     mass_figure,
 )
 from fsr_bringup.analysis.load import load_flight, zero_order_hold

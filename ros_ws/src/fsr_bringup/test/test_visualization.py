@@ -14,7 +14,7 @@ from mcap_ros2.decoder import DecoderFactory
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_bringup.visualization.config import visualization_config
 from fsr_bringup.visualization.foxglove import layout, layout_text
-from fsr_bringup.visualization.frames import WORLD_IN_MAP, axis_quaternions
+from fsr_bringup.visualization.frames import NED_TO_ENU, WORLD_IN_MAP, axis_quaternions
 from fsr_bringup.visualization.markers import FORCE_PER_ARM, speed_colours
 from fsr_sim.config.scenario import load_scenario, simulation_config
 from fsr_sim.config.validation import ConfigError
@@ -31,7 +31,7 @@ from fsr_sim.contract import (
     rotor_frame,
 )
 from fsr_sim.model.rotors import rotor_axes
-from fsr_sim.model.so3 import rotation_from_quaternion
+from fsr_sim.model.so3 import quaternion_from_rotation, rotation_from_quaternion
 from fsr_sim.ros.message_schema import message_class
 
 ROOT = Path(__file__).resolve().parents[4]
@@ -85,6 +85,7 @@ def test_map_to_world_ned_is_the_ned_enu_rotation_and_base_link_is_flu(ex4_recor
     rotation = rotation_from_quaternion([q.x, q.y, q.z, q.w])
     np.testing.assert_allclose(rotation @ [1.0, 2.0, 3.0], [2.0, 1.0, -3.0], atol=1e-15)  # (n, e, d) -> (e, n, -d)
     np.testing.assert_allclose([q.x, q.y, q.z, q.w], WORLD_IN_MAP, atol=0)
+    np.testing.assert_array_equal(WORLD_IN_MAP, quaternion_from_rotation(NED_TO_ENU))  # the literal, to the bit
     flu = transforms[(BODY_FRAME, BODY_FLU_FRAME)].rotation
     np.testing.assert_allclose(rotation_from_quaternion([flu.x, flu.y, flu.z, flu.w]) @ [1.0, 2.0, 3.0],
                                [1.0, -2.0, -3.0], atol=1e-15)

@@ -2,8 +2,9 @@ r"""Figures of one or several flights for a paper (matplotlib, Agg, no pyplot st
 
 Each ``*_figure`` function draws one figure from a list of :class:`Run` (one run, or several overlaid: two
 estimator settings, two controllers) and returns it, or a reason why it has nothing to show (topics
-missing, no surface effect, no rotors); :func:`make_figures` saves every figure in every requested format
-and turns the reasons into notes. Conventions, the same in every figure:
+missing, no surface effect, no rotors); :func:`draw_and_save` saves one in every requested format and turns
+the reason into a note (:mod:`fsr_bringup.analysis.figure_jobs` draws them all, in worker processes).
+Conventions, the same in every figure:
 
 * size: one journal column (3.5 in) or two (7.16 in) wide, 8 pt text (:data:`RC`), no title inside the
   figure unless asked for; the scenario and the runs go into the file's metadata (PNG text chunks, PDF info,
@@ -30,13 +31,8 @@ and turns the reasons into notes. Conventions, the same in every figure:
 from __future__ import annotations
 
 import math
-import multiprocessing
-import os
-import signal
-import sys
-from collections.abc import Callable, Iterable, Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import matplotlib
@@ -46,11 +42,11 @@ from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 from matplotlib.ticker import MaxNLocator
 
-from fsr_bringup.analysis.effective import EffectiveWrench, effective_wrench, thrust_ratio_series
+from fsr_bringup.analysis.effective import thrust_ratio_series
+from fsr_bringup.analysis.figure_jobs import Run
 from fsr_bringup.analysis.figure_layout import PNG_DPI, Panel, Panels, add_zoom, arrange, envelope, panel_grid
-from fsr_bringup.analysis.figure_options import FORMATS, FigureOptions
+from fsr_bringup.analysis.figure_options import FigureOptions
 from fsr_bringup.analysis.figure_rules import disturbance_windows, limits_near, start_transient, zoom_span
-from fsr_bringup.analysis.load import RecordedFlight, RecordingName
 from fsr_bringup.analysis.metrics import tracking_errors
 from fsr_bringup.visualization.frames import NED_TO_ENU
 from fsr_sim.contract import ODOM, REFERENCE, ROTOR_STATE, WRENCH_CMD
@@ -96,19 +92,6 @@ RC = {
     "svg.fonttype": "none", "pdf.fonttype": 42, "savefig.dpi": PNG_DPI, "font.family": "DejaVu Sans",
     "mathtext.fontset": "dejavusans",
 }
-
-
-@dataclass
-class Run:
-    """One flight to draw: its label in legends, the decoded recording and its effective truth."""
-
-    label: str
-    flight: RecordedFlight
-    effective: EffectiveWrench | None = None
-
-    @classmethod
-    def of(cls, flight: RecordedFlight, label: str | None = None) -> Run:
-        return cls(label or flight.scenario_name, flight, effective_wrench(flight))
 
 
 @dataclass
@@ -627,130 +610,3 @@ def draw_and_save(name: str, runs: list[Run], out_dir: Path, options: FigureOpti
             return [], [*notes, f"figure {name} left out: {drawn.reason}"]
         return save_figure(drawn.figure, out_dir / name, options.formats,
                            lambda fmt: figure_metadata(name, runs, fmt)), notes
-
-
-_JOB: tuple[list[Run], Path, FigureOptions] | None = None  # the figures' input, in a worker: set at its start
-WORKER_MODULES = ["fsr_bringup.analysis.figures"]  # imported once by the fork server, inherited by every worker
-
-
-def _light(run: Run) -> Run:
-    """``run`` with its flight's recording reduced to its name (what is sent to a worker process)."""
-    recording = run.flight.recording
-    name = RecordingName(getattr(recording, "path", None), bool(getattr(recording, "truncated", False)))
-    return replace(run, flight=replace(run.flight, recording=name))
-
-
-def _start_worker(job: tuple[list[Run], Path, FigureOptions]) -> None:
-    global _JOB
-    _JOB = job
-
-
-def _draw_in_worker(name: str) -> tuple[list[Path], list[str]]:
-    return draw_and_save(name, *_JOB)
-
-
-@contextmanager
-def _main_left_out() -> Iterator[None]:
-    """While the fork server and the workers start: the caller's ``__main__`` is not run again in them (a started -
-    not forked - worker imports the main script or module first, which would fly a user's script, unguarded by
-    ``if __name__ == "__main__"``, once more per worker; they need nothing of it), and they ignore SIGINT from
-    their start (an ignored signal stays ignored across exec: a Ctrl-C at the terminal, which reaches the whole
-    process group, leaves no traceback of theirs; the pool ends them)."""
-    main = sys.modules.get("__main__")
-    saved = {name: main.__dict__[name] for name in ("__file__", "__spec__") if name in main.__dict__} if main else {}
-    if main is not None:
-        main.__dict__.pop("__file__", None)
-        main.__spec__ = None
-    try:
-        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread: signals are the main thread's business
-        handler = None
-    try:
-        yield
-    finally:
-        if handler is not None:
-            signal.signal(signal.SIGINT, handler)
-        if main is not None:
-            main.__dict__.pop("__spec__", None)
-            main.__dict__.update(saved)
-
-
-def prepare_workers() -> None:
-    """Start the fork server now (it imports the figures' modules, a few seconds) so that it is ready when the
-    figures are drawn: ``fsr-fly`` calls this before the flight, ``fsr-analyze`` before reading the recordings."""
-    if _worker_context() is not None and "forkserver" in multiprocessing.get_all_start_methods():
-        from multiprocessing import forkserver
-
-        with _main_left_out():
-            forkserver.ensure_running()
-
-
-def _worker_context() -> multiprocessing.context.BaseContext | None:
-    """Workers started by a fork server (it imports the figures' modules once; its children fork from it, a
-    single-threaded process: no fork of this one, whatever threads it runs), else spawned; None where neither
-    exists."""
-    methods = multiprocessing.get_all_start_methods()
-    if "forkserver" in methods:
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(WORKER_MODULES)
-        return context
-    return multiprocessing.get_context("spawn") if "spawn" in methods else None
-
-
-def _known_to_workers(name: str) -> bool:
-    """A worker imports the figures afresh: it draws ``name`` as this process would when its function comes from
-    fsr's own modules (one registered at run time from elsewhere, docs/extending.md, is drawn here)."""
-    return getattr(FIGURES[name], "__module__", "").startswith("fsr_bringup.")
-
-
-class FigureJob:
-    """Figures being drawn: :meth:`result` waits for them. With more than one core they are drawn by worker
-    processes (one figure each, at most one per core; started by a fork server, :func:`_worker_context`: this
-    process, which may run threads, is never forked) while the caller goes on (the analysis computes its metrics
-    meanwhile); otherwise here, one after the other, when :meth:`result` is called."""
-
-    def __init__(self, runs: list[Run], out_dir: Path, options: FigureOptions) -> None:
-        self.job = (runs, out_dir, options)
-        self.pool = self.pending = None
-        self.remote: list[str] = []
-        workers = min(len(FIGURES), len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
-        context = _worker_context() if workers > 1 else None
-        if context is not None:
-            job = ([_light(run) for run in runs], out_dir, options)
-            with _main_left_out():
-                self.pool = context.Pool(workers, initializer=_start_worker, initargs=(job,))
-            self.remote = [name for name in FIGURES if _known_to_workers(name)]
-            self.pending = self.pool.map_async(_draw_in_worker, self.remote, chunksize=1)
-
-    def result(self) -> tuple[list[Path], list[str]]:
-        """(written files, notes for skipped figures), in the order of :data:`FIGURES`."""
-        if self.pool is None:
-            results = [draw_and_save(name, *self.job) for name in FIGURES]
-        else:
-            try:  # a figure registered at run time is not in a fresh worker's FIGURES: drawn here
-                local = {name: draw_and_save(name, *self.job) for name in FIGURES if name not in self.remote}
-                drawn = dict(zip(self.remote, self.pending.get(), strict=True))
-            finally:
-                self.pool.close()
-                self.pool.join()
-            results = [drawn[name] if name in drawn else local[name] for name in FIGURES]
-        written = [path for paths, _ in results for path in paths]
-        return written, [note for _, notes in results for note in notes]
-
-
-def start_figures(runs: list[Run] | RecordedFlight, out_dir: Path, options: FigureOptions | None = None) -> FigureJob:
-    """Start drawing every figure the runs allow into ``out_dir`` (:class:`FigureJob`)."""
-    if isinstance(runs, RecordedFlight):
-        runs = [Run.of(runs)]
-    options = options or FigureOptions()
-    unknown = [f for f in options.formats if f not in FORMATS]
-    if unknown:
-        raise ValueError(f"figure format(s) {', '.join(unknown)} not supported (use {', '.join(FORMATS)})")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    return FigureJob(runs, out_dir, options)
-
-
-def make_figures(runs: list[Run] | RecordedFlight, out_dir: Path, options: FigureOptions | None = None
-                 ) -> tuple[list[Path], list[str]]:
-    """Draw every figure the runs allow into ``out_dir``; returns (written files, notes for skipped ones)."""
-    return start_figures(runs, out_dir, options).result()

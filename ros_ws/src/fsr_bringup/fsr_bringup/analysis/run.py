@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fsr_bringup.analysis.figures import FigureOptions, Run, start_figures
+from fsr_bringup.analysis.figure_jobs import Run, start_figures
+from fsr_bringup.analysis.figure_options import FigureOptions
 from fsr_bringup.analysis.load import RecordedFlight, load_flight
 from fsr_bringup.analysis.metrics import DEFAULT_SETTLE_S, flight_metrics
 from fsr_bringup.analysis.summary import comparison_summary, markdown_summary

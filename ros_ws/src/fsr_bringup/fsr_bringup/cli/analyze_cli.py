@@ -136,7 +136,7 @@ def main(argv: list[str] | None = None) -> int:
         options = figure_options(args)
         animation = animation_options(args)
         if not args.no_figures:  # the figures' worker processes get ready while the recordings are read
-            from fsr_bringup.analysis.figures import prepare_workers
+            from fsr_bringup.analysis.figure_jobs import prepare_workers
 
             prepare_workers()
         recordings = []

@@ -153,6 +153,10 @@ def interrupts_end_the_flight() -> Iterator[Callable[[], str | None]]:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    if not args.no_analysis:  # the figures' worker processes get ready while the scenario is read and flown
+        from fsr_bringup.analysis.figure_jobs import prepare_workers
+
+        prepare_workers()
     try:
         name, members = load_members(args)
     except ConfigError as error:
@@ -189,10 +193,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fsr-fly: cannot create '{run_dir}': {error.strerror}", file=sys.stderr)
         return EXIT_CONFIG_ERROR
     scenario_path, launches = write_scenarios(members, run_dir)
-    if options is not None:  # the figures' worker processes get ready while the vehicle flies
-        from fsr_bringup.analysis.figures import prepare_workers
-
-        prepare_workers()
     for member in members:
         label = f"{member.namespace}: " if member.namespace else ""
         print(f"fsr-fly: {name}: {label}{member.checked.summary_line()}", flush=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from fsr_bringup.analysis.figures import FigureOptions
+from fsr_bringup.analysis.figure_options import FigureOptions
 from fsr_bringup.analysis.load import RecordedFlight
 from fsr_bringup.analysis.run import analyze_recording
 from fsr_sim.recording.reader import Recording, RecordingError, open_recording

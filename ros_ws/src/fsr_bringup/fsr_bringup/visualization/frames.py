@@ -22,12 +22,13 @@ import numpy as np
 
 from fsr_sim.contract import BODY_FLU_FRAME, BODY_FRAME, MAP_FRAME, WORLD_FRAME, frame_prefix, rotor_frame
 from fsr_sim.model.rotors import rotor_axes
-from fsr_sim.model.so3 import quaternion_from_rotation
 from fsr_sim.model.vehicle import Vehicle
 from fsr_sim.ros.cdr_pack import StampedNumbers, Template
 
 NED_TO_ENU = np.array(((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, -1.0)))  # (n, e, d) -> (e, n, -d)
-WORLD_IN_MAP = quaternion_from_rotation(NED_TO_ENU)  # x y z w: pi about (1, 1, 0)/sqrt(2)
+# x y z w of NED_TO_ENU, pi about (1, 1, 0)/sqrt(2), to the bit as quaternion_from_rotation gives it (a literal:
+# computing it at import loads compiled code into every process that imports the figures)
+WORLD_IN_MAP = np.array((0.7071067811865475, 0.7071067811865476, 0.0, 0.0))
 FLU_IN_FRD = np.array((1.0, 0.0, 0.0, 0.0))  # pi about x: (x, y, z) -> (x, -y, -z)
 TRANSFORM_VALUES = 7  # translation (3), rotation x y z w (4)
 
