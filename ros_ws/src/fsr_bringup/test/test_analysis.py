@@ -212,6 +212,31 @@ def test_the_figures_are_drawn_in_workers_that_were_not_forked_from_this_process
     assert {path.stem for path in written} >= {"pose", "rotors"}
 
 
+@pytest.mark.slow  # seconds of subprocesses, figures or flights: not for the fast tier
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one core: the figures are drawn in this process")
+def test_the_block_of_shared_memory_the_workers_read_is_freed_when_the_figures_are_done_or_dropped(
+        synthetic_recording: Path, tmp_path: Path) -> None:
+    import gc
+    from multiprocessing.shared_memory import SharedMemory
+
+    from fsr_bringup.analysis.figure_jobs import Run, start_figures
+
+    runs = [Run.of(load_flight(synthetic_recording), "synthetic")]
+    finished = start_figures(runs, tmp_path / "finished")
+    name = finished.shared.memory.name
+    SharedMemory(name=name).close()  # there while the workers draw
+    written, _ = finished.result()
+    assert (tmp_path / "finished" / "pose.png") in written
+    dropped = start_figures(runs, tmp_path / "dropped")
+    names = [name, dropped.shared.memory.name]
+    dropped.pool.terminate()
+    del dropped
+    gc.collect()
+    for name in names:
+        with pytest.raises(FileNotFoundError):
+            SharedMemory(name=name)
+
+
 def test_run_labels_leave_out_the_time_stamp_of_a_run_name() -> None:
     from fsr_bringup.analysis.run import run_labels
 

@@ -11,11 +11,14 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import pickle
 import signal
 import sys
+import weakref
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from multiprocessing.shared_memory import SharedMemory
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -47,6 +50,7 @@ class Run:
 
 Job = tuple[list[Run], Path, FigureOptions]
 _JOB: Job | None = None  # the figures' input, in a worker: set at its start
+_JOB_MEMORY: SharedMemory | None = None
 
 
 def _light(run: Run) -> Run:
@@ -58,9 +62,39 @@ def _light(run: Run) -> Run:
     return replace(run, flight=replace(run.flight, recording=name))
 
 
-def _start_worker(job: Job) -> None:
-    global _JOB
-    _JOB = job
+class SharedJob:
+    """A job's arrays in one block of shared memory, the rest pickled (``head``, pickle protocol 5 with the arrays
+    out of band): each worker maps the arrays instead of receiving its own copy through a pipe (31 MB for a 30 s
+    flight, 0.18 s of the caller's time for two workers). :meth:`release` frees the block."""
+
+    def __init__(self, job: Job) -> None:
+        buffers: list[pickle.PickleBuffer] = []
+        self.head = pickle.dumps(job, protocol=5, buffer_callback=buffers.append)
+        raw = [buffer.raw() for buffer in buffers]
+        self.memory = SharedMemory(create=True, size=max(1, sum(view.nbytes for view in raw)))
+        self.spans: list[tuple[int, int]] = []
+        offset = 0
+        for view in raw:
+            self.memory.buf[offset:offset + view.nbytes] = view
+            self.spans.append((offset, view.nbytes))
+            offset += view.nbytes
+        self.release = weakref.finalize(self, _free, self.memory)  # also if the job is dropped unfinished
+
+    def start_arguments(self) -> tuple[str, bytes, list[tuple[int, int]]]:
+        return self.memory.name, self.head, self.spans
+
+
+def _free(memory: SharedMemory) -> None:
+    memory.close()
+    memory.unlink()
+
+
+def _start_worker(name: str, head: bytes, spans: list[tuple[int, int]]) -> None:
+    """A worker's start: the job, its arrays read-only views of the shared block (a figure cannot change what
+    the others draw)."""
+    global _JOB, _JOB_MEMORY
+    _JOB_MEMORY = SharedMemory(name=name)  # kept: the job's arrays are views of it
+    _JOB = pickle.loads(head, buffers=[_JOB_MEMORY.buf[start:start + size].toreadonly() for start, size in spans])
 
 
 def _figure_names() -> list[str]:
@@ -149,9 +183,9 @@ class FigureJob:
         context = _worker_context() if workers > 1 else None
         if context is None:
             return
-        job = ([_light(run) for run in runs], out_dir, options)
+        self.shared = SharedJob(([_light(run) for run in runs], out_dir, options))
         with _main_left_out():
-            self.pool = context.Pool(workers, initializer=_start_worker, initargs=(job,))
+            self.pool = context.Pool(workers, initializer=_start_worker, initargs=self.shared.start_arguments())
         registry = _registered_here()
         if registry is None:
             self.names = self.remote = self.pool.apply(_figure_names)
@@ -178,6 +212,7 @@ class FigureJob:
             finally:
                 self.pool.close()
                 self.pool.join()
+                self.shared.release()
             results = [drawn[name] if name in drawn else local[name] for name in self.names]
         written = [path for paths, _ in results for path in paths]
         return written, [note for _, notes in results for note in notes]
