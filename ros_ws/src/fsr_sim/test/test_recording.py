@@ -9,7 +9,7 @@ from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
 
 from fsr_sim.recording.reader import RecordingError, open_recording
-from fsr_sim.recording.writer import RecordingWriter
+from fsr_sim.recording.writer import MCAP_ZSTD_LEVEL, RecordingWriter
 
 
 def odometry(k: int) -> Odometry:
@@ -269,7 +269,7 @@ def test_chunks_finished_on_the_writer_thread_give_mcaps_file(tmp_path):
     for fast, background in ((False, False), (True, False), (True, True)):
         path = tmp_path / f"run_{fast}_{background}.mcap"
         writer = RecordingWriter(path, {"fsr_scenario": {"yaml": "name: test\n"}}, chunk_size=16 * 1024,
-                                 fast_path=fast, background=background)
+                                 fast_path=fast, background=background, zstd_level=MCAP_ZSTD_LEVEL)
         writer.add_topic("/odom", "nav_msgs/msg/Odometry")
         for low in range(0, steps, 700):
             window = slice(low, low + 700)
@@ -282,6 +282,29 @@ def test_chunks_finished_on_the_writer_thread_give_mcaps_file(tmp_path):
         files.append(path.read_bytes())
     assert files[0] == files[1] == files[2]
     assert sum(1 for m in read_ros2_messages(str(path)) if m.channel.topic == "/odom") == steps
+
+
+def test_the_fast_paths_own_compression_level_writes_the_same_messages(tmp_path):
+    """At its own level (:data:`ZSTD_LEVEL`) the fast path writes other chunk bytes than mcap's level, and the same
+    messages."""
+    import numpy as np
+
+    from fsr_sim.recording.writer import ZSTD_LEVEL
+    from fsr_sim.ros import cdr_pack
+
+    assert ZSTD_LEVEL != MCAP_ZSTD_LEVEL
+    odom = cdr_pack.odometry("world_ned", "base_link_frd")
+    stamps = np.arange(2000, dtype=np.int64) * 1_000_000
+    rows = odom.pack_rows(stamps, np.random.default_rng(5).normal(size=(len(stamps), 13)))
+    paths = [tmp_path / f"level_{level}.mcap" for level in (ZSTD_LEVEL, MCAP_ZSTD_LEVEL)]
+    for path, level in zip(paths, (ZSTD_LEVEL, MCAP_ZSTD_LEVEL), strict=True):
+        with RecordingWriter(path, chunk_size=16 * 1024, zstd_level=level) as writer:
+            writer.add_topic("/odom", "nav_msgs/msg/Odometry")
+            writer.write_block(stamps, [("/odom", None, rows)])
+    assert paths[0].read_bytes() != paths[1].read_bytes()
+    decoded = [[(m.log_time_ns, m.ros_msg.pose.pose.position.x) for m in read_ros2_messages(str(path))]
+               for path in paths]
+    assert decoded[0] == decoded[1] and len(decoded[0]) == len(stamps)
 
 
 def test_a_chunk_the_writer_thread_cannot_write_is_reported_with_the_file(tmp_path):
