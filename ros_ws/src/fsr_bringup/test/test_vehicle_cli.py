@@ -94,3 +94,28 @@ def test_the_rotorpy_vehicles_print_their_authority_lag_and_aerodynamics(capsys)
     out = capsys.readouterr().out
     assert "| roll torque (+-) |" in out and "| rotor time constant | 0.072 s |" in out
     assert "| hover rotor speed | 1788.6 rad/s |" in out
+
+
+def test_the_gains_the_geometric_law_flies_on_the_imu_are_printed_too(capsys):
+    """The flight profile's law on the IMU (``controller.use_imu``) is designed for less lag: the octocopter's
+    attitude loop, set by the lag, is faster there; the catalog flies exactly these gains; a fully actuated vehicle
+    has none, and where no loop is set by the lag the markdown says the gains are the same."""
+    import numpy as np
+
+    from fsr_control.controllers.catalog import LAWS
+    from fsr_sim.model.vehicle import load_vehicle
+
+    assert main(["octocopter", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    odometry, imu = data["designed_gains"], data["designed_gains_imu"]
+    assert odometry["lag_s"] == 0.045 and imu["lag_s"] == 0.0305
+    assert imu["attitude"] > odometry["attitude"] and imu["limits"]["attitude"] == "lag"
+    flown = LAWS["geometric"].designed_gains(load_vehicle("octocopter"), True)
+    for name, value in imu["wrench_gains"].items():
+        np.testing.assert_array_equal(flown[name], value)
+    assert main(["octocopter"]) == 0
+    assert "for 30.5 ms of lag (motor and half an IMU sample" in capsys.readouterr().out
+    assert main(["quadrotor_ex4"]) == 0
+    assert "the same gains: no loop is set by the lag" in capsys.readouterr().out
+    assert main(["tilting_quadrotor_ex5", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["designed_gains_imu"] is None

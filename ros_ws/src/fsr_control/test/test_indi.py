@@ -7,7 +7,7 @@ import pytest
 
 from fsr_control.allocation import FixedRotorAllocator
 from fsr_control.config.controller_config import controller_config
-from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, design_lag, designed_gains, filter_coefficients, pack_indi
+from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, designed_gains, filter_coefficients, indi_lag, pack_indi
 from fsr_control.core import geometric_law, imu_bridge, indi_law
 from fsr_control.design.gain_design import design_gains
 from fsr_control.flight_controller import FlightController
@@ -61,7 +61,7 @@ def test_configuration_defaults():
     assert config.type == "indi" and config.filter_hz == DEFAULT_FILTER_HZ
     assert config.control_period == pytest.approx(0.001) and not config.rotor_state  # quadrotor_ex4: no lag
     assert not config.odometry_measured and config.odometry_delay_steps == 0  # the ideal preset: the true state
-    expected = design_gains(sim.vehicle, lag=design_lag(sim.vehicle)).wrench_gains()
+    expected = design_gains(sim.vehicle, lag=indi_lag(sim.vehicle)).wrench_gains()
     for name in ("k_p", "k_v", "k_r", "k_w"):
         np.testing.assert_array_equal(config.gains[name], expected[name])
     np.testing.assert_array_equal(config.gains["k_i"], np.zeros((3, 3)))
@@ -71,8 +71,8 @@ def test_configuration_defaults():
     # its 5 ms motor and the 30 Hz filter (13 ms, a quarter more: 16 ms), not the 30 ms motor and 15 ms of
     # odometry the geometric law's gains assume (45 ms): an attitude loop 2.8 times faster, 20.5 rad/s
     hummingbird = simulation_config(indi_scenario("vehicle=hummingbird")).vehicle
-    assert design_lag(hummingbird) == pytest.approx(1.25 * (0.005 + 0.0075 + 0.0005), abs=1e-4)
-    assert design_gains(hummingbird, lag=design_lag(hummingbird)).attitude == pytest.approx(
+    assert indi_lag(hummingbird) == pytest.approx(1.25 * (0.005 + 0.0075 + 0.0005), abs=1e-4)
+    assert design_gains(hummingbird, lag=indi_lag(hummingbird)).attitude == pytest.approx(
         2.8 * design_gains(hummingbird).attitude, rel=0.02)
     onboard = controller_config(indi_scenario("sensors.preset=onboard"))
     assert onboard.odometry_measured and onboard.odometry_delay_steps == 10

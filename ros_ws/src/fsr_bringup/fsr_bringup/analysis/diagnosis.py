@@ -51,13 +51,13 @@ def _first_shortfall(flight: RecordedFlight) -> dict[str, Any] | None:
 def _gain_causes(flight: RecordedFlight) -> list[dict[str, str]]:
     """Gains more than GAIN_FACTOR times those designed from the vehicle (rotor actuation only: a wrench has no
     authority limit)."""
-    from fsr_control.design.gain_design import design_gains, design_lag
+    from fsr_control.design.gain_design import design_gains
 
     controller, config = flight.controller, flight.config
     if controller is None or config is None or config.actuation != "rotors":
         return []
     try:
-        design = design_gains(config.vehicle, lag=design_lag(config.vehicle, controller.use_imu))
+        design = design_gains(config.vehicle, imu=controller.use_imu)
     except ValueError:
         return []
     designed = design.wrench_gains() if controller.type == "geometric" else design.acceleration_gains()

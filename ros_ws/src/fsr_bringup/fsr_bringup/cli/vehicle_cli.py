@@ -13,7 +13,9 @@ also ``allocation_4xn`` (the report's G_q rows f_z tau_x tau_y tau_z), and for a
 vehicle that cannot hover. ``designed_gains`` are the loop bandwidths [rad/s] and gains of ``controller.profile:
 flight`` (:mod:`fsr_control.design.gain_design`): ``attitude``, ``yaw``, ``horizontal``, ``vertical``, what set each
 (``limits``), the lag designed for (``lag_s``), ``wrench_gains`` (the geometric law's, N/m ... N m s/rad) and
-``acceleration_gains`` (the Voliro law's, 1/s^2 and 1/s); null when the authority is.
+``acceleration_gains`` (the Voliro law's, 1/s^2 and 1/s); null when the authority is. ``designed_gains_imu``: the
+same for the geometric law flying on the IMU (``controller.use_imu``, the flight profile's default where the
+scenario has an IMU: no odometry delay in its lag); null for a fully actuated vehicle (its law has no such mode).
 """
 
 from __future__ import annotations
@@ -76,9 +78,12 @@ def vehicle_summary(vehicle: Vehicle) -> dict:
         model_authority = authority(vehicle, margin=1.0)
     except ValueError as error:  # a vehicle that cannot hover: the rest still printed
         summary["authority"], summary["authority_error"], summary["designed_gains"] = None, str(error), None
+        summary["designed_gains_imu"] = None
     else:
         summary["authority"] = model_authority.as_dict()
         summary["designed_gains"] = design_gains(vehicle, model_authority).as_dict()
+        summary["designed_gains_imu"] = None if vehicle.fully_actuated else \
+            design_gains(vehicle, model_authority, imu=True).as_dict()
     if vehicle.has_servos:
         summary["tilt_angle_max"] = vehicle.tilt_angle_max
         summary["allocation_static"] = static_tilting_allocation(vehicle).tolist()
@@ -118,11 +123,13 @@ def _gain_text(gain: np.ndarray) -> str:
     return str(np.vectorize(lambda v: float(f"{v:.4g}"))(values).tolist())
 
 
-def _design_markdown(design: GainDesign, fully_actuated: bool) -> list[str]:
+def _design_markdown(design: GainDesign, fully_actuated: bool, imu: bool = False) -> list[str]:
     settings = {"lag": "the lag", "authority": "the authority", "cascade": f"attitude / {CASCADE_RATIO:g}"}
+    lag = "motor and half an IMU sample: the law flies on the IMU, `controller.use_imu`" if imu else \
+        "motor, onboard odometry's delay and rate"
     lines = [
         f"Gains designed from the vehicle (`controller.profile: flight`, docs/control.md) for "
-        f"{design.lag * 1e3:.0f} ms of lag (motor, onboard odometry's delay and rate; every loop below "
+        f"{design.lag * 1e3:.1f} ms of lag ({lag}; every loop below "
         f"{design.lag_bandwidth:.3g} rad/s), damping {design.damping:g}:",
         "",
         "| loop | bandwidth | set by |",
@@ -191,7 +198,16 @@ def vehicle_markdown(vehicle: Vehicle) -> str:
         out += ["", f"Authority at hover: none ({s['authority_error']})."]
     else:
         out += ["", *_authority_markdown(Authority(**s["authority"]))]
-        out += ["", *_design_markdown(design_gains(vehicle, Authority(**s["authority"])), vehicle.fully_actuated)]
+        model_authority = Authority(**s["authority"])
+        out += ["", *_design_markdown(design_gains(vehicle, model_authority), vehicle.fully_actuated)]
+        if not vehicle.fully_actuated:
+            on_imu, design = design_gains(vehicle, model_authority, imu=True), design_gains(vehicle, model_authority)
+            if all(np.array_equal(a, b) for a, b in zip(on_imu.wrench_gains().values(),
+                                                        design.wrench_gains().values(), strict=True)):
+                out += ["", f"On the IMU (`controller.use_imu`: {on_imu.lag * 1e3:.1f} ms of lag) the same gains: "
+                        "no loop is set by the lag."]
+            else:
+                out += ["", *_design_markdown(on_imu, False, imu=True)]
     return "\n".join(out) + "\n"
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.core import geometric_law, indi_law, laws, voliro_law
-from fsr_control.design.gain_design import design_gains, design_lag
+from fsr_control.design.gain_design import design_gains
 from fsr_sim.model.vehicle import Vehicle
 
 if TYPE_CHECKING:
@@ -86,7 +86,7 @@ def _pack_indi(vehicle: Vehicle, config: ControllerConfig) -> indi_law.IndiParam
 
 LAWS: dict[str, LawType] = {
     "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS,
-                         lambda vehicle, imu: design_gains(vehicle, lag=design_lag(vehicle, imu)).wrench_gains(),
+                         lambda vehicle, imu: design_gains(vehicle, imu=imu).wrench_gains(),
                          _pack_geometric, geometric_law.MEMORY_SIZE, fully_actuated=False,
                          optional_gains=geometric.OPTIONAL_GAINS),
     "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS,

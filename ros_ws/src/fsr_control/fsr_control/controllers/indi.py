@@ -47,7 +47,7 @@ velocity: the IMU integrated step to step, moved at each new ``odom`` sample by
 (Butterworth), discretised exactly for an input held over the control period ``T``: ``x_k = Phi x_(k-1) +
 Gamma u_k`` with ``Phi = exp(A T)``, ``Gamma = A^-1 (Phi - 1) B``; started at rest on the first sample. The
 default :data:`DEFAULT_FILTER_HZ` (30 Hz) keeps the gyro's derivative quiet at 1 kHz while the filter's group
-delay (``2 zeta / w_n``, 7.5 ms) is part of the lag the gains are designed for (:func:`design_lag`).
+delay (``2 zeta / w_n``, 7.5 ms) is part of the lag the gains are designed for (:func:`indi_lag`).
 
 The law is written once, in the compiled core (:func:`fsr_control.core.indi_law.indi_law`).
 """
@@ -75,7 +75,7 @@ LAG_MARGIN = 1.25
 FILTER_DAMPING = 1.0 / math.sqrt(2.0)  # Butterworth
 
 
-def design_lag(vehicle: Vehicle, filter_hz: float = DEFAULT_FILTER_HZ, period: float = DESIGN_PERIOD) -> float:
+def indi_lag(vehicle: Vehicle, filter_hz: float = DEFAULT_FILTER_HZ, period: float = DESIGN_PERIOD) -> float:
     """The lag [s] INDI's gains are designed for: :data:`LAG_MARGIN` times the vehicle's own motor (or servo)
     time constant, the filter's group delay ``2 zeta / w_n`` and half a control period. No sensor delay: the
     attitude loop damps with the gyro and, where ``odom`` is late, flies on the IMU-propagated estimate (module
@@ -86,11 +86,11 @@ def design_lag(vehicle: Vehicle, filter_hz: float = DEFAULT_FILTER_HZ, period: f
 
 def designed_gains(vehicle: Vehicle) -> dict[str, np.ndarray]:
     """The gains of ``controller.profile: flight``: the geometric law's designed from the vehicle
-    (:func:`fsr_control.design.gain_design.design_gains`) for INDI's own lag (:func:`design_lag`: the vehicle's motor
+    (:func:`fsr_control.design.gain_design.design_gains`) for INDI's own lag (:func:`indi_lag`: the vehicle's motor
     and the default filter, not the 30 ms motor and the odometry's delay the geometric law is designed for),
     without the integral (``k_i = 0``): the increment removes a constant external force itself, and an
     integral would only wind up during the transient and overshoot."""
-    gains = design_gains(vehicle, lag=design_lag(vehicle)).wrench_gains()
+    gains = design_gains(vehicle, lag=indi_lag(vehicle)).wrench_gains()
     gains["k_i"] = np.zeros((3, 3))
     return gains
 

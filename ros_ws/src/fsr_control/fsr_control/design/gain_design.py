@@ -161,7 +161,7 @@ def lateral_acceleration(vehicle: Vehicle, force_set: ForceSet) -> float:
 
 
 def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set: ForceSet | None = None,
-                 lag: float | None = None) -> GainDesign:
+                 lag: float | None = None, imu: bool = False) -> GainDesign:
     """The bandwidths and gains of the module docstring for ``vehicle`` (its nominal mass and inertia).
 
     Parameters
@@ -173,7 +173,10 @@ def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set
     force_set : ForceSet, optional
         A fully actuated vehicle's force set (default: the cached one); unused otherwise.
     lag : float, optional
-        The total lag [s] to design for (default: :func:`design_lag`, the geometric law's).
+        The total lag [s] to design for (default: :func:`design_lag` of ``vehicle`` and ``imu``, the geometric
+        law's).
+    imu : bool, optional
+        Whether the law flies on the IMU (``controller.use_imu``): the default lag's (:func:`design_lag`).
 
     Returns
     -------
@@ -182,7 +185,7 @@ def design_gains(vehicle: Vehicle, authority: Authority | None = None, force_set
     from fsr_control.design.authority_cache import model_authority, model_force_set
 
     authority = model_authority(vehicle) if authority is None else authority
-    lag = design_lag(vehicle) if lag is None else float(lag)
+    lag = design_lag(vehicle, imu) if lag is None else float(lag)
     cap = 1.0 / (LAG_FACTOR * lag)
     alpha = min(authority.roll_acceleration, authority.pitch_acceleration)
     attitude, attitude_limit = _bounded(cap, alpha, ATTITUDE_ERROR)
