@@ -80,6 +80,7 @@ DISTURBANCE_LABEL = "disturbance acting"
 FLOORS = {"m": 1e-3, "m/s": 1e-3, r"m/s$^2$": 1e-3, "deg": 1e-3, "rad/s": 1e-3, "N": 1e-3, "N m": 1e-4, "kg": 1e-4,
           "-": 1e-4, "rotor rad/s": 1e-2}
 PATH_POINTS = 3000  # a path is drawn through at most this many samples
+PNG_COMPRESS_LEVEL = 1  # zlib's fastest: a figure's file about a fifth larger, 10-15 % less CPU to draw and save
 PATH_FIGURE_HEIGHT_IN = 3.2
 PATH_FLAT_SHARE = 0.25  # the 3D box is at least this share of its widest half-extent along each axis
 PATH_3D_ZOOM = 0.85  # the 3D box within its axes (room for the tick and axis labels)
@@ -596,7 +597,8 @@ def save_figure(fig: Figure, stem: Path, formats: Iterable[str], metadata: Calla
     paths = []
     for fmt in formats:
         path = stem.with_suffix(f".{fmt}")
-        fig.savefig(path, format=fmt, dpi=PNG_DPI, metadata=metadata(fmt))
+        extra = {"pil_kwargs": {"compress_level": PNG_COMPRESS_LEVEL}} if fmt == "png" else {}
+        fig.savefig(path, format=fmt, dpi=PNG_DPI, metadata=metadata(fmt), **extra)
         paths.append(path)
     return paths
 
