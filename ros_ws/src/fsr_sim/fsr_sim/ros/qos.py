@@ -15,46 +15,24 @@ from fsr_sim.contract import Topic
 
 STREAM_DEPTH = 5000  # messages: about 5 s of a 1 kHz stream
 
-STREAM_QOS = QoSProfile(
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    history=HistoryPolicy.KEEP_LAST,
-    depth=STREAM_DEPTH,
-)
 
+def _reliable(durability: DurabilityPolicy, depth: int) -> QoSProfile:
+    """Every profile is reliable and keeps the last ``depth`` messages; they differ in durability and depth."""
+    return QoSProfile(reliability=ReliabilityPolicy.RELIABLE, durability=durability, history=HistoryPolicy.KEEP_LAST,
+                      depth=depth)
+
+
+STREAM_QOS = _reliable(DurabilityPolicy.TRANSIENT_LOCAL, STREAM_DEPTH)
 # Inputs published by users (any durability matches a volatile subscriber).
-GOAL_QOS = QoSProfile(
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.VOLATILE,
-    history=HistoryPolicy.KEEP_LAST,
-    depth=10,
-)
-
+GOAL_QOS = _reliable(DurabilityPolicy.VOLATILE, 10)
 # /clock: reliable and as deep as the streams, so that the recorder keeps every step even when it falls a few
 # hundred messages behind (with depth 10 it lost ~5 %); volatile, so rclpy's own best-effort clock
 # subscription (use_sim_time) still matches.
-CLOCK_QOS = QoSProfile(
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.VOLATILE,
-    history=HistoryPolicy.KEEP_LAST,
-    depth=STREAM_DEPTH,
-)
-
+CLOCK_QOS = _reliable(DurabilityPolicy.VOLATILE, STREAM_DEPTH)
 # sim_progress: a watcher wants the latest value only.
-PROGRESS_QOS = QoSProfile(
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.VOLATILE,
-    history=HistoryPolicy.KEEP_LAST,
-    depth=1,
-)
-
+PROGRESS_QOS = _reliable(DurabilityPolicy.VOLATILE, 1)
 # One-off messages (goals, status) that a late subscriber should still receive.
-LATCHED_QOS = QoSProfile(
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    history=HistoryPolicy.KEEP_LAST,
-    depth=1,
-)
+LATCHED_QOS = _reliable(DurabilityPolicy.TRANSIENT_LOCAL, 1)
 
 _PROFILES = {"STREAM": STREAM_QOS, "GOAL": GOAL_QOS, "CLOCK": CLOCK_QOS, "PROGRESS": PROGRESS_QOS,
              "LATCHED": LATCHED_QOS}
