@@ -63,3 +63,12 @@ def test_end_process_exits_normally_while_another_thread_runs(tmp_path: Path) ->
         """, tmp_path)
     assert done.returncode == 4
     assert (tmp_path / "thread_finished").read_text() == "yes"
+
+
+def test_the_fork_servers_warm_up_draws_in_memory_only(tmp_path: Path, monkeypatch) -> None:
+    """The figure the fork server draws to fill matplotlib's caches is written nowhere."""
+    from fsr_bringup.analysis.figures import warm_up
+
+    monkeypatch.chdir(tmp_path)
+    warm_up()
+    assert list(tmp_path.iterdir()) == []

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from fsr_bringup.analysis.load import RecordedFlight
 
 FIGURES_MODULE = "fsr_bringup.analysis.figures"
-WORKER_MODULES = [FIGURES_MODULE]  # imported once by the fork server, inherited by every worker
+WORKER_MODULES = ["fsr_bringup.analysis.figure_server"]  # imported once by the fork server (the figures, warm)
 MOST_WORKERS = 8  # about the figures a flight has: a worker more would only receive the job
 
 
