@@ -4,7 +4,7 @@ A light module: it imports neither matplotlib nor the analysis (those only insid
 so that a command starts the fork server first thing (:func:`prepare_workers`: it imports the figures' modules,
 about a second, while the command reads its scenario and flies). The calling process pays for matplotlib only
 when it draws a figure itself (one core, or a figure registered at run time from outside fsr's modules,
-docs/extending.md).
+docs/extending.md). The flights' arrays reach the workers through shared memory (:class:`SharedJob`).
 """
 
 from __future__ import annotations

@@ -598,10 +598,14 @@ def save_figure(fig: Figure, stem: Path, formats: Iterable[str], metadata: Calla
     paths = []
     for fmt in formats:
         path = stem.with_suffix(f".{fmt}")
-        extra = {"pil_kwargs": {"compress_level": PNG_COMPRESS_LEVEL}} if fmt == "png" else {}
-        fig.savefig(path, format=fmt, dpi=PNG_DPI, metadata=metadata(fmt), **extra)
+        _write(fig, path, fmt, metadata(fmt))
         paths.append(path)
     return paths
+
+
+def _write(fig: Figure, target: Path | io.BytesIO, fmt: str, metadata: dict) -> None:
+    extra = {"pil_kwargs": {"compress_level": PNG_COMPRESS_LEVEL}} if fmt == "png" else {}
+    fig.savefig(target, format=fmt, dpi=PNG_DPI, metadata=metadata, **extra)
 
 
 def draw_and_save(name: str, runs: list[Run], out_dir: Path, options: FigureOptions) -> tuple[list[Path], list[str]]:
@@ -628,5 +632,5 @@ def warm_up() -> None:
         panel.ax.set_xlabel(TIME_LABEL)
         panel.ax.text(0.99, 0.04, "range", transform=panel.ax.transAxes, ha="right", va="bottom")
         arrange(panels, _legend(panels.fig, {"warm-up": panel.ax.lines[0]}, 1), "warm-up")
-        panels.fig.savefig(io.BytesIO(), format="png", dpi=PNG_DPI, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
+        _write(panels.fig, io.BytesIO(), "png", {})
 
