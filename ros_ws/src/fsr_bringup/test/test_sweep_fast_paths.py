@@ -143,7 +143,11 @@ def assert_packed_equal(got, want, where: str = "") -> None:
     """Two packed objects (NamedTuples of arrays and numbers, nested) equal to the bit."""
     if isinstance(want, np.ndarray):
         assert got.dtype == want.dtype and got.shape == want.shape, where
-        assert np.array_equal(got, want, equal_nan=True), where
+        if want.dtype.names:  # a record (named state): field by field
+            for name in want.dtype.names:
+                assert_packed_equal(np.asarray(got[name]), np.asarray(want[name]), f"{where}.{name}")
+        else:
+            assert np.array_equal(got, want, equal_nan=True), where
     elif isinstance(want, tuple):
         assert type(got) is type(want) and len(got) == len(want), where
         names = getattr(want, "_fields", range(len(want)))

@@ -32,7 +32,7 @@ from fsr_sim.core.plant import (
     stage_wrench,
 )
 from fsr_sim.core.rigid_body import GRAVITY, state_rotation
-from fsr_sim.core.sensors import IMU_SIZE, measure_imu, odometry_memory_size
+from fsr_sim.core.sensors import IMU_SIZE, measure_imu
 from fsr_sim.core.so3 import Vec3, mat_t_vec3
 from fsr_sim.core.surfaces import ceiling_rest_z, ground_rest_z
 
@@ -70,8 +70,7 @@ def publish_imu(params: PlantParams, state: PlantState, out) -> None:  # noqa: A
     out[IMU_TRUE_LINEAR_ACCELERATION + 2] = sz
     for i in range(IMU_SIZE):
         out[IMU_ANGULAR_VELOCITY + i] = out[true + i]
-    memory = state.sensor_memory[odometry_memory_size(params.sensors.odometry.delay):]
-    measure_imu(imu, memory, int(state.status[0].step_index), out[IMU_ANGULAR_VELOCITY:IMU_END])
+    measure_imu(imu, state.sensor_memory, int(state.status[0].step_index), out[IMU_ANGULAR_VELOCITY:IMU_END])
 
 
 @jit

@@ -45,7 +45,7 @@ from fsr_sim.core import plant as core
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.core.aerodynamics import AeroParams
 from fsr_sim.core.rigid_body import STATE_SIZE
-from fsr_sim.core.sensors import memory_size, reset_memory
+from fsr_sim.core.sensors import new_sensor_memory
 from fsr_sim.core.surfaces import has_thrust_effects
 from fsr_sim.model.checks import InvalidValueError, finite_array
 from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances
@@ -174,9 +174,8 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
         work=np.zeros((5, STATE_SIZE)),
         status=core.new_plant_status(), saturation=np.zeros(core_rotors.saturation_size(n)),
         gust_states=params.turbulence.initial_states.copy(), gusts=params.turbulence.initial_gusts.copy(),
-        sensor_memory=np.zeros(memory_size(params.sensors)),
+        sensor_memory=new_sensor_memory(params.sensors),
     )
-    reset_memory(params.sensors, state.sensor_memory)
     core_rotors.reset_saturation(state.saturation)
     if params.tilting:
         core_rotors.tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
