@@ -143,7 +143,11 @@ def assert_packed_equal(got, want, where: str = "") -> None:
     """Two packed objects (NamedTuples of arrays and numbers, nested) equal to the bit."""
     if isinstance(want, np.ndarray):
         assert got.dtype == want.dtype and got.shape == want.shape, where
-        assert np.array_equal(got, want, equal_nan=True), where
+        if want.dtype.names:  # a record (named state): field by field
+            for name in want.dtype.names:
+                assert_packed_equal(np.asarray(got[name]), np.asarray(want[name]), f"{where}.{name}")
+        else:
+            assert np.array_equal(got, want, equal_nan=True), where
     elif isinstance(want, tuple):
         assert type(got) is type(want) and len(got) == len(want), where
         names = getattr(want, "_fields", range(len(want)))
@@ -258,7 +262,7 @@ def test_the_analysis_effective_truth_is_the_loops(scenario, fixed):
 
     setup = prepare_flight(load_scenario(scenario, values=fixed))
     loop, a = loop_flight(setup, 0.01), setup.arrays
-    acc = np.zeros(core.SIZE)
+    acc = core.new_accumulators()
     outcome, k, _ = flight_loop.fly(
         loop.plant_params, loop.plant_state, loop.controller_params, loop.controller_state, loop.with_estimator,
         loop.estimator_measured, loop.observer_params, loop.observer_state, 0, setup.steps, setup.steps,
@@ -268,12 +272,14 @@ def test_the_analysis_effective_truth_is_the_loops(scenario, fixed):
     assert outcome == flight_loop.FINISHED and k == setup.steps
     flight = recorded_flight_of_run(setup.run(k + 1, "finished", "", 0.0))
     truth = effective_wrench(flight)
-    from_arrays = np.zeros(core.SIZE)
+    from_arrays = core.new_accumulators()
     odom = flight.odom
     core.measure_log(loop.measures, from_arrays, odom.t, np.ascontiguousarray(odom.position),
                      np.ascontiguousarray(odom.rotation), a.control[:k + 1], truth.wrench_body, a.estimates[:k + 1])
-    assert acc[core.TRUTH_SAMPLES] == from_arrays[core.TRUTH_SAMPLES] == setup.steps
-    np.testing.assert_allclose(from_arrays, acc, rtol=1e-9, atol=1e-12)
+    assert acc[0].truth_samples == from_arrays[0].truth_samples == setup.steps
+    for name in core.ACCUMULATORS.names:
+        np.testing.assert_allclose(np.asarray(from_arrays[0][name], float), np.asarray(acc[0][name], float),
+                                   rtol=1e-9, atol=1e-12, err_msg=name)
 
 
 @pytest.mark.parametrize(("scenario", "fixed"), ONE_TRUTH_FLIGHTS[:3])

@@ -92,19 +92,19 @@ class CompensationReport:
     observer restarts after a stamp gap."""
 
     def __init__(self, memory: np.ndarray) -> None:
-        self.memory = memory
+        self.memory = memory  # the core's COMPENSATION_MEMORY record
 
     @property
     def compensated_steps(self) -> int:
-        return int(self.memory[core.COMPENSATED_STEPS])
+        return int(self.memory[0].compensated_steps)
 
     @property
     def contact_steps(self) -> int:
-        return int(self.memory[core.CONTACT_STEPS])
+        return int(self.memory[0].contact_steps)
 
     @property
     def gaps(self) -> int:
-        return int(self.memory[core.GAPS])
+        return int(self.memory[0].gaps)
 
     late_estimates = 0  # the observer is in the controller's process
 
@@ -126,7 +126,7 @@ def pack_compensation(config: CompensationConfig | None, vehicle: Vehicle) -> tu
     params = core.CompensationParams(config is not None, observer.params, observer.sample_time,
                                      config is not None and config.r >= 2, surfaces,
                                      config is not None and config.measured, config is None or config.rates)
-    state = core.CompensationState(observer.state, np.zeros((3, 3)), np.eye(3), np.zeros(core.MEMORY_SIZE))
+    state = core.CompensationState(observer.state, np.zeros((3, 3)), np.eye(3), core.new_compensation_memory())
     return params, state
 
 
@@ -168,7 +168,7 @@ class WrenchCompensator:
     @property
     def in_contact(self) -> bool:
         """Whether the last state was in contact with a surface (compensation gated off)."""
-        return bool(self.state.memory[core.CONTACT])
+        return bool(self.state.memory[0].contact)
 
 
 class _ObserverView:

@@ -45,7 +45,7 @@ def make_control_law(config: ControllerConfig, vehicle: Vehicle) -> CompiledLaw:
     """The law ``config.type`` names (:data:`fsr_control.controllers.catalog.LAWS`) on the nominal ``vehicle``."""
     law = LAWS[config.type]
     params = laws.law_params(law.kind, law.pack(vehicle, config), law.horizon_steps, law.horizon_dt)
-    return CompiledLaw(params, law.memory_size)
+    return CompiledLaw(params)
 
 
 def seconds_from_ns(stamp_ns: int) -> float:

@@ -31,8 +31,7 @@ def hold_state(controller: FlightController, offset: tuple[float, float, float],
     level = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     for k in range(first, first + steps):
         controller.command_row(k * PERIOD, position, level, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
-    at = geometric_law.INTEGRAL
-    return controller.law.memory[at:at + 3].copy()
+    return controller.law.memory.geometric[0].integral.copy()
 
 
 def test_the_integral_sums_the_position_error_and_is_clamped_to_its_force_bound():

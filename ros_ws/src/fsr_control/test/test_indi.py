@@ -8,7 +8,7 @@ import pytest
 from fsr_control.allocation import FixedRotorAllocator
 from fsr_control.config.controller_config import controller_config
 from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, designed_gains, filter_coefficients, indi_lag, pack_indi
-from fsr_control.core import geometric_law, imu_bridge, indi_law
+from fsr_control.core import imu_bridge, laws
 from fsr_control.design.gain_design import design_gains
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import load_scenario, simulation_config
@@ -159,8 +159,7 @@ def test_the_estimate_bridges_the_odometry_delay_and_hold_with_the_imu():
     period, delay, every = 0.001, 10, 10
     params = pack_indi(vehicle, designed_gains(vehicle), DEFAULT_FILTER_HZ, period, True, predict=True,
                        delay_steps=delay)
-    memory = np.zeros(indi_law.MEMORY_SIZE)
-    at = geometric_law.BRIDGE  # INDI keeps its estimate where the geometric law keeps its own
+    memory = laws.new_law_memory().bridge[0]  # INDI keeps its estimate where the geometric law keeps its own
     rate, acceleration = np.array([0.8, -0.5, 0.3]), np.array([2.0, -1.0, 0.5])
     p0, v0 = np.array([1.0, 2.0, -3.0]), np.array([3.0, -1.0, 0.2])
 
@@ -179,7 +178,7 @@ def test_the_estimate_bridges_the_odometry_delay_and_hold_with_the_imu():
         position, velocity, rotation = truth(step)
         imu = np.r_[rate, rotation.T @ (acceleration - (0.0, 0.0, 9.81))]
         rows = tuple(tuple(row) for row in measured[2])
-        p, r, v = estimate(params.bridge, memory, at, tuple(measured[0]), rows, tuple(measured[1]), imu)
+        p, r, v = estimate(params.bridge, memory, tuple(measured[0]), rows, tuple(measured[1]), imu)
         if step > 200:
             worst = max(worst, np.linalg.norm(np.subtract(p, position)), np.linalg.norm(np.subtract(v, velocity)),
                         np.abs(np.subtract(r, rotation)).max())

@@ -19,10 +19,10 @@ from fsr_sim.core.odometry import (
     PUBLISHED_SIZE,
 )
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.core.sensors import IMU_HISTORY, IMU_SIZE, measure_imu
+from fsr_sim.core.sensors import measure_imu, new_sensor_memory, reset_sensor_memory
 from fsr_sim.model import Environment, Plant, Surface, disturbances, load_vehicle
 from fsr_sim.model.checks import InvalidValueError
-from fsr_sim.model.sensors import ImuModel
+from fsr_sim.model.sensors import ImuModel, pack_sensors
 from fsr_sim.model.so3 import rotation_from_euler_zyx
 
 FREE_SPACE = Environment(ground=Surface(enabled=False))
@@ -95,10 +95,8 @@ def test_in_flight_it_reads_every_force_but_gravity_in_the_body_frame():
 
 
 def stage(model: ImuModel, period: float = 0.001):
-    params = model.pack(period)
-    memory = np.zeros(IMU_HISTORY + IMU_SIZE * (params.delay + 1))
-    memory[0] = -1.0
-    return params, memory
+    sensors = pack_sensors(None, model, period)
+    return sensors.imu, new_sensor_memory(sensors)
 
 
 def test_an_ideal_stage_is_the_truth_delayed_and_held():
@@ -135,8 +133,7 @@ def test_the_discrete_noise_and_walk_follow_the_densities():
 
 @numba.njit  # not cached: a test writes nothing next to its source
 def _bias_after(params, steps, memory, out):  # noqa: ANN001, ANN202
-    memory[:] = 0.0
-    memory[0] = -1.0
+    reset_sensor_memory(memory)
     for k in range(steps + 1):
         out[:] = 0.0
         measure_imu(params, memory, k, out)

@@ -4,7 +4,8 @@ and that a flight's arrays are fed through after the fact (:mod:`fsr_bringup.swe
 one definition.
 
 Per sample ``k = 0..K`` (the state stamped ``t_k = k T``, ``t_k = (k period_ns) 1e-9`` as the loop computes it,
-and the controller's answer to it), into the accumulator vector ``acc`` (:data:`SIZE`, indices below):
+and the controller's answer to it), into the accumulators ``acc`` (a 1-element record array of
+:data:`ACCUMULATORS`, :func:`new_accumulators`; the fields below):
 
 * position error ``e_k = |p_k - p_d,k|`` [m]: the last finite value, the peak, ``sum e_k^2`` and the samples
   counted (finite ones), and the last sample outside the band (NaN counts as outside); the last sample whose
@@ -54,26 +55,34 @@ from fsr_sim.core.rotors import scaled_rotor_wrench
 from fsr_sim.core.so3 import Mat3, Vec3, mat_t_mat3, mat_t_vec3, rotation_rows_from_quaternion
 from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, thrust_ratios
 
-# The accumulators (acc).
-POSITION_FINAL, POSITION_PEAK, POSITION_SQUARES, POSITION_SAMPLES, POSITION_LAST_OUTSIDE = 0, 1, 2, 3, 4
-ATTITUDE_FINAL, ATTITUDE_PEAK = 5, 7  # 2 each: (sin, cos) of the angle (module docstring)
-ATTITUDE_SAMPLES = 9
-ROTOR_SPEED_PEAK, SATURATED_STEPS, TILT_STEPS = 10, 11, 12
-GAVE_WAY = 13  # 6: 1 where that body axis fell short at some step
-ESTIMATE_SQUARES = 19  # 6: sum of the squared errors at t >= late_from
-ESTIMATE_LATE = 25  # samples summed in ESTIMATE_SQUARES
-ESTIMATE_LAST_OUTSIDE = 26  # 6: the last sample outside the band (-1: none)
-TRUTH_LAST_SUM = 32  # 6: sum of the truths at t >= last_from
-TRUTH_LAST_SAMPLES = 38
-FINAL_BAND = 39  # 6: the band of the last sample with a truth
-TRUTH_SAMPLES = 45  # samples with a finite truth
-TRUTH_UNDEFINED = 46  # samples (before the last) whose truth is not finite
-SMOOTHED_ESTIMATE = 47  # 6: the estimate through the smoothed settling time's low-pass
-SMOOTHED_TRUTH = 53  # 6: the truth through it
-SMOOTHED_LAST_OUTSIDE = 59  # 6: the last sample whose low-passed error is outside the band (-1: none)
-SMOOTHED_FINAL_BAND = 65  # 6: the band of the last low-passed truth
-REFERENCE_LAST_MOVING = 71  # the last sample whose position reference moves (velocity or acceleration != 0; -1: none)
-SIZE = 72
+ACCUMULATORS = np.dtype([
+    ("position_final", np.float64),  # [m] the last finite position error (NaN: none yet)
+    ("position_peak", np.float64),
+    ("position_squares", np.float64),  # [m^2] sum of the squared finite errors
+    ("position_samples", np.int64),  # finite errors summed
+    ("position_last_outside", np.int64),  # the last sample outside the band (-1: none)
+    ("attitude_final", np.float64, (2,)),  # (sin, cos) of the angle (module docstring)
+    ("attitude_peak", np.float64, (2,)),
+    ("attitude_samples", np.int64),
+    ("rotor_speed_peak", np.float64),  # [rad/s]
+    ("saturated_steps", np.int64),
+    ("tilt_steps", np.int64),
+    ("gave_way", np.uint8, (6,)),  # per body axis: 1 once it fell short (numba's records hold no bool arrays)
+    ("estimate_squares", np.float64, (6,)),  # sum of the squared errors at t >= late_from
+    ("estimate_late", np.int64),  # samples summed in estimate_squares
+    ("estimate_last_outside", np.int64, (6,)),  # the last sample outside the band (-1: none)
+    ("truth_last_sum", np.float64, (6,)),  # sum of the truths at t >= last_from
+    ("truth_last_samples", np.int64),
+    ("final_band", np.float64, (6,)),  # the band of the last sample with a truth
+    ("truth_samples", np.int64),  # samples with a finite truth
+    ("truth_undefined", np.int64),  # samples (before the last) whose truth is not finite
+    ("smoothed_estimate", np.float64, (6,)),  # the estimate through the smoothed settling time's low-pass
+    ("smoothed_truth", np.float64, (6,)),  # the truth through it
+    ("smoothed_last_outside", np.int64, (6,)),  # the last sample whose low-passed error is outside the band (-1: none)
+    ("smoothed_final_band", np.float64, (6,)),  # the band of the last low-passed truth
+    ("reference_last_moving", np.int64),  # the last sample whose position reference moves (-1: none)
+], align=True)
+"""The accumulators' fields (module docstring), read and written in place as ``acc[0].position_peak``."""
 # The rows of rotor_rows (n each): rotor_state of t_k, the thrust ratios of t_k and t_k+1, the speeds and tilts
 # acting over the step, work rows.
 ACTUAL_SPEEDS, ACTUAL_TILTS, RATIOS, RATIOS_NEXT, SPEEDS, TILTS, GROUND, CEILING = range(8)
@@ -119,20 +128,40 @@ def unmeasured(plant: PlantParams) -> MeasureParams:
                          plant.surfaces)
 
 
+def new_accumulators() -> np.ndarray:
+    """Zeroed accumulators (a 1-element :data:`ACCUMULATORS` record array; :func:`reset` before a flight)."""
+    return np.zeros(1, ACCUMULATORS).view(np.recarray)
+
+
 @jit
 def reset(acc) -> None:  # noqa: ANN001
     """The accumulators before the first sample (NaN: no value yet; -1: no sample outside a band)."""
-    acc[:] = 0.0
-    acc[POSITION_FINAL] = math.nan
-    acc[POSITION_PEAK] = -math.inf
-    acc[POSITION_LAST_OUTSIDE] = -1.0
-    acc[REFERENCE_LAST_MOVING] = -1.0
-    acc[ATTITUDE_FINAL] = acc[ATTITUDE_FINAL + 1] = math.nan
-    acc[ATTITUDE_PEAK] = acc[ATTITUDE_PEAK + 1] = math.nan
-    acc[ROTOR_SPEED_PEAK] = -math.inf
-    for c in range(6):
-        acc[ESTIMATE_LAST_OUTSIDE + c] = -1.0
-        acc[SMOOTHED_LAST_OUTSIDE + c] = -1.0
+    a = acc[0]
+    a.position_final = math.nan
+    a.position_peak = -math.inf
+    a.position_squares = 0.0
+    a.position_samples = 0
+    a.position_last_outside = -1
+    a.attitude_final[:] = math.nan
+    a.attitude_peak[:] = math.nan
+    a.attitude_samples = 0
+    a.rotor_speed_peak = -math.inf
+    a.saturated_steps = 0
+    a.tilt_steps = 0
+    a.gave_way[:] = 0
+    a.estimate_squares[:] = 0.0
+    a.estimate_late = 0
+    a.estimate_last_outside[:] = -1
+    a.truth_last_sum[:] = 0.0
+    a.truth_last_samples = 0
+    a.final_band[:] = 0.0
+    a.truth_samples = 0
+    a.truth_undefined = 0
+    a.smoothed_estimate[:] = 0.0
+    a.smoothed_truth[:] = 0.0
+    a.smoothed_last_outside[:] = -1
+    a.smoothed_final_band[:] = 0.0
+    a.reference_last_moving = -1
 
 
 @jit
@@ -162,40 +191,42 @@ def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> Non
     """Sample ``k``: the true state ``x`` (13), its rotation and the controller's output ``row``."""
     ex, ey, ez = x[0] - row[REFERENCE_POSITION], x[1] - row[REFERENCE_POSITION + 1], x[2] - row[REFERENCE_POSITION + 2]
     error = math.sqrt(ex * ex + ey * ey + ez * ez)
+    a = acc[0]
     if math.isfinite(error):
-        acc[POSITION_FINAL] = error
-        acc[POSITION_PEAK] = max(acc[POSITION_PEAK], error)
-        acc[POSITION_SQUARES] += error * error
-        acc[POSITION_SAMPLES] += 1.0
+        a.position_final = error
+        a.position_peak = max(a.position_peak, error)
+        a.position_squares += error * error
+        a.position_samples += 1
     if not error <= m.band:
-        acc[POSITION_LAST_OUTSIDE] = k
+        a.position_last_outside = k
     for i in range(3):
         if not (row[REFERENCE_VELOCITY + i] == 0.0 and row[REFERENCE_ACCELERATION + i] == 0.0):
-            acc[REFERENCE_LAST_MOVING] = k
+            a.reference_last_moving = k
     sin_part, cos_part = relative_angle_parts(_rows(row, COMMANDED_ROTATION), rotation)
     if math.isfinite(sin_part) and math.isfinite(cos_part):
         # the peak's (sin, cos) without an atan2 per step: in the upper half plane the larger angle is the one
         # counter-clockwise of the other (a cross product); ties within rounding pick either, the same angle
-        peak_sin, peak_cos = acc[ATTITUDE_PEAK], acc[ATTITUDE_PEAK + 1]
-        if acc[ATTITUDE_SAMPLES] == 0.0 or peak_cos * sin_part - peak_sin * cos_part > 0.0:
-            acc[ATTITUDE_PEAK], acc[ATTITUDE_PEAK + 1] = sin_part, cos_part
-        acc[ATTITUDE_FINAL], acc[ATTITUDE_FINAL + 1] = sin_part, cos_part
-        acc[ATTITUDE_SAMPLES] += 1.0
+        peak, final = a.attitude_peak, a.attitude_final
+        peak_sin, peak_cos = peak[0], peak[1]
+        if a.attitude_samples == 0 or peak_cos * sin_part - peak_sin * cos_part > 0.0:
+            peak[0], peak[1] = sin_part, cos_part
+        final[0], final[1] = sin_part, cos_part
+        a.attitude_samples += 1
     if not m.rotors:
         return
     n = (row.shape[0] - ROTOR_SPEEDS) // 2
     at_limit = False
     for i in range(n):
         speed = row[ROTOR_SPEEDS + i]
-        if math.isnan(speed) or math.isnan(acc[ROTOR_SPEED_PEAK]):
-            acc[ROTOR_SPEED_PEAK] = math.nan
-        elif speed > acc[ROTOR_SPEED_PEAK]:
-            acc[ROTOR_SPEED_PEAK] = speed
+        if math.isnan(speed) or math.isnan(a.rotor_speed_peak):
+            a.rotor_speed_peak = math.nan
+        elif speed > a.rotor_speed_peak:
+            a.rotor_speed_peak = speed
         held = m.speed_middle if math.isnan(speed) else speed
         if held >= m.speed_upper or held <= m.speed_lower:
             at_limit = True
     if at_limit:
-        acc[SATURATED_STEPS] += 1.0
+        a.saturated_steps += 1
     if m.tilts:
         tilted = False
         for i in range(n):
@@ -203,10 +234,10 @@ def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> Non
             if abs(0.0 if math.isnan(tilt) else tilt) >= m.tilt_limit:
                 tilted = True
         if tilted:
-            acc[TILT_STEPS] += 1.0
+            a.tilt_steps += 1
     for c in range(6):
         if abs(row[SHORTFALL + c]) > m.shortfall_tolerance:
-            acc[GAVE_WAY + c] = 1.0
+            a.gave_way[c] = 1
 
 
 @jit_inline
@@ -236,37 +267,39 @@ def measure_truth(m: MeasureParams, acc, t: float, truth: tuple, estimate) -> No
     for c in range(6):
         if not math.isfinite(truth[c]):
             defined = False
+    a = acc[0]
     if not defined:
-        acc[TRUTH_UNDEFINED] += 1.0
+        a.truth_undefined += 1
         return
-    j = acc[TRUTH_SAMPLES]  # the index among the samples with a truth
-    acc[TRUTH_SAMPLES] += 1.0
+    j = a.truth_samples  # the index among the samples with a truth
+    a.truth_samples += 1
     late = t >= m.late_from
     last = t >= m.last_from
     if late:
-        acc[ESTIMATE_LATE] += 1.0
+        a.estimate_late += 1
     if last:
-        acc[TRUTH_LAST_SAMPLES] += 1.0
+        a.truth_last_samples += 1
     gain, decay = m.smoothing_gain, 1.0 - m.smoothing_gain
+    smoothed_estimate, smoothed_truth = a.smoothed_estimate, a.smoothed_truth
     for c in range(6):
         error = estimate[c] - truth[c]
         band = m.tolerance * abs(truth[c])
         if abs(error) > band:
-            acc[ESTIMATE_LAST_OUTSIDE + c] = j
-        acc[FINAL_BAND + c] = band
-        if j == 0.0:
-            acc[SMOOTHED_ESTIMATE + c], acc[SMOOTHED_TRUTH + c] = estimate[c], truth[c]
+            a.estimate_last_outside[c] = j
+        a.final_band[c] = band
+        if j == 0:
+            smoothed_estimate[c], smoothed_truth[c] = estimate[c], truth[c]
         else:  # g x + (1 - g) y, as scipy's lfilter
-            acc[SMOOTHED_ESTIMATE + c] = gain * estimate[c] + decay * acc[SMOOTHED_ESTIMATE + c]
-            acc[SMOOTHED_TRUTH + c] = gain * truth[c] + decay * acc[SMOOTHED_TRUTH + c]
-        band = m.tolerance * abs(acc[SMOOTHED_TRUTH + c])
-        if abs(acc[SMOOTHED_ESTIMATE + c] - acc[SMOOTHED_TRUTH + c]) > band:
-            acc[SMOOTHED_LAST_OUTSIDE + c] = j
-        acc[SMOOTHED_FINAL_BAND + c] = band
+            smoothed_estimate[c] = gain * estimate[c] + decay * smoothed_estimate[c]
+            smoothed_truth[c] = gain * truth[c] + decay * smoothed_truth[c]
+        band = m.tolerance * abs(smoothed_truth[c])
+        if abs(smoothed_estimate[c] - smoothed_truth[c]) > band:
+            a.smoothed_last_outside[c] = j
+        a.smoothed_final_band[c] = band
         if late:
-            acc[ESTIMATE_SQUARES + c] += error * error
+            a.estimate_squares[c] += error * error
         if last:
-            acc[TRUTH_LAST_SUM + c] += truth[c]
+            a.truth_last_sum[c] += truth[c]
 
 
 @jit_inline

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fsr_bringup.core import flight_loop
-from fsr_bringup.core.flight_measures import ROTOR_ROWS, SIZE, unmeasured
+from fsr_bringup.core.flight_measures import ROTOR_ROWS, new_accumulators, unmeasured
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
 from fsr_control.core.controller import COMMANDED_QUATERNION, REFERENCE_POSITION
@@ -318,14 +318,14 @@ class FlightArrays:
     actuators: np.ndarray  # (size, 2 rotors): the rotors' actual speeds and tilts (rotor_state)
     control: np.ndarray  # (size, controller output): the controller's output row
     estimates: np.ndarray  # (size, 7)
-    rotor_rows: np.ndarray  # (ROTOR_ROWS, rotors), acc (SIZE): the loop's measurement scratch (unused here)
+    rotor_rows: np.ndarray  # (ROTOR_ROWS, rotors), acc (new_accumulators): the loop's measurement scratch (unused here)
     acc: np.ndarray
 
     @classmethod
     def make(cls, size: int, rotors: int) -> FlightArrays:
         return cls(np.zeros((size, 13)), np.zeros((size, PUBLISHED_SIZE)), np.zeros((size, 2 * rotors)),
                    np.zeros((size, control_layout.output_size(rotors))), np.zeros((size, 7)),
-                   np.zeros((ROTOR_ROWS, rotors)), np.zeros(SIZE))
+                   np.zeros((ROTOR_ROWS, rotors)), new_accumulators())
 
     def fits(self, size: int, rotors: int) -> bool:
         return len(self.states) >= size and self.actuators.shape[1] == 2 * rotors

@@ -18,7 +18,6 @@ from typing import Any
 
 from fsr_bringup.core.flight_loop import CONTROLLER_FAILED
 from fsr_bringup.core.flight_loop import FINISHED as FINISHED_OUTCOME
-from fsr_bringup.core.flight_measures import TRUTH_UNDEFINED
 from fsr_bringup.runner.in_process_flight import FlightArrays, prepare_flight
 from fsr_bringup.sweeps.axes import flight_scenario
 from fsr_bringup.sweeps.measured import fly_accumulated, fly_measured, loop_flight, measured_row
@@ -87,7 +86,7 @@ def fly_one(base: Scenario, values: dict[str, Any], band: float = DEFAULT_BAND_M
         if metric is not None and metric not in TRUTH_COLUMNS:
             repacked = repacked.replace(with_estimator=False, measures=repacked.measures._replace(truth=False))
         outcome, k, acc = fly_accumulated(repacked)
-        if outcome == FINISHED_OUTCOME and acc[TRUTH_UNDEFINED] <= 0:
+        if outcome == FINISHED_OUTCOME and acc[0].truth_undefined <= 0:
             return measured_row(repacked, acc), repacked.steps
         if outcome != FINISHED_OUTCOME and metric is not None:
             return lost_row(k, repacked.period_ns), k - (outcome == CONTROLLER_FAILED)

@@ -33,7 +33,7 @@ class _Scratch:
         self.control = np.zeros((2, control_layout.output_size(rotors)))
         self.estimates = np.zeros((2, 7))
         self.rotor_rows = np.zeros((core.ROTOR_ROWS, rotors))
-        self.acc = np.zeros(core.SIZE)
+        self.acc = core.new_accumulators()
 
 
 _SCRATCH: dict[int, _Scratch] = {}
@@ -92,7 +92,7 @@ def fly_measured(flight: LoopFlight) -> dict[str, Any] | None:
     """Fly ``flight`` whole, measured in the loop: its row, or None when the loop could not measure it (module
     docstring: the flight is then to be flown again from its arrays)."""
     outcome, _, acc = fly_accumulated(flight)
-    if outcome != FINISHED or acc[core.TRUTH_UNDEFINED] > 0:
+    if outcome != FINISHED or acc[0].truth_undefined > 0:
         return None
     return measured_row(flight, acc)
 

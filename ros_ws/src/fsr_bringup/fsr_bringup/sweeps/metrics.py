@@ -103,60 +103,60 @@ def measure_params(sim, estimation, start: float, end: float, sample_s: float, b
         ground=surfaces._replace(ceiling_effect=False), ceiling=surfaces._replace(ground_effect=False))
 
 
-def _degrees(acc: np.ndarray, at: int) -> float:
-    """The angle [deg] of the ``(sin, cos)`` parts at ``acc[at]`` (NaN: no finite sample)."""
-    if not acc[core.ATTITUDE_SAMPLES]:
+def _degrees(acc: np.record, parts: np.ndarray) -> float:
+    """The angle [deg] of the ``(sin, cos)`` ``parts`` of the accumulators ``acc`` (NaN: no finite sample)."""
+    if not acc.attitude_samples:
         return math.nan
-    return float(np.degrees(np.arctan2(acc[at], acc[at + 1])))
+    return float(np.degrees(np.arctan2(parts[0], parts[1])))
 
 
 def accumulated_row(acc: np.ndarray, measures: core.MeasureParams, count: int, time: Callable[[int], float],
                     end_reason: str = FINISHED, end_detail: str = "") -> dict[str, Any]:
     """The row (:data:`METRIC_COLUMNS`) of a flight of ``count`` samples from its accumulators ``acc``
-    (``time(k)`` [s] of sample ``k``, inf past the last)."""
-    valid = acc[core.POSITION_SAMPLES] > 0
-    last = int(acc[core.POSITION_LAST_OUTSIDE])
+    (:func:`fsr_bringup.core.flight_measures.new_accumulators`; ``time(k)`` [s] of sample ``k``, inf past the
+    last)."""
+    acc = acc[0]
+    valid = acc.position_samples > 0
+    last = int(acc.position_last_outside)
     row: dict[str, Any] = {
         "end_reason": end_reason, "end_detail": end_detail, "flown_s": time(count - 1),
-        "position_error_final_m": float(acc[core.POSITION_FINAL]) if valid else math.nan,
-        "position_error_peak_m": float(acc[core.POSITION_PEAK]) if valid else math.nan,
-        "position_error_rms_m": math.sqrt(acc[core.POSITION_SQUARES] / acc[core.POSITION_SAMPLES]) if valid
-        else math.nan,
-        "attitude_error_final_deg": _degrees(acc, core.ATTITUDE_FINAL),
-        "attitude_error_peak_deg": _degrees(acc, core.ATTITUDE_PEAK),
-        "settling_time_s": settled_after_arrival(time(count - 1), int(acc[core.REFERENCE_LAST_MOVING]) + 1,
+        "position_error_final_m": float(acc.position_final) if valid else math.nan,
+        "position_error_peak_m": float(acc.position_peak) if valid else math.nan,
+        "position_error_rms_m": math.sqrt(acc.position_squares / acc.position_samples) if valid else math.nan,
+        "attitude_error_final_deg": _degrees(acc, acc.attitude_final),
+        "attitude_error_peak_deg": _degrees(acc, acc.attitude_peak),
+        "settling_time_s": settled_after_arrival(time(count - 1), int(acc.reference_last_moving) + 1,
                                                  last + 1, time),
     }
     if not measures.rotors:
         row.update(rotor_speed_peak_rad_s=math.nan, saturated_fraction=math.nan, gave_way="")
     else:
-        fraction = acc[core.SATURATED_STEPS] / count
+        fraction = acc.saturated_steps / count
         if measures.tilts:
-            fraction = max(fraction, acc[core.TILT_STEPS] / count)
-        row.update(rotor_speed_peak_rad_s=float(acc[core.ROTOR_SPEED_PEAK]), saturated_fraction=float(fraction),
-                   gave_way="+".join(axis for c, axis in enumerate(WRENCH_AXES) if acc[core.GAVE_WAY + c]))
+            fraction = max(fraction, acc.tilt_steps / count)
+        row.update(rotor_speed_peak_rad_s=float(acc.rotor_speed_peak), saturated_fraction=float(fraction),
+                   gave_way="+".join(axis for c, axis in enumerate(WRENCH_AXES) if acc.gave_way[c]))
     row.update(estimate_force_rms_N=math.nan, estimate_torque_rms_N_m=math.nan, estimate_settling_s=math.nan,
                estimate_force_settling_s=math.nan)
-    samples = int(acc[core.TRUTH_SAMPLES])
-    if measures.truth and samples >= 2 and acc[core.ESTIMATE_LATE] > 0:
-        rms = np.sqrt(acc[core.ESTIMATE_SQUARES:core.ESTIMATE_SQUARES + 6] / acc[core.ESTIMATE_LATE])
-        last_samples = acc[core.TRUTH_LAST_SAMPLES]
-        final_truth = (acc[core.TRUTH_LAST_SUM:core.TRUTH_LAST_SUM + 6] / last_samples if last_samples
-                       else np.full(6, math.nan))
+    samples = int(acc.truth_samples)
+    if measures.truth and samples >= 2 and acc.estimate_late > 0:
+        rms = np.sqrt(acc.estimate_squares / acc.estimate_late)
+        last_samples = acc.truth_last_samples
+        final_truth = acc.truth_last_sum / last_samples if last_samples else np.full(6, math.nan)
         significant = [c for c in range(6) if abs(final_truth[c]) >= SIGNIFICANT_WRENCH]
 
-        def slowest(last_outside: int, final_band: int, channels: list[int]) -> float:
+        def slowest(last_outside: np.ndarray, final_band: np.ndarray, channels: list[int]) -> float:
             settled = []
             for c in channels:
-                outside = acc[last_outside + c]
+                outside = last_outside[c]
                 value = math.nan if outside >= samples - 1 else time(int(outside) + 1) - time(0)
-                settled.append(value if acc[final_band + c] > 0.0 else math.nan)
+                settled.append(value if final_band[c] > 0.0 else math.nan)
             return (math.inf if any(math.isnan(v) for v in settled) else max(settled)) if settled else math.nan
 
         row.update(estimate_force_rms_N=float(np.sqrt(np.sum(rms[:3] ** 2))),
                    estimate_torque_rms_N_m=float(np.sqrt(np.sum(rms[3:] ** 2))),
-                   estimate_settling_s=slowest(core.ESTIMATE_LAST_OUTSIDE, core.FINAL_BAND, significant),
-                   estimate_force_settling_s=slowest(core.SMOOTHED_LAST_OUTSIDE, core.SMOOTHED_FINAL_BAND,
+                   estimate_settling_s=slowest(acc.estimate_last_outside, acc.final_band, significant),
+                   estimate_force_settling_s=slowest(acc.smoothed_last_outside, acc.smoothed_final_band,
                                                      [c for c in significant if c < 3]))
     return row
 
@@ -201,7 +201,7 @@ def recorded_row(flight: RecordedFlight, band: float = DEFAULT_BAND_M, end_reaso
     sample_s = (t[-2] - t[0]) / (count - 2) if count > 2 else 0.0
     measures = measure_params(config, measured, float(t[0]), float(t[-1]), float(sample_s), band,
                               flight.rotor_state is not None)
-    acc = np.zeros(core.SIZE)
+    acc = core.new_accumulators()
     core.measure_log(measures, acc, t, np.ascontiguousarray(odom.position), np.ascontiguousarray(odom.rotation),
                      rows, np.ascontiguousarray(truth), estimates)
     if end_reason is None:

@@ -41,8 +41,6 @@ class LawType:
     pack : callable
         ``pack(vehicle, config) -> params``: the law's own parameters (its field of ``LawParams``) from the
         validated configuration (:class:`~fsr_control.config.controller_config.ControllerConfig`).
-    memory_size : int
-        The length of the law's own memory.
     fully_actuated : bool
         The law commands a whole body wrench (a vehicle whose rotors produce any wrench, allocated to rotors);
         False: thrust along ``-z_b`` and a torque (a vehicle that is not fully actuated).
@@ -60,7 +58,6 @@ class LawType:
     default_gains: dict[str, np.ndarray]
     designed_gains: Callable[[Vehicle, bool], dict[str, np.ndarray]]
     pack: Callable[[Vehicle, ControllerConfig], NamedTuple]
-    memory_size: int
     fully_actuated: bool
     optional_gains: tuple[str, ...] = ()
     horizon_steps: int = 0
@@ -87,12 +84,12 @@ def _pack_indi(vehicle: Vehicle, config: ControllerConfig) -> indi_law.IndiParam
 LAWS: dict[str, LawType] = {
     "geometric": LawType(laws.GEOMETRIC, geometric.DEFAULT_GAINS,
                          lambda vehicle, imu: design_gains(vehicle, imu=imu).wrench_gains(),
-                         _pack_geometric, geometric_law.MEMORY_SIZE, fully_actuated=False,
+                         _pack_geometric, fully_actuated=False,
                          optional_gains=geometric.OPTIONAL_GAINS),
     "voliro": LawType(laws.VOLIRO, voliro.DEFAULT_GAINS,
                       lambda vehicle, imu: design_gains(vehicle).acceleration_gains(),
-                      _pack_voliro, voliro_law.MEMORY_SIZE, fully_actuated=True),
+                      _pack_voliro, fully_actuated=True),
     "indi": LawType(laws.INDI, geometric.DEFAULT_GAINS, lambda vehicle, imu: indi.designed_gains(vehicle),
-                    _pack_indi, indi_law.MEMORY_SIZE, fully_actuated=False, optional_gains=geometric.OPTIONAL_GAINS,
+                    _pack_indi, fully_actuated=False, optional_gains=geometric.OPTIONAL_GAINS,
                     needs_imu=True, needs_rotor_state=True),
 }

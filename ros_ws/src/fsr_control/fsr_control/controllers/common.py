@@ -118,11 +118,12 @@ def pack_bridge(enabled: bool, period: float, delay_steps: int) -> BridgeParams:
 
 class CompiledLaw:
     """A law of the compiled core on a nominal vehicle: its packed parameters (:attr:`params`, the law's own in
-    its field of :class:`~fsr_control.core.laws.LawParams`) and its own memory (``memory_size`` entries)."""
+    its field of :class:`~fsr_control.core.laws.LawParams`) and the laws' memory
+    (:class:`~fsr_control.core.laws.LawMemory`)."""
 
-    def __init__(self, params: laws.LawParams, memory_size: int) -> None:
+    def __init__(self, params: laws.LawParams) -> None:
         self.params = params
-        self.memory = np.zeros(memory_size)
+        self.memory = laws.new_law_memory()
         own = getattr(params, laws.LAW_FIELDS[params.kind])  # the law's own parameters
         self.mass = own.mass
         self.inertia = own.matrices[INERTIA]
@@ -130,7 +131,7 @@ class CompiledLaw:
     def reset(self) -> None:
         """Forget the previous sample (the geometric law's measured acceleration restarts from the model's, its
         integral from zero)."""
-        self.memory[:] = 0.0
+        laws.reset_law_memory(self.memory)
 
     def compute(self, reference: Reference, position: np.ndarray, rotation: np.ndarray, velocity_world: np.ndarray,
                 angular_velocity_body: np.ndarray, compensation: Compensation | None = None,

@@ -136,4 +136,4 @@ class GeometricController(CompiledLaw):
                              f"'{vehicle.name}' is fully actuated (use voliro)")
         own = pack_geometric(vehicle, gains, feedforward, acceleration_filter_hz, integral_limit, imu, period,
                              odometry_measured, delay_steps)
-        super().__init__(laws.law_params(laws.GEOMETRIC, own), geometric_law.MEMORY_SIZE)
+        super().__init__(laws.law_params(laws.GEOMETRIC, own))

@@ -142,4 +142,4 @@ class IndiController(CompiledLaw):
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], period: float,
                  filter_hz: float = DEFAULT_FILTER_HZ, rotor_state: bool = True, integral_limit: float = 0.0) -> None:
         own = pack_indi(vehicle, gains, filter_hz, period, rotor_state, integral_limit)
-        super().__init__(laws.law_params(laws.INDI, own), indi_law.MEMORY_SIZE)
+        super().__init__(laws.law_params(laws.INDI, own))

@@ -73,5 +73,5 @@ class VoliroController(CompiledLaw):
             raise ValueError(f"the voliro controller needs a fully actuated vehicle (rotors on servos or canted); "
                              f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
         own = pack_voliro(vehicle, gains, angular_feedforward)
-        super().__init__(laws.law_params(laws.VOLIRO, own), voliro_law.MEMORY_SIZE)
+        super().__init__(laws.law_params(laws.VOLIRO, own))
         self.report_feedforward = angular_feedforward == "report"

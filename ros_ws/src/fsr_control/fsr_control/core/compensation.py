@@ -28,10 +28,22 @@ from fsr_sim.core.surfaces import Surfaces, in_contact
 
 PERIOD_TOLERANCE = 0.01  # relative: a stamp step further than this from the control period is a gap
 
-# CompensationState.memory entries
-HISTORY_COUNT, HAS_LAST_STAMP, LAST_STAMP, READY, CONTACT = 0, 1, 2, 3, 4
-COMPENSATED_STEPS, CONTACT_STEPS, GAPS = 5, 6, 7
-MEMORY_SIZE = 8
+COMPENSATION_MEMORY = np.dtype([
+    ("history_count", np.int64),  # force estimates kept in CompensationState.history (0 .. 3)
+    ("has_last_stamp", np.bool_),
+    ("last_stamp", np.float64),  # [s]
+    ("ready", np.bool_),  # the observer has a recorded sample of the previous stamp (its estimate may be used)
+    ("contact", np.bool_),  # the vehicle was on a surface at the last stamp (the estimate is gated)
+    ("compensated_steps", np.int64),  # steps with an estimate cancelled
+    ("contact_steps", np.int64),  # steps gated by contact
+    ("gaps", np.int64),  # stamp steps further than PERIOD_TOLERANCE from the control period
+], align=True)
+"""The fields of ``CompensationState.memory``, read and written in place as ``memory[0].ready``."""
+
+
+def new_compensation_memory() -> np.ndarray:
+    """A zeroed :data:`COMPENSATION_MEMORY` record (1-element record array)."""
+    return np.zeros(1, COMPENSATION_MEMORY).view(np.recarray)
 
 
 class CompensationParams(NamedTuple):
@@ -48,7 +60,7 @@ class CompensationState(NamedTuple):
     observer: ObserverState
     history: np.ndarray  # (3, 3) the last force estimates [N], oldest first
     rate_inverse: np.ndarray  # (3, 3) Q^-1 of the last recorded sample
-    memory: np.ndarray  # (MEMORY_SIZE,)
+    memory: np.ndarray  # (1,) COMPENSATION_MEMORY record
 
 
 @jit_inline
@@ -58,31 +70,31 @@ def compensation_estimate(params: CompensationParams, state: CompensationState, 
     after a gap: the observer is restarted). The rates are backward differences of the last estimates (zero
     until there are two, three); the second difference only for ``r >= 2`` (with ``r = 1`` the estimate's rate
     jumps with every step of its input, so its second difference is an impulse); zero unless ``params.rates``."""
-    memory = state.memory
+    memory = state.memory[0]
     period = params.period
-    if memory[HAS_LAST_STAMP] != 0.0 and abs(stamp - memory[LAST_STAMP] - period) > PERIOD_TOLERANCE * period:
-        memory[GAPS] += 1.0
-        memory[READY] = 0.0
-    memory[HAS_LAST_STAMP], memory[LAST_STAMP] = 1.0, stamp
-    memory[CONTACT] = 1.0 if in_contact(params.surfaces, position_down) else 0.0
-    if memory[CONTACT] != 0.0:
-        memory[CONTACT_STEPS] += 1.0
-        memory[READY] = 0.0
-    if memory[READY] == 0.0:
+    if memory.has_last_stamp and abs(stamp - memory.last_stamp - period) > PERIOD_TOLERANCE * period:
+        memory.gaps += 1
+        memory.ready = False
+    memory.has_last_stamp, memory.last_stamp = True, stamp
+    memory.contact = in_contact(params.surfaces, position_down)
+    if memory.contact:
+        memory.contact_steps += 1
+        memory.ready = False
+    if not memory.ready:
         reset_observer(state.observer)
-        memory[HISTORY_COUNT] = 0.0
+        memory.history_count = 0
         return NO_COMPENSATION
-    memory[COMPENSATED_STEPS] += 1.0
+    memory.compensated_steps += 1
     w = state.observer.estimate  # [f_e (world); tau_e (eta coordinates)]
     history = state.history
-    count = int(memory[HISTORY_COUNT])
+    count = int(memory.history_count)
     if count == 3:  # keep the last three: drop the oldest
         for j in range(3):
             history[0, j], history[1, j] = history[1, j], history[2, j]
     else:
         count += 1
     history[count - 1, 0], history[count - 1, 1], history[count - 1, 2] = w[0], w[1], w[2]
-    memory[HISTORY_COUNT] = count
+    memory.history_count = count
     rate = (0.0, 0.0, 0.0)
     acceleration = (0.0, 0.0, 0.0)
     if count >= 2:
@@ -111,4 +123,4 @@ def compensation_record(params: CompensationParams, state: CompensationState, ro
     eta_dot = mat_vec3(inverse, angular_velocity)
     observer_update(params.observer, state.observer, velocity_world, (phi, theta, psi), eta_dot, force_body,
                     torque_body)
-    state.memory[READY] = 1.0
+    state.memory[0].ready = True

@@ -31,7 +31,7 @@ from fsr_control.core.compensation import (
     compensation_record,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_control.core.laws import NO_COMPENSATION, LawParams, control_law, law_allocated
+from fsr_control.core.laws import NO_COMPENSATION, LawMemory, LawParams, control_law, law_allocated
 from fsr_control.core.reference import TrajectoryTable, sample_horizon, sample_reference
 from fsr_sim.core.jit import jit
 from fsr_sim.core.rotors import measured_rotor_wrench
@@ -70,7 +70,7 @@ class ControllerParams(NamedTuple):
 
 
 class ControllerState(NamedTuple):
-    law: np.ndarray  # the law's own memory (fsr_control.core.laws)
+    law: LawMemory  # the laws' memory (fsr_control.core.laws)
     allocation: AllocationState
     compensation: CompensationState
     reference: np.ndarray  # (5, 4) scratch: the active segment's channel derivatives

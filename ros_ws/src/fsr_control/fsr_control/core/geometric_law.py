@@ -2,7 +2,8 @@
 
 Its equations, the two feed-forwards of its desired rates and the integral term are in
 :mod:`fsr_control.controllers.geometric` (the Python shell); its parameters are :class:`GeometricParams`, its
-memory the ``MEMORY_SIZE`` entries laid out below.
+memory the :data:`GEOMETRIC_MEMORY` record (``LawMemory.geometric``) and, flying on the IMU, the IMU bridge's
+(``LawMemory.bridge``).
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_control.core import imu_bridge
 from fsr_control.core.flatness import attitude_from_thrust_vector
 from fsr_control.core.imu_bridge import BridgeParams, bridged_state
 from fsr_control.core.law_terms import INERTIA, Compensation, linear_feedback, matrix_at
@@ -45,14 +45,18 @@ class GeometricParams(NamedTuple):
         return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False, 0.0, False, 0.0, False, BridgeParams.unused())
 
 
-# memory entries: the previous sample, its filtered measured acceleration and the filtered rates of the
-# compensated estimate (vectors: 3 entries), the position error's integral [m s], whether the last command
-# fell short on the axes the position loop acts through (thrust, roll and pitch torque), then the IMU bridge's
-HAS_PREVIOUS, PREVIOUS_TIME, PREVIOUS_VELOCITY, FILTERED_ACCELERATION = 0, 1, 2, 5
-HAS_FILTERED_RATES, FILTERED_FORCE_RATE, FILTERED_FORCE_ACCELERATION = 8, 9, 12
-INTEGRAL, INTEGRAL_HOLD = 15, 18
-BRIDGE = 19
-MEMORY_SIZE = BRIDGE + imu_bridge.MEMORY_SIZE
+GEOMETRIC_MEMORY = np.dtype([
+    ("has_previous", np.bool_),  # a previous sample was seen
+    ("previous_time", np.float64),  # its time [s]
+    ("previous_velocity", np.float64, (3,)),  # its velocity world [m/s]
+    ("filtered_acceleration", np.float64, (3,)),  # the measured acceleration's low-pass [m/s^2]
+    ("has_filtered_rates", np.bool_),  # the compensated estimate's rates are filtered from a first value
+    ("filtered_force_rate", np.float64, (3,)),  # [N/s]
+    ("filtered_force_acceleration", np.float64, (3,)),  # [N/s^2]
+    ("integral", np.float64, (3,)),  # the position error's integral [m s]
+    ("integral_hold", np.bool_),  # the last command fell short on thrust or roll/pitch torque
+], align=True)
+"""The geometric law's memory (``LawMemory.geometric[0]``), kept between steps."""
 
 
 @jit_inline
@@ -62,36 +66,37 @@ def _measured_acceleration(memory, t: float, velocity_world: Vec3, thrust: float
     ``g e3 - u_T z_b / m`` at the first step or when time does not advance. With a ``cutoff`` [Hz] > 0, through
     a first-order low-pass ``a_f <- a_f + (1 - exp(-2 pi f_c dt)) (a - a_f)`` (from the model's value at the
     first step): a difference of measured velocities amplifies their noise by ``1 / dt``."""
-    has_previous, previous_time = memory[HAS_PREVIOUS] != 0.0, memory[PREVIOUS_TIME]
-    vx, vy, vz = memory[PREVIOUS_VELOCITY], memory[PREVIOUS_VELOCITY + 1], memory[PREVIOUS_VELOCITY + 2]
-    memory[HAS_PREVIOUS], memory[PREVIOUS_TIME] = 1.0, t
-    memory[PREVIOUS_VELOCITY], memory[PREVIOUS_VELOCITY + 1], memory[PREVIOUS_VELOCITY + 2] = velocity_world
+    has_previous, previous_time = memory.has_previous, memory.previous_time
+    previous = memory.previous_velocity
+    vx, vy, vz = previous[0], previous[1], previous[2]
+    memory.has_previous, memory.previous_time = True, t
+    previous[0], previous[1], previous[2] = velocity_world
+    f = memory.filtered_acceleration
     if has_previous and t > previous_time:
         dt = t - previous_time
         raw = ((velocity_world[0] - vx) / dt, (velocity_world[1] - vy) / dt, (velocity_world[2] - vz) / dt)
         if cutoff <= 0.0:
             return raw
         gain = 1.0 - math.exp(-2.0 * math.pi * cutoff * dt)
-        f = FILTERED_ACCELERATION
-        memory[f] += gain * (raw[0] - memory[f])
-        memory[f + 1] += gain * (raw[1] - memory[f + 1])
-        memory[f + 2] += gain * (raw[2] - memory[f + 2])
-        return memory[f], memory[f + 1], memory[f + 2]
+        f[0] += gain * (raw[0] - f[0])
+        f[1] += gain * (raw[1] - f[1])
+        f[2] += gain * (raw[2] - f[2])
+        return f[0], f[1], f[2]
     scale = thrust / mass
     model = (-scale * z_b[0], -scale * z_b[1], GRAVITY - scale * z_b[2])
-    memory[FILTERED_ACCELERATION], memory[FILTERED_ACCELERATION + 1], memory[FILTERED_ACCELERATION + 2] = model
+    f[0], f[1], f[2] = model
     return model
 
 
 @jit_inline
-def _low_pass3(memory, at: int, value: Vec3, gain: float, first: bool) -> Vec3:  # noqa: ANN001
-    """``y <- y + gain (value - y)`` on the 3 entries of ``memory`` from ``at`` (``first``: ``y = value``)."""
+def _low_pass3(y, value: Vec3, gain: float, first: bool) -> Vec3:  # noqa: ANN001
+    """``y <- y + gain (value - y)`` on the 3 entries of ``y`` (``first``: ``y = value``)."""
     for i in range(3):
         if first:
-            memory[at + i] = value[i]
+            y[i] = value[i]
         else:
-            memory[at + i] += gain * (value[i] - memory[at + i])
-    return memory[at], memory[at + 1], memory[at + 2]
+            y[i] += gain * (value[i] - y[i])
+    return y[0], y[1], y[2]
 
 
 @jit_inline
@@ -101,13 +106,13 @@ def _filtered_rates(memory, t: float, compensation: Compensation, cutoff: float)
     of the estimate, which amplify its noise by ``1 / T`` and ``1 / T^2``. Call before the previous sample's
     time is updated (it reads it)."""
     if cutoff <= 0.0 or not compensation.active:
-        memory[HAS_FILTERED_RATES] = 0.0
+        memory.has_filtered_rates = False
         return compensation.force_rate, compensation.force_acceleration
-    first = memory[HAS_FILTERED_RATES] == 0.0 or memory[HAS_PREVIOUS] == 0.0 or not t > memory[PREVIOUS_TIME]
-    gain = 0.0 if first else 1.0 - math.exp(-2.0 * math.pi * cutoff * (t - memory[PREVIOUS_TIME]))
-    memory[HAS_FILTERED_RATES] = 1.0
-    return (_low_pass3(memory, FILTERED_FORCE_RATE, compensation.force_rate, gain, first),
-            _low_pass3(memory, FILTERED_FORCE_ACCELERATION, compensation.force_acceleration, gain, first))
+    first = not memory.has_filtered_rates or not memory.has_previous or not t > memory.previous_time
+    gain = 0.0 if first else 1.0 - math.exp(-2.0 * math.pi * cutoff * (t - memory.previous_time))
+    memory.has_filtered_rates = True
+    return (_low_pass3(memory.filtered_force_rate, compensation.force_rate, gain, first),
+            _low_pass3(memory.filtered_force_acceleration, compensation.force_acceleration, gain, first))
 
 
 @jit_inline
@@ -115,18 +120,19 @@ def _integral_force(params: GeometricParams, memory, t: float, e_p: Vec3) -> Vec
     """``K_i int e_p dt`` [N] (world): the position error integrated over the time since the previous sample,
     unless the last command fell short (:func:`geometric_allocated`), then the integral scaled back so that
     ``|K_i int e_p| <= integral_limit``. Call before the previous sample's time is updated (it reads it)."""
-    if memory[HAS_PREVIOUS] != 0.0 and t > memory[PREVIOUS_TIME] and memory[INTEGRAL_HOLD] == 0.0:
-        dt = t - memory[PREVIOUS_TIME]
-        memory[INTEGRAL] += e_p[0] * dt
-        memory[INTEGRAL + 1] += e_p[1] * dt
-        memory[INTEGRAL + 2] += e_p[2] * dt
-    force = mat_vec3(matrix_at(params.matrices, K_I), (memory[INTEGRAL], memory[INTEGRAL + 1], memory[INTEGRAL + 2]))
+    integral = memory.integral
+    if memory.has_previous and t > memory.previous_time and not memory.integral_hold:
+        dt = t - memory.previous_time
+        integral[0] += e_p[0] * dt
+        integral[1] += e_p[1] * dt
+        integral[2] += e_p[2] * dt
+    force = mat_vec3(matrix_at(params.matrices, K_I), (integral[0], integral[1], integral[2]))
     size = math.sqrt(dot3(force, force))
     if size > params.integral_limit:
         scale = params.integral_limit / size
-        memory[INTEGRAL] *= scale
-        memory[INTEGRAL + 1] *= scale
-        memory[INTEGRAL + 2] *= scale
+        integral[0] *= scale
+        integral[1] *= scale
+        integral[2] *= scale
         return force[0] * scale, force[1] * scale, force[2] * scale
     return force
 
@@ -134,7 +140,8 @@ def _integral_force(params: GeometricParams, memory, t: float, e_p: Vec3) -> Vec
 @jit_inline
 def geometric_law(params: GeometricParams, memory, t: float, reference: ReferenceSample, position: Vec3,  # noqa: ANN001
                   rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
-    """``(status, [0, 0, -u_T], tau_b, R_d)`` of the geometric law (:mod:`fsr_control.controllers.geometric`)."""
+    """``(status, [0, 0, -u_T], tau_b, R_d)`` of the geometric law (:mod:`fsr_control.controllers.geometric`);
+    ``memory`` its :data:`GEOMETRIC_MEMORY` record."""
     m = params.mass
     k_p, k_v = matrix_at(params.matrices, K_P), matrix_at(params.matrices, K_V)
     inertia = matrix_at(params.matrices, INERTIA)
@@ -156,7 +163,7 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
     w = angular_velocity
     f_dot, f_ddot = _filtered_rates(memory, t, compensation, params.acceleration_cutoff)
     if params.reference_feedforward:  # R_d's rates from the reference alone: m p_dddot_d, m p_ddddot_d
-        memory[HAS_PREVIOUS], memory[PREVIOUS_TIME] = 1.0, t
+        memory.has_previous, memory.previous_time = True, t
         jerk_d, snap_d = reference.jerk, reference.snap
         a_dot = (m * jerk_d[0], m * jerk_d[1], m * jerk_d[2])
         a_ddot = (m * snap_d[0], m * snap_d[1], m * snap_d[2])
@@ -207,14 +214,15 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
 
 
 @jit_inline
-def flown_state(params: GeometricParams, memory, position: Vec3, rotation: Mat3, velocity_world: Vec3,  # noqa: ANN001
+def flown_state(params: GeometricParams, bridge_memory, position: Vec3, rotation: Mat3, velocity_world: Vec3,  # noqa: ANN001
                 angular_velocity: Vec3, imu) -> tuple:  # noqa: ANN001
     """``(position, R rows, velocity world, angular velocity body)`` the law flies on: ``odom``'s, or where the
     law takes the IMU (``imu`` (6,): angular velocity [rad/s], specific force [m/s^2], body FRD) its gyro's rate
     and, where ``odom`` is a measurement, the IMU-bridged estimate of this step
-    (:func:`fsr_control.core.imu_bridge.bridged_state`)."""
+    (:func:`fsr_control.core.imu_bridge.bridged_state`, on its :data:`~fsr_control.core.imu_bridge.BRIDGE_MEMORY`
+    record ``bridge_memory``)."""
     if params.bridge.enabled:
-        position, rotation, velocity_world = bridged_state(params.bridge, memory, BRIDGE, position, rotation,
+        position, rotation, velocity_world = bridged_state(params.bridge, bridge_memory, position, rotation,
                                                            velocity_world, imu)
     if params.gyro:
         angular_velocity = (imu[0], imu[1], imu[2])
@@ -231,4 +239,4 @@ def geometric_allocated(params: GeometricParams, memory, shortfall) -> None:  # 
         for i in range(5):
             if abs(shortfall[i]) > SHORTFALL_TOLERANCE:
                 short = True
-        memory[INTEGRAL_HOLD] = 1.0 if short else 0.0
+        memory.integral_hold = short

@@ -2,8 +2,8 @@
 fixed rotors, from the vehicle's own measurements.
 
 Its equations are in :mod:`fsr_control.controllers.indi` (the Python shell); its parameters are
-:class:`IndiParams`, its memory the geometric law's ``MEMORY_SIZE`` entries (the geometric law runs on it)
-followed by the filter's states laid out below.
+:class:`IndiParams`, its memory the :data:`INDI_MEMORY` record (``LawMemory.indi``) beside the geometric law's
+(``LawMemory.geometric``: the geometric law runs on it) and the IMU bridge's (``LawMemory.bridge``).
 
 Every signal the increment uses passes through the same second-order low-pass (``IndiParams.filter``: the
 exact discretisation ``x <- Phi x + Gamma u`` of ``y_ddot = w_n^2 (u - y) - 2 zeta w_n y_dot``, ``x = (y,
@@ -17,7 +17,7 @@ reference's alone (its jerk and snap): nothing measured is differentiated into t
 The attitude loop damps with the gyro (the IMU's angular velocity, not ``odom``'s). Where ``odom`` is a
 measurement (``IndiParams.bridge``: noisy, late or slower than the control rate), the law flies on its own
 estimate of the pose and velocity at the current step, the IMU bridge the geometric law of the flight profile
-flies on as well (:func:`fsr_control.core.imu_bridge.bridged_state`, kept in the geometric law's memory): the IMU
+flies on as well (:func:`fsr_control.core.imu_bridge.bridged_state`, kept in ``LawMemory.bridge``): the IMU
 integrated (strapdown) from step to step, corrected at each new ``odom`` sample towards it by the share
 ``BridgeParams.correction`` of the difference to the estimate of the step that sample measured
 (``BridgeParams.delay`` steps back), so that the sample's delay and hold are bridged by the IMU and its noise is
@@ -61,31 +61,31 @@ class IndiParams(NamedTuple):
                    False, BridgeParams.unused())
 
 
-# memory after the geometric law's: whether the filter holds a sample, whether a command was recorded, the
-# previous step's commanded wrench (force, torque: 6), then per filtered signal (angular velocity, specific force,
-# rotor force, rotor torque) its 3 values and their 3 rates
-HAS_FILTER, HAS_COMMAND = geometric.MEMORY_SIZE, geometric.MEMORY_SIZE + 1
-COMMAND = geometric.MEMORY_SIZE + 2
-FILTERS = COMMAND + 6
-ANGULAR_VELOCITY, SPECIFIC_FORCE, ROTOR_FORCE, ROTOR_TORQUE = range(4)
+ANGULAR_VELOCITY, SPECIFIC_FORCE, ROTOR_FORCE, ROTOR_TORQUE = range(4)  # the filtered signals
 FILTER_STATES = 6  # per signal: 3 values, then 3 rates
-MEMORY_SIZE = FILTERS + 4 * FILTER_STATES  # the estimate (IndiParams.bridge) is in the geometric law's part
+INDI_MEMORY = np.dtype([
+    ("has_filter", np.bool_),  # the filter holds a sample
+    ("has_command", np.bool_),  # a command was recorded
+    ("command", np.float64, (6,)),  # the previous step's commanded wrench: force [N], torque [N m], body
+    ("filters", np.float64, (4, FILTER_STATES)),  # per filtered signal: its 3 values and their 3 rates
+], align=True)
+"""INDI's own memory (``LawMemory.indi[0]``); the estimate (``IndiParams.bridge``) is the bridge's."""
 
 
 @jit_inline
 def _filtered(params: IndiParams, memory, signal: int, value: Vec3, first: bool) -> tuple:  # noqa: ANN001
     """Step the low-pass of ``signal`` with the sample ``value`` (``first``: start at rest on it); returns its
     (value, rate)."""
-    at = FILTERS + FILTER_STATES * signal
+    x = memory.filters[signal]
     f = params.filter
     for i in range(3):
         if first:
-            memory[at + i], memory[at + 3 + i] = value[i], 0.0
+            x[i], x[3 + i] = value[i], 0.0
         else:
-            y, y_dot = memory[at + i], memory[at + 3 + i]
-            memory[at + i] = f[0] * y + f[1] * y_dot + f[4] * value[i]
-            memory[at + 3 + i] = f[2] * y + f[3] * y_dot + f[5] * value[i]
-    return ((memory[at], memory[at + 1], memory[at + 2]), (memory[at + 3], memory[at + 4], memory[at + 5]))
+            y, y_dot = x[i], x[3 + i]
+            x[i] = f[0] * y + f[1] * y_dot + f[4] * value[i]
+            x[3 + i] = f[2] * y + f[3] * y_dot + f[5] * value[i]
+    return ((x[0], x[1], x[2]), (x[3], x[4], x[5]))
 
 
 @jit_inline
@@ -93,29 +93,30 @@ def indi_law(params: IndiParams, memory, t: float, reference: ReferenceSample, p
              rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, imu, speeds, tilts) -> tuple:  # noqa: ANN001
     """``(status, [0, 0, -u_T], tau_b, R_d)`` of INDI (:mod:`fsr_control.controllers.indi`): ``imu`` (6,) the
     IMU's angular velocity [rad/s] and specific force [m/s^2] (body FRD), ``speeds``, ``tilts`` (n,) the rotors'
-    (``rotor_state``)."""
+    (``rotor_state``); ``memory`` the controller's ``LawMemory``."""
     if params.bridge.enabled:
-        position, rotation, velocity_world = bridged_state(params.bridge, memory, geometric.BRIDGE, position, rotation,
+        position, rotation, velocity_world = bridged_state(params.bridge, memory.bridge[0], position, rotation,
                                                            velocity_world, imu)
+    own_memory = memory.indi[0]
     m = params.mass
     inertia = matrix_at(params.matrices, INERTIA)
     gyro = (imu[0], imu[1], imu[2])
     specific_force = (imu[3], imu[4], imu[5])
-    first = memory[HAS_FILTER] == 0.0
+    first = not own_memory.has_filter
     if params.rotor_state:
         force_r, torque_r = measured_rotor_wrench(params.allocation, params.c_f, False, speeds, tilts)
-    elif memory[HAS_COMMAND] != 0.0:
-        c = COMMAND
-        force_r = (memory[c], memory[c + 1], memory[c + 2])
-        torque_r = (memory[c + 3], memory[c + 4], memory[c + 5])
+    elif own_memory.has_command:
+        c = own_memory.command
+        force_r = (c[0], c[1], c[2])
+        torque_r = (c[3], c[4], c[5])
     else:  # no command yet: the rotors are taken to hold the vehicle as measured (no external wrench)
         force_r = (m * specific_force[0], m * specific_force[1], m * specific_force[2])
         torque_r = cross3(gyro, mat_vec3(inertia, gyro))
-    omega_f, omega_dot_f = _filtered(params, memory, ANGULAR_VELOCITY, gyro, first)
-    force_f = _filtered(params, memory, SPECIFIC_FORCE, specific_force, first)[0]
-    rotor_force_f = _filtered(params, memory, ROTOR_FORCE, force_r, first)[0]
-    rotor_torque_f = _filtered(params, memory, ROTOR_TORQUE, torque_r, first)[0]
-    memory[HAS_FILTER] = 1.0
+    omega_f, omega_dot_f = _filtered(params, own_memory, ANGULAR_VELOCITY, gyro, first)
+    force_f = _filtered(params, own_memory, SPECIFIC_FORCE, specific_force, first)[0]
+    rotor_force_f = _filtered(params, own_memory, ROTOR_FORCE, force_r, first)[0]
+    rotor_torque_f = _filtered(params, own_memory, ROTOR_TORQUE, torque_r, first)[0]
+    own_memory.has_filter = True
     # m s = f_rotors + f_ext (body) and I w_dot + w x I w = tau_rotors + tau_ext, on the filtered signals
     external_body = (m * force_f[0] - rotor_force_f[0], m * force_f[1] - rotor_force_f[1],
                      m * force_f[2] - rotor_force_f[2])
@@ -129,17 +130,20 @@ def indi_law(params: IndiParams, memory, t: float, reference: ReferenceSample, p
     # force turns R_d with every rotor-speed change the aerodynamics feel, a loop that tumbles the vehicle)
     increment = Compensation(True, mat_vec3(rotation, external_body), external_torque, zero, zero)
     own = GeometricParams(m, params.matrices, params.integral, params.integral_limit, True, 0.0, True, params.bridge)
-    return geometric.geometric_law(own, memory, t, reference, position, rotation, velocity_world, gyro, increment)
+    return geometric.geometric_law(own, memory.geometric[0], t, reference, position, rotation, velocity_world, gyro,
+                                   increment)
 
 
 @jit_inline
 def indi_allocated(params: IndiParams, memory, force: Vec3, torque: Vec3, shortfall) -> None:  # noqa: ANN001
     """After the allocation: keep the wrench the command produces (``force``, ``torque``, body [N, N m]) for the
-    next step's increment (without ``rotor_state``), and hold the integral as the geometric law does."""
-    c = COMMAND
-    memory[c], memory[c + 1], memory[c + 2] = force
-    memory[c + 3], memory[c + 4], memory[c + 5] = torque
-    memory[HAS_COMMAND] = 1.0
+    next step's increment (without ``rotor_state``), and hold the integral as the geometric law does
+    (``memory``: the controller's ``LawMemory``)."""
+    own_memory = memory.indi[0]
+    c = own_memory.command
+    c[0], c[1], c[2] = force
+    c[3], c[4], c[5] = torque
+    own_memory.has_command = True
     geometric.geometric_allocated(GeometricParams(params.mass, params.matrices, params.integral,
                                                   params.integral_limit, True, 0.0, True, params.bridge),
-                                  memory, shortfall)
+                                  memory.geometric[0], shortfall)

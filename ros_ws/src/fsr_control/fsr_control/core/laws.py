@@ -8,9 +8,11 @@ tells it, after the allocation, what of its wrench the rotors could not produce.
 
 A law's parameters are its own: a NamedTuple in the law's core file (:class:`GeometricParams`,
 :class:`VoliroParams`, :class:`IndiParams`), held in its field of :class:`LawParams` (the other laws' fields hold
-placeholders, so that one compiled tick serves every law); its memory is its own array, of the size its core file says.
-A new law is its core file (its function, its parameters with an ``unused()`` placeholder, its memory size),
-an import, a field and a branch here, and an entry in
+placeholders, so that one compiled tick serves every law); its memory is its own record (a 1-element numpy record
+array whose fields it reads and writes as ``memory.geometric[0].integral``), a field of :class:`LawMemory` (every
+controller holds every law's, for the same reason). A new law is its core file (its function, its parameters
+with an ``unused()`` placeholder, its memory's record type if it keeps any), an import, a field and a branch
+here, and an entry in
 :data:`fsr_control.controllers.catalog.LAWS` (``docs/extending.md``).
 
 Each law takes the reference, the state (position and velocity world NED [m, m/s], ``R`` rows body FRD -> world,
@@ -25,16 +27,25 @@ from __future__ import annotations
 
 from typing import NamedTuple, get_type_hints
 
-from fsr_control.core.geometric_law import GeometricParams, flown_state, geometric_allocated, geometric_law
-from fsr_control.core.indi_law import IndiParams, indi_allocated, indi_law
+import numpy as np
+
+from fsr_control.core.geometric_law import (
+    GEOMETRIC_MEMORY,
+    GeometricParams,
+    flown_state,
+    geometric_allocated,
+    geometric_law,
+)
+from fsr_control.core.imu_bridge import BRIDGE_MEMORY
+from fsr_control.core.indi_law import INDI_MEMORY, IndiParams, indi_allocated, indi_law
 from fsr_control.core.law_terms import NO_COMPENSATION, Compensation, linear_feedback
 from fsr_control.core.reference import ReferenceSample
 from fsr_control.core.voliro_law import VoliroParams, voliro_law
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.so3 import Mat3, Vec3
 
-__all__ = ["NO_COMPENSATION", "Compensation", "LawParams", "control_law", "law_allocated", "law_params",
-           "linear_feedback"]
+__all__ = ["NO_COMPENSATION", "Compensation", "LawMemory", "LawParams", "control_law", "law_allocated",
+           "law_params", "linear_feedback", "new_law_memory", "reset_law_memory"]
 
 
 class LawParams(NamedTuple):
@@ -49,6 +60,29 @@ class LawParams(NamedTuple):
 
 LAW_FIELDS = LawParams._fields[3:]  # the laws, in the order of their kinds
 GEOMETRIC, VOLIRO, INDI = LAW_FIELDS.index("geometric"), LAW_FIELDS.index("voliro"), LAW_FIELDS.index("indi")
+
+
+class LawMemory(NamedTuple):
+    """What the laws keep between steps: each a 1-element record array of its core file's record type."""
+
+    geometric: np.ndarray  # GEOMETRIC_MEMORY (fsr_control.core.geometric_law)
+    bridge: np.ndarray  # BRIDGE_MEMORY: the IMU-bridged estimate the geometric law and INDI fly on (imu_bridge)
+    indi: np.ndarray  # INDI_MEMORY (fsr_control.core.indi_law)
+    # a new law that keeps anything: its record here, e.g. ``my_law: np.ndarray  # MY_LAW_MEMORY``
+
+
+MEMORY_TYPES = {"geometric": GEOMETRIC_MEMORY, "bridge": BRIDGE_MEMORY, "indi": INDI_MEMORY}  # LawMemory's fields
+
+
+def new_law_memory() -> LawMemory:
+    """Every law's memory, zeroed (nothing seen yet)."""
+    return LawMemory(**{name: np.zeros(1, record).view(np.recarray) for name, record in MEMORY_TYPES.items()})
+
+
+def reset_law_memory(memory: LawMemory) -> None:
+    """Forget everything the laws kept (as :func:`new_law_memory`)."""
+    for record in memory:
+        record[...] = 0
 
 
 def law_params(kind: int, own: NamedTuple, horizon_steps: int = 0, horizon_dt: float = 0.0) -> LawParams:
@@ -67,9 +101,9 @@ def control_law(params: LawParams, memory, horizon, t: float, reference: Referen
                 position: Vec3, rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3,
                 compensation: Compensation, imu, speeds, tilts) -> tuple:  # noqa: ANN001
     """``(status, force_body, torque_body, R_c)`` of the law ``params.kind`` (module docstring): ``memory`` the
-    law's own, ``horizon`` the reference ahead (``params.horizon_steps`` rows); ``imu`` (6,) the IMU's angular
-    velocity [rad/s] and specific force [m/s^2], ``speeds`` and ``tilts`` (n,) the rotors' measured state, of
-    the same stamp (read only by a law that needs them)."""
+    laws' (:class:`LawMemory`), ``horizon`` the reference ahead (``params.horizon_steps`` rows); ``imu`` (6,)
+    the IMU's angular velocity [rad/s] and specific force [m/s^2], ``speeds`` and ``tilts`` (n,) the rotors'
+    measured state, of the same stamp (read only by a law that needs them)."""
     if params.kind == VOLIRO:
         return voliro_law(params.voliro, reference, position, rotation, velocity_world, angular_velocity,
                           compensation)
@@ -77,9 +111,9 @@ def control_law(params: LawParams, memory, horizon, t: float, reference: Referen
         return indi_law(params.indi, memory, t, reference, position, rotation, velocity_world, angular_velocity,
                         imu, speeds, tilts)
     # a new law: its branch here, e.g. ``if params.kind == MY_LAW: return my_law(params.my_law, horizon, ...)``
-    position, rotation, velocity_world, angular_velocity = flown_state(params.geometric, memory, position, rotation,
-                                                                       velocity_world, angular_velocity, imu)
-    return geometric_law(params.geometric, memory, t, reference, position, rotation, velocity_world,
+    position, rotation, velocity_world, angular_velocity = flown_state(params.geometric, memory.bridge[0], position,
+                                                                       rotation, velocity_world, angular_velocity, imu)
+    return geometric_law(params.geometric, memory.geometric[0], t, reference, position, rotation, velocity_world,
                          angular_velocity, compensation)
 
 
@@ -89,6 +123,6 @@ def law_allocated(params: LawParams, memory, force: Vec3, torque: Vec3, shortfal
     [N, N m], ``shortfall`` (6,) the demanded minus that (what a law with an integral needs for its
     anti-windup)."""
     if params.kind == GEOMETRIC:
-        geometric_allocated(params.geometric, memory, shortfall)
+        geometric_allocated(params.geometric, memory.geometric[0], shortfall)
     elif params.kind == INDI:
         indi_allocated(params.indi, memory, force, torque, shortfall)

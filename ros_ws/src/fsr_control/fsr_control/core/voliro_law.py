@@ -1,7 +1,7 @@
 """The Voliro law per step (compiled core): a whole body wrench, for fully actuated vehicles.
 
 Its equations are in :mod:`fsr_control.controllers.voliro` (the Python shell); its parameters are
-:class:`VoliroParams`; it keeps no memory.
+:class:`VoliroParams`; it keeps no memory (no field of ``LawMemory``).
 """
 
 from __future__ import annotations
@@ -31,9 +31,6 @@ class VoliroParams(NamedTuple):
     def unused(cls) -> VoliroParams:
         """Placeholder parameters, for a controller that flies another law."""
         return cls(0.0, np.zeros((len(MATRICES), 3, 3)), False)
-
-
-MEMORY_SIZE = 0
 
 
 @jit_inline

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 from fsr_sim.core.jit import jit
-from fsr_sim.core.plant import AT_CEILING, IN_CONTACT, PlantState
+from fsr_sim.core.plant import PlantState
 
 IN_CONTROL, ATTITUDE_LOST, POSITION_LOST = 0, 1, 2
 
@@ -38,7 +38,8 @@ def thrust_axes_cosine(qx: float, qy: float, qz: float, qw: float, cx: float, cy
 @jit
 def held_by_surface(state: PlantState) -> bool:
     """The ground or the ceiling held the vehicle at the end of the last RK4 step."""
-    return state.status[IN_CONTACT] != 0.0 or state.status[AT_CEILING] != 0.0
+    status = state.status[0]
+    return status.in_contact or status.at_ceiling
 
 
 @jit

@@ -26,16 +26,13 @@ from fsr_sim.core.odometry import (
     IMU_TRUE_LINEAR_ACCELERATION,
 )
 from fsr_sim.core.plant import (
-    CEILING_CAPPED,
-    GROUND_CAPPED,
-    STEP_INDEX,
     PlantParams,
     PlantState,
     plant_time,
     stage_wrench,
 )
 from fsr_sim.core.rigid_body import GRAVITY, state_rotation
-from fsr_sim.core.sensors import IMU_SIZE, measure_imu, odometry_memory_size
+from fsr_sim.core.sensors import IMU_SIZE, measure_imu
 from fsr_sim.core.so3 import Vec3, mat_t_vec3
 from fsr_sim.core.surfaces import ceiling_rest_z, ground_rest_z
 
@@ -43,10 +40,10 @@ from fsr_sim.core.surfaces import ceiling_rest_z, ground_rest_z
 @jit_inline
 def specific_force(params: PlantParams, state: PlantState) -> Vec3:
     """``R^T (p_ddot - g e3)`` [m/s^2], body FRD, of the current state (module docstring)."""
-    x, status = state.x, state.status
-    ground_capped, ceiling_capped = status[GROUND_CAPPED], status[CEILING_CAPPED]
+    x, status = state.x, state.status[0]
+    ground_capped, ceiling_capped = status.ground_capped, status.ceiling_capped
     (fx, fy, fz), _ = stage_wrench(params, state, plant_time(params, state), x)
-    status[GROUND_CAPPED], status[CEILING_CAPPED] = ground_capped, ceiling_capped  # a measurement, not a step
+    status.ground_capped, status.ceiling_capped = ground_capped, ceiling_capped  # a measurement, not a step
     inverse_mass = 1.0 / params.mass
     ax, ay, az = fx * inverse_mass, fy * inverse_mass, fz * inverse_mass  # p_ddot - g e3, world
     surfaces = params.surfaces
@@ -73,8 +70,7 @@ def publish_imu(params: PlantParams, state: PlantState, out) -> None:  # noqa: A
     out[IMU_TRUE_LINEAR_ACCELERATION + 2] = sz
     for i in range(IMU_SIZE):
         out[IMU_ANGULAR_VELOCITY + i] = out[true + i]
-    memory = state.sensor_memory[odometry_memory_size(params.sensors.odometry.delay):]
-    measure_imu(imu, memory, int(state.status[STEP_INDEX]), out[IMU_ANGULAR_VELOCITY:IMU_END])
+    measure_imu(imu, state.sensor_memory, int(state.status[0].step_index), out[IMU_ANGULAR_VELOCITY:IMU_END])
 
 
 @jit

@@ -15,7 +15,7 @@ import math
 from fsr_sim.core.imu import publish_imu
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.odometry import publish_state
-from fsr_sim.core.plant import STEP_INDEX, PlantParams, PlantState, divergence, plant_external_wrench, plant_step
+from fsr_sim.core.plant import PlantParams, PlantState, divergence, plant_external_wrench, plant_step
 from fsr_sim.core.sensors import measure_odometry
 
 
@@ -25,7 +25,7 @@ def publish(params: PlantParams, state: PlantState, out) -> None:  # noqa: ANN00
     sensor stage measures it (:mod:`fsr_sim.core.sensors`; the true state when it is off), the true
     ``wrench_truth`` and, with an IMU, ``imu`` and its true values (:mod:`fsr_sim.core.imu`)."""
     publish_state(state.x, plant_external_wrench(params, state), out)
-    measure_odometry(params.sensors.odometry, state.sensor_memory, int(state.status[STEP_INDEX]), out)
+    measure_odometry(params.sensors.odometry, state.sensor_memory, int(state.status[0].step_index), out)
     publish_imu(params, state, out)
 
 

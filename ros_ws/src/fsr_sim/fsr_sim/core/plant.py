@@ -45,11 +45,25 @@ MAX_SPIN = 200.0  # rad/s
 # divergence() codes (the message is made by fsr_sim.model.plant.divergence_reason)
 RUNNING, NOT_FINITE, TOO_FAST, SPINNING, GROUND_CRASH, CEILING_CRASH = 0, 1, 2, 3, 4, 5
 
-# PlantState.status entries
-STEP_INDEX, IN_CONTACT, AT_CEILING, MAX_IMPACT, MAX_CEILING_IMPACT = 0, 1, 2, 3, 4
-GROUND_CAP_STEPS, CEILING_CAP_STEPS, GROUND_CAPPED, CEILING_CAPPED = 5, 6, 7, 8
-WRENCH_COMMANDED = 9  # 1 once a wrench command came (the lagging wrench starts at the first one)
-STATUS_SIZE = 10
+PLANT_STATUS = np.dtype([
+    ("step_index", np.int64),  # control periods stepped so far (the state's time is step_index * period)
+    ("in_contact", np.bool_),  # the ground held the vehicle at the end of the last RK4 step
+    ("at_ceiling", np.bool_),  # the ceiling held it then
+    ("max_impact", np.float64),  # fastest downward speed at ground contact so far [m/s]
+    ("max_ceiling_impact", np.float64),  # fastest upward speed at ceiling contact so far [m/s]
+    ("ground_cap_steps", np.int64),  # control periods in which a ground-effect ratio was held at max_ratio
+    ("ceiling_cap_steps", np.int64),  # the same for the ceiling effect
+    ("ground_capped", np.bool_),  # a ground-effect ratio was held at max_ratio in the current period
+    ("ceiling_capped", np.bool_),
+    ("wrench_commanded", np.bool_),  # a wrench command came (the lagging wrench starts at the first one)
+], align=True)
+"""The fields of ``PlantState.status``, a record read and written in place as ``status[0].step_index``."""
+
+
+def new_plant_status() -> np.ndarray:
+    """A zeroed :data:`PLANT_STATUS` record (a 1-element record array: ``status[0].field`` reads and writes the
+    fields compiled and under CPython alike)."""
+    return np.zeros(1, PLANT_STATUS).view(np.recarray)
 
 
 class PlantParams(NamedTuple):
@@ -101,7 +115,7 @@ class PlantState(NamedTuple):
     ratios: np.ndarray  # (n,) scratch: thrust ratios of the current stage
     actuator_start: np.ndarray  # (max(2n, 6),) scratch: speeds and tilts (or the wrench) at the RK4 step's start
     work: np.ndarray  # (5, 13) scratch: RK4 rates k1..k4 and the stage state
-    status: np.ndarray  # (STATUS_SIZE,) step index, contact, impacts, surface-cap counts
+    status: np.ndarray  # (1,) PLANT_STATUS record: step index, contact, impacts, surface-cap counts
     saturation: np.ndarray  # rotor-speed saturation record (fsr_sim.core.rotors)
     gust_states: np.ndarray  # (m, 3, 2) turbulence filter states
     gusts: np.ndarray  # (m, 3) gust velocities [m/s] world NED, held over the RK4 step
@@ -111,7 +125,7 @@ class PlantState(NamedTuple):
 @jit_inline
 def plant_time(params: PlantParams, state: PlantState) -> float:
     """Simulated time [s] of the current state."""
-    return state.status[STEP_INDEX] * params.period
+    return state.status[0].step_index * params.period
 
 
 @jit_inline
@@ -279,8 +293,9 @@ def set_wrench_command(params: PlantParams, state: PlantState, wrench) -> None: 
     """Hold a body wrench (6,): force [N] and torque [N m], FRD (wrench actuation). With a lag
     (``wrench_lag``) it is what the applied wrench approaches (:func:`actuators_at`); the first command is
     also the applied wrench at the start (as the rotors start spun up)."""
-    first = state.status[WRENCH_COMMANDED] == 0.0
-    state.status[WRENCH_COMMANDED] = 1.0
+    status = state.status[0]
+    first = not status.wrench_commanded
+    status.wrench_commanded = True
     for i in range(6):
         state.wrench_command[i] = wrench[i]
         if first and params.wrench_lag:
@@ -293,7 +308,7 @@ def cut_thrust(params: PlantParams, state: PlantState) -> None:
     """Failsafe: all rotors stopped, zero wrench (tilts are kept); with a rotor lag they spin down (the wrench
     decays)."""
     state.wrench_command[:] = 0.0
-    state.status[WRENCH_COMMANDED] = 1.0
+    state.status[0].wrench_commanded = True
     state.speed_command[:] = 0.0
     if not params.rotor_lag:
         state.speeds[:] = 0.0
@@ -308,10 +323,11 @@ def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple: 
     wrench = state.body_wrench
     if not params.wrench_actuation and has_thrust_effects(params.surfaces):
         ground_capped, ceiling_capped = thrust_ratios(params.surfaces, x[2], rotation[2], state.ratios)
+        status = state.status[0]
         if ground_capped:
-            state.status[GROUND_CAPPED] = 1.0
+            status.ground_capped = True
         if ceiling_capped:
-            state.status[CEILING_CAPPED] = 1.0
+            status.ceiling_capped = True
         (fx, fy, fz), (tx, ty, tz) = scaled_rotor_wrench(state.columns, state.speed_sq, state.ratios)
     else:
         fx, fy, fz, tx, ty, tz = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
@@ -392,22 +408,22 @@ def _hold_at(state: PlantState, rest_z: float) -> None:
 @jit_inline
 def apply_contact(params: PlantParams, state: PlantState) -> None:
     """Ground (and, when enabled, ceiling) contact after an RK4 step (module docstring)."""
-    surfaces, x, status = params.surfaces, state.x, state.status
-    status[IN_CONTACT] = 0.0
+    surfaces, x, status = params.surfaces, state.x, state.status[0]
+    status.in_contact = False
     if surfaces.ground:
         rest_z = ground_rest_z(surfaces)
         if not x[2] < rest_z:
-            status[IN_CONTACT] = 1.0
-            if x[5] > status[MAX_IMPACT]:
-                status[MAX_IMPACT] = x[5]
+            status.in_contact = True
+            if x[5] > status.max_impact:
+                status.max_impact = x[5]
             _hold_at(state, rest_z)
     if surfaces.ceiling:
-        status[AT_CEILING] = 0.0
+        status.at_ceiling = False
         rest_z = ceiling_rest_z(surfaces)
         if not x[2] > rest_z:
-            status[AT_CEILING] = 1.0
-            if -x[5] > status[MAX_CEILING_IMPACT]:  # upward (negative NED z) speed
-                status[MAX_CEILING_IMPACT] = -x[5]
+            status.at_ceiling = True
+            if -x[5] > status.max_ceiling_impact:  # upward (negative NED z) speed
+                status.max_ceiling_impact = -x[5]
             _hold_at(state, rest_z)
 
 
@@ -415,19 +431,22 @@ def apply_contact(params: PlantParams, state: PlantState) -> None:
 def plant_step(params: PlantParams, state: PlantState) -> None:
     """Advance one control period: ``substeps`` RK4 steps of ``dt`` with contact; count the steps in which a
     thrust ratio was held at a surface's ``max_ratio``."""
-    status = state.status
+    status = state.status[0]
     time = plant_time(params, state)
     for sub in range(params.substeps):
         rk4_step(params, state, time + sub * params.dt)
         apply_contact(params, state)
         if state.gusts.shape[0]:
             advance_gusts(params.turbulence, state.gust_states, state.gusts,
-                          int(status[STEP_INDEX]) * params.substeps + sub)
-    if status[GROUND_CAPPED] != 0.0 or status[CEILING_CAPPED] != 0.0:
-        status[GROUND_CAP_STEPS] += status[GROUND_CAPPED]
-        status[CEILING_CAP_STEPS] += status[CEILING_CAPPED]
-        status[GROUND_CAPPED] = status[CEILING_CAPPED] = 0.0
-    status[STEP_INDEX] += 1.0
+                          int(status.step_index) * params.substeps + sub)
+    if status.ground_capped or status.ceiling_capped:
+        if status.ground_capped:
+            status.ground_cap_steps += 1
+        if status.ceiling_capped:
+            status.ceiling_cap_steps += 1
+        status.ground_capped = False
+        status.ceiling_capped = False
+    status.step_index += 1
 
 
 @jit_inline
@@ -442,9 +461,10 @@ def divergence(params: PlantParams, state: PlantState) -> int:
         return TOO_FAST
     if math.sqrt(x[10] * x[10] + x[11] * x[11] + x[12] * x[12]) > MAX_SPIN:
         return SPINNING
-    if state.status[MAX_IMPACT] > params.crash_speed:
+    status = state.status[0]
+    if status.max_impact > params.crash_speed:
         return GROUND_CRASH
-    if state.status[MAX_CEILING_IMPACT] > params.crash_speed:
+    if status.max_ceiling_impact > params.crash_speed:
         return CEILING_CRASH
     return RUNNING
 

@@ -29,6 +29,7 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_sim.core.jit import jit, jit_inline
+from fsr_sim.core.odometry import ODOM_SIZE
 
 MASK32 = 0xFFFFFFFF
 POSITION, ATTITUDE, VELOCITY, ANGULAR_VELOCITY = 0, 3, 6, 9  # first channel of each noise group
@@ -49,12 +50,10 @@ class OdometryParams(NamedTuple):
     every: int  # a new measurement every this many published states (the others hold it)
 
 
-MEMORY_STEP, MEMORY_BIAS, MEMORY_HELD, MEMORY_HISTORY = 0, 1, 13, 26  # odometry's memory (measure_odometry)
 BIAS_CHANNEL = 12  # the odometry's bias walks' generator channels: 12 .. 23
 
 IMU_SIZE = 6  # an IMU sample: angular velocity [rad/s], then specific force [m/s^2], body FRD (imu's field order)
 IMU_NOISE_CHANNEL, IMU_BIAS_CHANNEL = 24, 30  # the IMU's generator channels: white noise 24 .. 29, walks 30 .. 35
-IMU_STEP, IMU_BIAS, IMU_HELD, IMU_HISTORY = 0, 1, 7, 13  # the IMU's memory (measure_imu), after the odometry's
 
 
 class ImuParams(NamedTuple):
@@ -77,22 +76,46 @@ class SensorParams(NamedTuple):
     imu: ImuParams
 
 
+SENSOR_MEMORY = np.dtype([
+    ("odometry_step", np.int64),  # the last step whose bias walk was taken (-1: none yet)
+    ("odometry_bias", np.float64, (12,)),  # position, attitude rotation vector, velocity, angular velocity
+    ("odometry_held", np.float64, (ODOM_SIZE,)),  # the measurement held between new ones (rate)
+    ("imu_step", np.int64),  # the last step whose bias was moved (-1: none yet; the initial bias at the first)
+    ("imu_bias", np.float64, (IMU_SIZE,)),
+    ("imu_held", np.float64, (IMU_SIZE,)),
+], align=True)
+"""The fields of :attr:`SensorMemory.fields`, read and written in place as ``memory.fields[0].imu_bias``."""
+
+
+class SensorMemory(NamedTuple):
+    """What both sensor stages keep between published states (``PlantState.sensor_memory``)."""
+
+    fields: np.ndarray  # (1,) SENSOR_MEMORY record
+    odometry_history: np.ndarray  # (delay + 1, ODOM_SIZE) delay line: step k's measurement at row k % (delay + 1)
+    imu_history: np.ndarray  # (delay + 1, IMU_SIZE) the IMU's
+
+
+def new_sensor_memory(params: SensorParams) -> SensorMemory:
+    """Both stages' memory at the start of a flight (no state measured yet: :func:`reset_sensor_memory`)."""
+    memory = SensorMemory(np.zeros(1, SENSOR_MEMORY).view(np.recarray),
+                          np.zeros((params.odometry.delay + 1, ODOM_SIZE)),
+                          np.zeros((params.imu.delay + 1, IMU_SIZE)))
+    reset_sensor_memory(memory)
+    return memory
+
+
 @jit
-def odometry_memory_size(delay: int) -> int:
-    """Floats of :func:`measure_odometry`'s memory for a delay of ``delay`` states."""
-    return MEMORY_HISTORY + 13 * (delay + 1)
-
-
-def memory_size(params: SensorParams) -> int:
-    """Floats of both stages' memory (``PlantState.sensor_memory``): the odometry's, then the IMU's."""
-    return odometry_memory_size(params.odometry.delay) + IMU_HISTORY + IMU_SIZE * (params.imu.delay + 1)
-
-
-def reset_memory(params: SensorParams, memory: np.ndarray) -> None:
-    """The memory of both stages at the start of a flight (no state measured yet)."""
-    memory[:] = 0.0
-    memory[MEMORY_STEP] = -1.0
-    memory[odometry_memory_size(params.odometry.delay) + IMU_STEP] = -1.0
+def reset_sensor_memory(memory: SensorMemory) -> None:
+    """Both stages' memory as at the start of a flight: nothing measured yet."""
+    fields = memory.fields[0]
+    fields.odometry_step = -1
+    fields.imu_step = -1
+    fields.odometry_bias[:] = 0.0
+    fields.odometry_held[:] = 0.0
+    fields.imu_bias[:] = 0.0
+    fields.imu_held[:] = 0.0
+    memory.odometry_history[:] = 0.0
+    memory.imu_history[:] = 0.0
 
 
 @jit
@@ -147,79 +170,74 @@ def sense(params: OdometryParams, step: int, out, bias) -> None:  # noqa: ANN001
 
 
 @jit_inline
-def measure_odometry(params: OdometryParams, memory, step: int, out) -> None:  # noqa: ANN001
-    """The whole odometry stage on the published row ``out`` of step ``step`` (``memory``:
-    :func:`odometry_memory_size` floats, ``memory[MEMORY_STEP]`` = -1 at the start):
+def _delayed_and_held(history, held, delay: int, every: int, step: int, out) -> None:  # noqa: ANN001
+    """A stage's delay and rate on its measurement ``out`` (``history.shape[1]`` numbers) of step ``step``:
+    published as the measurement of step ``step - delay`` (of step 0 before; ``history``: the delay line,
+    ``delay + 1`` rows), then a new one every ``every`` steps, ``held`` in between."""
+    size = history.shape[1]
+    if delay > 0:
+        slots = delay + 1
+        write = step % slots
+        for i in range(size):
+            history[write, i] = out[i]
+        read = (step - delay) % slots if step >= delay else 0
+        for i in range(size):
+            out[i] = history[read, i]
+    if every > 1:
+        if step % every == 0:
+            for i in range(size):
+                held[i] = out[i]
+        else:
+            for i in range(size):
+                out[i] = held[i]
+
+
+@jit_inline
+def measure_odometry(params: OdometryParams, memory: SensorMemory, step: int, out) -> None:  # noqa: ANN001
+    """The whole odometry stage on the published row ``out`` of step ``step`` (``memory``: both stages',
+    :func:`new_sensor_memory`):
 
     1. bias random walks: per step, ``b <- b + walk sqrt(T) n`` per channel (once per step, however often the
        step is published), then white noise plus the bias (:func:`sense`);
     2. delay: the row published at step ``k`` is the measurement of step ``k - delay`` (of step 0 before);
     3. rate: a new measurement every ``every`` steps, held in between.
     ``wrench_truth`` (the rest of the row) stays the true one, of step ``k``."""
+    fields = memory.fields[0]
     if params.enabled:
-        if step > memory[MEMORY_STEP]:
+        if step > fields.odometry_step:
             scale = math.sqrt(params.period)
             for group in range(4):
                 walk = params.walks[group] * scale
                 if walk > 0.0:
                     for i in range(3):
                         channel = 3 * group + i
-                        memory[MEMORY_BIAS + channel] += walk * standard_normal(params.seed, step,
+                        fields.odometry_bias[channel] += walk * standard_normal(params.seed, step,
                                                                                 BIAS_CHANNEL + channel)
-            memory[MEMORY_STEP] = step
-        sense(params, step, out, memory[MEMORY_BIAS:MEMORY_HELD])
-    if params.delay > 0:
-        slots = params.delay + 1
-        write = MEMORY_HISTORY + 13 * (step % slots)
-        for i in range(13):
-            memory[write + i] = out[i]
-        read = MEMORY_HISTORY + (13 * ((step - params.delay) % slots) if step >= params.delay else 0)
-        for i in range(13):
-            out[i] = memory[read + i]
-    if params.every > 1:
-        if step % params.every == 0:
-            for i in range(13):
-                memory[MEMORY_HELD + i] = out[i]
-        else:
-            for i in range(13):
-                out[i] = memory[MEMORY_HELD + i]
+            fields.odometry_step = step
+        sense(params, step, out, fields.odometry_bias)
+    _delayed_and_held(memory.odometry_history, fields.odometry_held, params.delay, params.every, step, out)
 
 
 @jit_inline
-def measure_imu(params: ImuParams, memory, step: int, out) -> None:  # noqa: ANN001
+def measure_imu(params: ImuParams, memory: SensorMemory, step: int, out) -> None:  # noqa: ANN001
     """The IMU stage on ``out`` (6,): the true angular velocity [rad/s] and specific force [m/s^2] of step
-    ``step`` in, what ``imu`` publishes out (``memory``: the IMU's part of the sensor memory,
-    ``memory[IMU_STEP]`` = -1 at the start):
+    ``step`` in, what ``imu`` publishes out (``memory``: both stages', :func:`new_sensor_memory`):
 
     1. bias: its initial value at the first step, then per step ``b <- b + walk sqrt(T) n`` per axis; white
        noise ``density sqrt(rate) n`` plus the bias (nothing of either for an ideal IMU);
     2. delay: the sample published at step ``k`` is the measurement of step ``k - delay`` (of step 0 before);
     3. rate: a new sample every ``every`` steps, held in between."""
+    fields = memory.fields[0]
     if params.noisy:
-        if step > memory[IMU_STEP]:
-            first = memory[IMU_STEP] < 0.0
+        if step > fields.imu_step:
+            first = fields.imu_step < 0
             for i in range(IMU_SIZE):
                 if first:
-                    memory[IMU_BIAS + i] = params.initial_bias[i]
+                    fields.imu_bias[i] = params.initial_bias[i]
                 elif params.walk_std[i] > 0.0:
-                    memory[IMU_BIAS + i] += params.walk_std[i] * standard_normal(params.seed, step,
-                                                                                 IMU_BIAS_CHANNEL + i)
-            memory[IMU_STEP] = step
+                    fields.imu_bias[i] += params.walk_std[i] * standard_normal(params.seed, step, IMU_BIAS_CHANNEL + i)
+            fields.imu_step = step
         for i in range(IMU_SIZE):
             out[i] += (params.noise_std[i] * standard_normal(params.seed, step, IMU_NOISE_CHANNEL + i)
-                       + memory[IMU_BIAS + i])
-    if params.delay > 0:
-        slots = params.delay + 1
-        write = IMU_HISTORY + IMU_SIZE * (step % slots)
-        for i in range(IMU_SIZE):
-            memory[write + i] = out[i]
-        read = IMU_HISTORY + (IMU_SIZE * ((step - params.delay) % slots) if step >= params.delay else 0)
-        for i in range(IMU_SIZE):
-            out[i] = memory[read + i]
-    if params.every > 1:
-        if step % params.every == 0:
-            for i in range(IMU_SIZE):
-                memory[IMU_HELD + i] = out[i]
-        else:
-            for i in range(IMU_SIZE):
-                out[i] = memory[IMU_HELD + i]
+                       + fields.imu_bias[i])
+    _delayed_and_held(memory.imu_history, fields.imu_held, params.delay, params.every, step, out)

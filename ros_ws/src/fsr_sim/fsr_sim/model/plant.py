@@ -45,7 +45,7 @@ from fsr_sim.core import plant as core
 from fsr_sim.core import rotors as core_rotors
 from fsr_sim.core.aerodynamics import AeroParams
 from fsr_sim.core.rigid_body import STATE_SIZE
-from fsr_sim.core.sensors import memory_size, reset_memory
+from fsr_sim.core.sensors import new_sensor_memory
 from fsr_sim.core.surfaces import has_thrust_effects
 from fsr_sim.model.checks import InvalidValueError, finite_array
 from fsr_sim.model.disturbances import DisturbanceProfile, pack_disturbances
@@ -172,11 +172,10 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
         wrench_command=np.zeros(6), columns=params.vertical_columns.copy(),
         body_wrench=np.zeros(6), ratios=np.ones(n), actuator_start=np.zeros(max(2 * n, 6)),
         work=np.zeros((5, STATE_SIZE)),
-        status=np.zeros(core.STATUS_SIZE), saturation=np.zeros(core_rotors.saturation_size(n)),
+        status=core.new_plant_status(), saturation=np.zeros(core_rotors.saturation_size(n)),
         gust_states=params.turbulence.initial_states.copy(), gusts=params.turbulence.initial_gusts.copy(),
-        sensor_memory=np.zeros(memory_size(params.sensors)),
+        sensor_memory=new_sensor_memory(params.sensors),
     )
-    reset_memory(params.sensors, state.sensor_memory)
     core_rotors.reset_saturation(state.saturation)
     if params.tilting:
         core_rotors.tilted_columns(params.vertical_columns, params.lateral_columns, state.tilts, state.columns)
@@ -186,7 +185,7 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
 
 def divergence_reason(code: int, params: core.PlantParams, state: core.PlantState) -> str | None:
     """The message of a :func:`fsr_sim.core.plant.divergence` code (None: the flight goes on)."""
-    x, status = state.x.tolist(), state.status
+    x, status = state.x.tolist(), state.status[0]
     if code == core.NOT_FINITE:
         return "state is not finite (NaN or inf)"
     if code == core.TOO_FAST:
@@ -195,10 +194,10 @@ def divergence_reason(code: int, params: core.PlantParams, state: core.PlantStat
         spin = math.sqrt(x[10] * x[10] + x[11] * x[11] + x[12] * x[12])
         return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
     if code == core.GROUND_CRASH:
-        return (f"crashed into the ground at {status[core.MAX_IMPACT]:.2f} m/s "
+        return (f"crashed into the ground at {status.max_impact:.2f} m/s "
                 f"(limit {params.crash_speed} m/s)")
     if code == core.CEILING_CRASH:
-        return (f"crashed into the ceiling at {status[core.MAX_CEILING_IMPACT]:.2f} m/s "
+        return (f"crashed into the ceiling at {status.max_ceiling_impact:.2f} m/s "
                 f"(limit {params.crash_speed} m/s)")
     return None
 
@@ -297,11 +296,11 @@ class Plant:
     @property
     def step_index(self) -> int:
         """Control periods stepped so far (the state's time is ``step_index * period``)."""
-        return int(self.core_state.status[core.STEP_INDEX])
+        return int(self.core_state.status[0].step_index)
 
     @step_index.setter
     def step_index(self, value: int) -> None:
-        self.core_state.status[core.STEP_INDEX] = int(value)
+        self.core_state.status[0].step_index = int(value)
 
     @property
     def time(self) -> float:
@@ -377,36 +376,37 @@ class Plant:
         return self.core_state.body_wrench.copy()
 
     # ----- contact and surfaces ---------------------------------------------------------------------
-    def _status(self, entry: int) -> float:
-        return float(self.core_state.status[entry])
+    @property
+    def _status(self) -> np.record:
+        return self.core_state.status[0]
 
     @property
     def in_contact(self) -> bool:
         """Whether the ground held the vehicle at the end of the last RK4 step."""
-        return bool(self._status(core.IN_CONTACT))
+        return bool(self._status.in_contact)
 
     @property
     def at_ceiling(self) -> bool:
-        return bool(self._status(core.AT_CEILING))
+        return bool(self._status.at_ceiling)
 
     @property
     def max_impact_speed(self) -> float:
         """Fastest downward speed at ground contact so far [m/s]."""
-        return self._status(core.MAX_IMPACT)
+        return float(self._status.max_impact)
 
     @property
     def max_ceiling_impact_speed(self) -> float:
         """Fastest upward speed at ceiling contact so far [m/s]."""
-        return self._status(core.MAX_CEILING_IMPACT)
+        return float(self._status.max_ceiling_impact)
 
     @property
     def ground_cap_steps(self) -> int:
         """Control steps in which a rotor's ground-effect ratio was held at ``max_ratio``."""
-        return int(self._status(core.GROUND_CAP_STEPS))
+        return int(self._status.ground_cap_steps)
 
     @property
     def ceiling_cap_steps(self) -> int:
-        return int(self._status(core.CEILING_CAP_STEPS))
+        return int(self._status.ceiling_cap_steps)
 
     # ----- commands ---------------------------------------------------------------------------------
     def set_rotor_command(self, speeds: ArrayLike, tilts: ArrayLike | None = None) -> bool:
