@@ -35,7 +35,6 @@ from fsr_bringup.core.flight_measures import (
     measure_sample,
     measure_step,
     reset,
-    state_rotation,
 )
 from fsr_control.core.allocation import TILTING, WRENCH
 from fsr_control.core.controller import (
@@ -55,6 +54,7 @@ from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import actuator_row, advance, publish
 from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
+from fsr_sim.core.rigid_body import state_rotation
 from fsr_sim.core.rotors import measured_rotor_wrench
 
 GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly

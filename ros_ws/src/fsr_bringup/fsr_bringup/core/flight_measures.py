@@ -51,8 +51,15 @@ from fsr_control.core.controller import (
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.core.plant import PlantParams, PlantState, period_mean_lagged, set_rotor_command
+from fsr_sim.core.rigid_body import (
+    POSITION_Z,
+    state_angular_velocity,
+    state_position,
+    state_rotation,
+    state_velocity,
+)
 from fsr_sim.core.rotors import scaled_rotor_wrench
-from fsr_sim.core.so3 import Mat3, Vec3, mat_t_mat3, mat_t_vec3, rotation_rows_from_quaternion
+from fsr_sim.core.so3 import Mat3, Vec3, mat_t_mat3, mat_t_vec3
 from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, thrust_ratios
 
 ACCUMULATORS = np.dtype([
@@ -181,15 +188,11 @@ def _rows(row, at: int) -> Mat3:  # noqa: ANN001
             (row[at + 6], row[at + 7], row[at + 8]))
 
 
-@jit
-def state_rotation(x) -> Mat3:  # noqa: ANN001
-    return rotation_rows_from_quaternion(x[6], x[7], x[8], x[9])
-
-
 @jit_inline
 def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> None:  # noqa: ANN001
     """Sample ``k``: the true state ``x`` (13), its rotation and the controller's output ``row``."""
-    ex, ey, ez = x[0] - row[REFERENCE_POSITION], x[1] - row[REFERENCE_POSITION + 1], x[2] - row[REFERENCE_POSITION + 2]
+    px, py, pz = state_position(x)
+    ex, ey, ez = px - row[REFERENCE_POSITION], py - row[REFERENCE_POSITION + 1], pz - row[REFERENCE_POSITION + 2]
     error = math.sqrt(ex * ex + ey * ey + ez * ez)
     a = acc[0]
     if math.isfinite(error):
@@ -249,9 +252,9 @@ def measure_estimate(m: MeasureParams, surfaces: Surfaces, acc, t: float, t_next
     ``x_next`` of ``t_next`` (and their rotations), the published row of ``t`` (its ``wrench_truth``), the
     commanded body wrench, the actuator's body wrench at the start and at the end of the step, and the estimate
     of ``t``."""
-    parts = effective_truth(m, surfaces, t_next - t, rotation, rotation_next, (x[3], x[4], x[5]),
-                            (x_next[3], x_next[4], x_next[5]), (x[10], x[11], x[12]),
-                            (x_next[10], x_next[11], x_next[12]), x_next[2],
+    parts = effective_truth(m, surfaces, t_next - t, rotation, rotation_next, state_velocity(x),
+                            state_velocity(x_next), state_angular_velocity(x), state_angular_velocity(x_next),
+                            x_next[POSITION_Z],
                             (published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2]),
                             (published[TRUTH_TORQUE], published[TRUTH_TORQUE + 1], published[TRUTH_TORQUE + 2]),
                             force_cmd, torque_cmd, force_start, torque_start, force_end, torque_end)
@@ -308,11 +311,11 @@ def thrust_ratio_row(m: MeasureParams, x, rotation: Mat3, ground, ceiling, out) 
     ceiling's, each with the other surface's effect off (1 where a surface has none), as the analysis takes
     them; ``ground`` and ``ceiling`` (n,) scratch."""
     if has_thrust_effects(m.ground):
-        thrust_ratios(m.ground, x[2], rotation[2], ground)
+        thrust_ratios(m.ground, x[POSITION_Z], rotation[2], ground)
     else:
         ground[:] = 1.0
     if has_thrust_effects(m.ceiling):
-        thrust_ratios(m.ceiling, x[2], rotation[2], ceiling)
+        thrust_ratios(m.ceiling, x[POSITION_Z], rotation[2], ceiling)
     else:
         ceiling[:] = 1.0
     for i in range(out.shape[0]):
