@@ -152,8 +152,9 @@ def effective_wrench(flight: RecordedFlight) -> EffectiveWrench | None:
         return np.ascontiguousarray(values, dtype=float)
 
     effective_truth_log(params, pack_surfaces(config.environment, plant), c(odom.t), c(rotation),
-                        c(odom.velocity_world), c(odom.angular_velocity), c(odom.position[:, 2]), c(f_ext_body),
-                        c(tau_ext), c(f_cmd), c(tau_cmd), c(f_start), c(tau_start), c(f_end), c(tau_end), out)
+                        c(odom.velocity_world), c(odom.angular_velocity), c(odom.position[:, 2]),
+                        (c(f_ext_body), c(tau_ext)), (c(f_cmd), c(tau_cmd)), (c(f_start), c(tau_start)),
+                        (c(f_end), c(tau_end)), out)
 
     def part(at: int) -> np.ndarray:
         return out[:, at:at + 3]

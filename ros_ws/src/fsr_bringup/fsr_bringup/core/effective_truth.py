@@ -96,19 +96,20 @@ def _spin(omega: Vec3, inertia) -> Vec3:  # noqa: ANN001
 
 @jit_inline
 def effective_truth(p: TruthParams, surfaces: Surfaces, dt: float, rotation: Mat3, rotation_next: Mat3, velocity: Vec3,
-                    velocity_next: Vec3, omega: Vec3, omega_next: Vec3, z_next: float, f_ext_body: Vec3,
-                    tau_ext: Vec3, force_cmd: Vec3, torque_cmd: Vec3, force_start: Vec3, torque_start: Vec3,
-                    force_end: Vec3, torque_end: Vec3) -> tuple:
+                    velocity_next: Vec3, omega: Vec3, omega_next: Vec3, z_next: float, external: tuple,
+                    commanded: tuple, start: tuple, end: tuple) -> tuple:
     """The effective truth of the step ``[t_k, t_k + dt]`` (module docstring) for the plant and model ``p`` (a
     :class:`TruthParams`, or any tuple with its fields, such as the sweep's measurement parameters) and the
     contact rule's ``surfaces`` (``pack_surfaces`` of the environment and the plant vehicle), from the true
     states at its ends
     (``R``, world velocity [m/s], body angular velocity [rad/s], the down-coordinate ``z`` [m] of the end), the
     external wrench of ``t_k`` (``wrench_truth``, body; NaN taken as 0), the commanded body wrench and the
-    actuator's body wrench at the start and at the end of the step.
+    actuator's body wrench at the start and at the end of the step (each wrench a pair ``(force, torque)``).
 
     Returns ``(force_world, torque_body, external_force_world, thrust_change_world, contact_force_world,
     mismatch_force_world, held)``: vectors [N, N m], ``held`` the ground's contact at the end of the step."""
+    (f_ext_body, tau_ext), (force_cmd, torque_cmd), (force_start, torque_start), (force_end, torque_end) = \
+        external, commanded, start, end
     f_ext = mat_vec3(rotation, (finite(f_ext_body[0]), finite(f_ext_body[1]), finite(f_ext_body[2])))
     tau = (finite(tau_ext[0]), finite(tau_ext[1]), finite(tau_ext[2]))
     commanded_world = mat_vec3(rotation, force_cmd)
@@ -163,20 +164,22 @@ def _put(out, k: int, at: int, v: Vec3) -> None:  # noqa: ANN001
 
 
 @jit
-def effective_truth_log(p: TruthParams, surfaces: Surfaces, t, rotation, velocity, omega, z, f_ext_body,  # noqa: ANN001
-                        tau_ext, force_cmd, torque_cmd, force_start, torque_start, force_end, torque_end,
-                        out) -> None:
+def effective_truth_log(p: TruthParams, surfaces: Surfaces, t, rotation, velocity, omega, z,  # noqa: ANN001
+                        external: tuple, commanded: tuple, start: tuple, end: tuple, out) -> None:  # noqa: ANN001
     """:func:`effective_truth` of every step of a log of ``n`` true states (``t`` (n,) [s], ``rotation``
     (n, 3, 3), ``velocity`` world and ``omega`` body (n, 3), ``z`` (n,)) and of the wrenches of each step
-    (n, 3) into ``out`` (n, :data:`LOG_COLUMNS`): the columns named above, ``FORCE_BODY`` ``R_k^T f_eff``;
-    the last row (no step) NaN, its contact force and ``held`` 0."""
+    (each a pair ``(force, torque)`` of (n, 3) arrays) into ``out`` (n, :data:`LOG_COLUMNS`): the columns named
+    above, ``FORCE_BODY`` ``R_k^T f_eff``; the last row (no step) NaN, its contact force and ``held`` 0."""
     n = t.shape[0]
+    (f_ext_body, tau_ext), (force_cmd, torque_cmd), (force_start, torque_start), (force_end, torque_end) = \
+        external, commanded, start, end
     for k in range(n - 1):
         rotation_k = _mat(rotation, k)
         parts = effective_truth(p, surfaces, t[k + 1] - t[k], rotation_k, _mat(rotation, k + 1), _vec(velocity, k),
                                 _vec(velocity, k + 1), _vec(omega, k), _vec(omega, k + 1), z[k + 1],
-                                _vec(f_ext_body, k), _vec(tau_ext, k), _vec(force_cmd, k), _vec(torque_cmd, k),
-                                _vec(force_start, k), _vec(torque_start, k), _vec(force_end, k), _vec(torque_end, k))
+                                (_vec(f_ext_body, k), _vec(tau_ext, k)), (_vec(force_cmd, k), _vec(torque_cmd, k)),
+                                (_vec(force_start, k), _vec(torque_start, k)),
+                                (_vec(force_end, k), _vec(torque_end, k)))
         force_world, torque, f_ext, thrust_change, contact_force, mismatch, held = parts
         _put(out, k, FORCE_WORLD, force_world)
         _put(out, k, TORQUE_BODY, torque)

@@ -28,14 +28,17 @@ row of a sweep (:mod:`fsr_bringup.core.flight_measures`, without per-step arrays
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import numpy as np
+
 from fsr_bringup.core.flight_measures import (
-    MeasureParams,
+    Measurement,
     held_wrench,
     measure_first,
     measure_sample,
     measure_step,
     reset,
-    state_rotation,
 )
 from fsr_control.core.allocation import TILTING, WRENCH
 from fsr_control.core.controller import (
@@ -55,10 +58,30 @@ from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.lockstep import actuator_row, advance, publish
 from fsr_sim.core.odometry import IMU_ANGULAR_VELOCITY, read_odometry
 from fsr_sim.core.plant import RUNNING, PlantParams, PlantState, set_rotor_command, set_wrench_command
+from fsr_sim.core.rigid_body import state_rotation
 from fsr_sim.core.rotors import measured_rotor_wrench
 
 GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly
 RECORD, MEASURE = 1, 2  # what fly does with each step (flags): write its rows; measure it (a sweep's row)
+
+
+class LoopEstimator(NamedTuple):
+    """The estimator of the loop (:func:`fsr_estimation.core.observer_step.estimate_from_state`)."""
+
+    enabled: bool
+    measured: bool  # estimator.input: measured (the rotors' measured wrench of rotor_state)
+    params: ObserverParams
+    state: ObserverState
+
+
+class LoopTrace(NamedTuple):
+    """The rows :func:`fly` writes per step (RECORD: row ``k`` of step ``k``; else two scratch rows)."""
+
+    states: np.ndarray  # (rows, 13) the true state
+    published: np.ndarray  # (rows, PUBLISHED_SIZE) the published row (fsr_sim.core.odometry)
+    actuators: np.ndarray  # (rows, 2n) the rotors' actual speeds, then tilts (rotor_state)
+    control: np.ndarray  # (rows, output size) the controller's output row (fsr_control.core.controller)
+    estimates: np.ndarray  # (rows, 7) the estimator's
 
 
 @jit_inline
@@ -77,48 +100,41 @@ def hold_command(plant: PlantParams, plant_state: PlantState, mode: int, row, fo
 
 
 @jit_inline
-def closed_loop_tick(controller: ControllerParams, controller_state: ControllerState, with_estimator: bool,
-                     estimator_measured: bool, observer: ObserverParams, observer_state: ObserverState, t: float,
-                     odometry, speeds, tilts, row, estimate) -> tuple:  # noqa: ANN001
+def closed_loop_tick(controller: ControllerParams, controller_state: ControllerState, estimator: LoopEstimator,
+                     t: float, odometry, speeds, tilts, row, estimate) -> tuple:  # noqa: ANN001
     """The controller's answer ``row`` to the published ``odometry`` of ``t`` [s] (the published row: odom and,
-    with an IMU, imu) and the rotors' measured ``speeds``, ``tilts`` (``rotor_state``) and, with the estimator,
-    its estimate of that state and the commanded wrench (``estimator_measured``: the rotors' measured wrench)
-    into ``estimate``. Returns ``(status, force, torque)``: the law's status and the commanded wrench (on a
-    failure the estimator is not called)."""
+    with an IMU, imu) and the rotors' measured ``speeds``, ``tilts`` (``rotor_state``) and, with the estimator
+    (``estimator.enabled``), its estimate of that state and the commanded wrench (``estimator.measured``: the
+    rotors' measured wrench) into ``estimate``. Returns ``(status, force, torque)``: the law's status and the
+    commanded wrench (on a failure the estimator is not called)."""
     position, rotation, velocity_world, angular_velocity = read_odometry(odometry)
     imu = odometry[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6]
     status = controller_tick(controller, controller_state, t, position, rotation, velocity_world, angular_velocity,
                              imu, speeds, tilts, row)
     force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
     torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
-    if status == ATTITUDE_OK and with_estimator:
+    if status == ATTITUDE_OK and estimator.enabled:
         force_e, torque_e = force, torque
-        if estimator_measured:
+        if estimator.measured:
             allocation = controller.allocation
             force_e, torque_e = measured_rotor_wrench(allocation.allocation, allocation.c_f,
                                                       allocation.mode == TILTING, speeds, tilts)
-        estimate_from_state(observer, observer_state, rotation, velocity_world, angular_velocity, force_e, torque_e,
-                            estimate)
+        estimate_from_state(estimator.params, estimator.state, rotation, velocity_world, angular_velocity, force_e,
+                            torque_e, estimate)
     return status, force, torque
 
 
 @jit
 def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParams, controller_state: ControllerState,
-        with_estimator: bool, estimator_measured: bool, observer: ObserverParams, observer_state: ObserverState,
-        first: int, last: int, step_count: int, period_ns: int, control_bounds: tuple, what: int, states, published,
-        actuators, control, estimates, measures: MeasureParams, actuator_plant: PlantParams,
-        actuator_state: PlantState, rotor_rows, acc) -> tuple:  # noqa: ANN001
+        estimator: LoopEstimator, first: int, last: int, step_count: int, period_ns: int, control_bounds: tuple,
+        what: int, trace: LoopTrace, measurement: Measurement) -> tuple:
     """Steps ``first..last`` (``last <= step_count``), each written and/or measured as ``what`` says
     (:data:`RECORD` | :data:`MEASURE`).
 
-    RECORD: row ``k`` of ``states`` (13), ``published`` (the row of :mod:`fsr_sim.core.odometry`), ``actuators``
-    (2n: the rotors' actual speeds, then tilts: ``rotor_state``), ``control`` (the controller's output row) and
-    ``estimates`` (7) gets what step ``k`` published. Without it these hold two rows each, step ``k`` in row
-    ``k % 2`` (scratch). MEASURE: the step is measured into ``acc`` (:mod:`fsr_bringup.core.flight_measures`,
-    with ``measures``; ``actuator_plant`` the plant without actuator dynamics and its ``actuator_state``, the
-    rotors' wrench of a command; ``rotor_rows`` (``ROTOR_ROWS``, n) scratch kept from one call to the next),
-    reset at step 0. ``estimator_measured``: the estimator takes the rotors' measured wrench
-    (``estimator.input: measured``).
+    RECORD: row ``k`` of each of ``trace``'s arrays gets what step ``k`` published. Without it they hold two
+    rows each, step ``k`` in row ``k % 2`` (scratch). MEASURE: the step is measured into ``measurement.acc``
+    (:mod:`fsr_bringup.core.flight_measures`), reset at step 0. ``estimator.measured``: the estimator takes the
+    rotors' measured wrench (``estimator.input: measured``).
 
     Returns ``(outcome, k, detail)``: ``GOING_ON`` after ``last``; ``FINISHED`` at ``step_count``;
     ``DIVERGED`` with the divergence code after step ``k`` (state ``k + 1`` is not recorded);
@@ -128,6 +144,9 @@ def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParam
     (:meth:`fsr_sim.model.control_loss.ControlBounds.pack`): row ``k`` is complete."""
     record = (what & RECORD) != 0
     mode = controller.allocation.mode
+    states, published, actuators, control, estimates = trace
+    measures, acc, rotor_rows = measurement.params, measurement.acc, measurement.rotor_rows
+    with_estimator = estimator.enabled
     truth = (what & MEASURE) != 0 and with_estimator and measures.truth
     rotor_truth = truth and mode != WRENCH
     n = actuators.shape[1] // 2
@@ -146,9 +165,8 @@ def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParam
         for i in range(plant_state.x.shape[0]):
             x[i] = plant_state.x[i]
         row = control[now]
-        status, force, torque = closed_loop_tick(controller, controller_state, with_estimator, estimator_measured,
-                                                 observer, observer_state, t, published[now], actuators[now, :n],
-                                                 actuators[now, n:], row, estimates[now])
+        status, force, torque = closed_loop_tick(controller, controller_state, estimator, t, published[now],
+                                                 actuators[now, :n], actuators[now, n:], row, estimates[now])
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status
         if what & MEASURE:
@@ -169,7 +187,7 @@ def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParam
         if code != RUNNING:
             return DIVERGED, k, code
         if truth:
-            measure_step(measures, plant, plant_state, rotor_truth, actuator_plant, actuator_state, acc, k, t,
-                         ((k + 1) * period_ns) * 1e-9, x, published[now], row, actuators[now], force, torque,
-                         force_held, torque_held, estimates[now], rotor_rows)
+            measure_step(measurement, plant, plant_state, rotor_truth, k, t, ((k + 1) * period_ns) * 1e-9, x,
+                         published[now], row, actuators[now], (force, torque), (force_held, torque_held),
+                         estimates[now])
     return GOING_ON, last, 0

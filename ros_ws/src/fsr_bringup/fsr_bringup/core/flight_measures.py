@@ -51,8 +51,15 @@ from fsr_control.core.controller import (
 from fsr_sim.core.jit import jit, jit_inline
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.core.plant import PlantParams, PlantState, period_mean_lagged, set_rotor_command
+from fsr_sim.core.rigid_body import (
+    POSITION_Z,
+    state_angular_velocity,
+    state_position,
+    state_rotation,
+    state_velocity,
+)
 from fsr_sim.core.rotors import scaled_rotor_wrench
-from fsr_sim.core.so3 import Mat3, Vec3, mat_t_mat3, mat_t_vec3, rotation_rows_from_quaternion
+from fsr_sim.core.so3 import Mat3, Vec3, mat_t_mat3, mat_t_vec3
 from fsr_sim.core.surfaces import Surfaces, has_thrust_effects, thrust_ratios
 
 ACCUMULATORS = np.dtype([
@@ -118,6 +125,16 @@ class MeasureParams(NamedTuple):
     ceiling: Surfaces  # ... with the ground's effect off
 
 
+class Measurement(NamedTuple):
+    """What the loop measures a flight with (:func:`fsr_bringup.core.flight_loop.fly` with ``MEASURE``)."""
+
+    params: MeasureParams
+    actuator_plant: PlantParams  # the plant without actuator dynamics: the rotors' wrench of a command
+    actuator_state: PlantState  # its scratch state
+    rotor_rows: np.ndarray  # (ROTOR_ROWS, n) scratch kept from one call to the next
+    acc: np.ndarray  # the accumulators (new_accumulators)
+
+
 def unmeasured(plant: PlantParams) -> MeasureParams:
     """Measurement parameters that measure nothing (a flight only written out), of the numba types of a measured
     flight's, so that one compilation of the loop serves both: the packed ``plant``'s inertia (read-only, as
@@ -181,15 +198,11 @@ def _rows(row, at: int) -> Mat3:  # noqa: ANN001
             (row[at + 6], row[at + 7], row[at + 8]))
 
 
-@jit
-def state_rotation(x) -> Mat3:  # noqa: ANN001
-    return rotation_rows_from_quaternion(x[6], x[7], x[8], x[9])
-
-
 @jit_inline
 def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> None:  # noqa: ANN001
     """Sample ``k``: the true state ``x`` (13), its rotation and the controller's output ``row``."""
-    ex, ey, ez = x[0] - row[REFERENCE_POSITION], x[1] - row[REFERENCE_POSITION + 1], x[2] - row[REFERENCE_POSITION + 2]
+    px, py, pz = state_position(x)
+    ex, ey, ez = px - row[REFERENCE_POSITION], py - row[REFERENCE_POSITION + 1], pz - row[REFERENCE_POSITION + 2]
     error = math.sqrt(ex * ex + ey * ey + ez * ez)
     a = acc[0]
     if math.isfinite(error):
@@ -241,20 +254,19 @@ def measure_sample(m: MeasureParams, acc, k: int, x, rotation: Mat3, row) -> Non
 
 
 @jit_inline
-def measure_estimate(m: MeasureParams, surfaces: Surfaces, acc, t: float, t_next: float, x, x_next,
-                     rotation: Mat3, rotation_next: Mat3, published, force_cmd: Vec3, torque_cmd: Vec3,
-                     force_start: Vec3, torque_start: Vec3, force_end: Vec3, torque_end: Vec3,
+def measure_estimate(m: MeasureParams, surfaces: Surfaces, acc, t: float, t_next: float, x, x_next,  # noqa: ANN001
+                     rotation: Mat3, rotation_next: Mat3, published, commanded: tuple, start: tuple, end: tuple,
                      estimate) -> None:  # noqa: ANN001
     """Sample ``k < K`` of the estimate against the effective truth, from the state ``x`` (13) of ``t`` and
     ``x_next`` of ``t_next`` (and their rotations), the published row of ``t`` (its ``wrench_truth``), the
-    commanded body wrench, the actuator's body wrench at the start and at the end of the step, and the estimate
-    of ``t``."""
-    parts = effective_truth(m, surfaces, t_next - t, rotation, rotation_next, (x[3], x[4], x[5]),
-                            (x_next[3], x_next[4], x_next[5]), (x[10], x[11], x[12]),
-                            (x_next[10], x_next[11], x_next[12]), x_next[2],
-                            (published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2]),
-                            (published[TRUTH_TORQUE], published[TRUTH_TORQUE + 1], published[TRUTH_TORQUE + 2]),
-                            force_cmd, torque_cmd, force_start, torque_start, force_end, torque_end)
+    commanded body wrench, the actuator's body wrench at the start and at the end of the step (each a pair
+    ``(force, torque)``), and the estimate of ``t``."""
+    parts = effective_truth(m, surfaces, t_next - t, rotation, rotation_next, state_velocity(x),
+                            state_velocity(x_next), state_angular_velocity(x), state_angular_velocity(x_next),
+                            x_next[POSITION_Z],
+                            ((published[TRUTH_FORCE], published[TRUTH_FORCE + 1], published[TRUTH_FORCE + 2]),
+                             (published[TRUTH_TORQUE], published[TRUTH_TORQUE + 1], published[TRUTH_TORQUE + 2])),
+                            commanded, start, end)
     force_body, torque = mat_t_vec3(rotation, parts[0]), parts[1]
     measure_truth(m, acc, t, (force_body[0], force_body[1], force_body[2], torque[0], torque[1], torque[2]),
                   estimate)
@@ -308,11 +320,11 @@ def thrust_ratio_row(m: MeasureParams, x, rotation: Mat3, ground, ceiling, out) 
     ceiling's, each with the other surface's effect off (1 where a surface has none), as the analysis takes
     them; ``ground`` and ``ceiling`` (n,) scratch."""
     if has_thrust_effects(m.ground):
-        thrust_ratios(m.ground, x[2], rotation[2], ground)
+        thrust_ratios(m.ground, x[POSITION_Z], rotation[2], ground)
     else:
         ground[:] = 1.0
     if has_thrust_effects(m.ceiling):
-        thrust_ratios(m.ceiling, x[2], rotation[2], ceiling)
+        thrust_ratios(m.ceiling, x[POSITION_Z], rotation[2], ceiling)
     else:
         ceiling[:] = 1.0
     for i in range(out.shape[0]):
@@ -354,22 +366,24 @@ def held_wrench(plant: PlantParams, plant_state: PlantState, force: Vec3, torque
 
 
 @jit_inline
-def measure_step(m: MeasureParams, plant: PlantParams, plant_state: PlantState, rotors: bool,
-                 actuator_plant: PlantParams, actuator_state: PlantState, acc, k: int, t: float, t_next: float, x,
-                 published, row, actual, force: Vec3, torque: Vec3, force_held: Vec3, torque_held: Vec3, estimate,
-                 rotor_rows) -> None:  # noqa: ANN001
+def measure_step(measurement: Measurement, plant: PlantParams, plant_state: PlantState, rotors: bool, k: int,
+                 t: float, t_next: float, x, published, row, actual, commanded: tuple, held: tuple,  # noqa: ANN001
+                 estimate) -> None:  # noqa: ANN001
     """Step ``k`` (``[t, t_next]``, just flown) of the estimate against the effective truth: ``x`` (13) the state
     of ``t``, ``plant_state`` that of ``t_next``, ``published`` the row of ``t``, ``row`` the controller's answer
-    and ``force``, ``torque`` its commanded wrench, ``actual`` (2n) the rotors' speeds and tilts of ``t``
-    (``rotor_state``), ``force_held``, ``torque_held`` what a wrench-actuated plant applied (:func:`held_wrench`),
-    ``estimate`` the estimator's of ``t``. With ``rotors`` their wrench at the thrust ratios of both poses
-    (``rotor_rows``: the ratios of ``t`` in ``RATIOS_NEXT`` on entry, of ``t_next`` on return), computed on
-    ``actuator_plant``, the plant without actuator dynamics, as the analysis computes it."""
+    and ``commanded`` its wrench (force, torque), ``actual`` (2n) the rotors' speeds and tilts of ``t``
+    (``rotor_state``), ``held`` the wrench a wrench-actuated plant applied (:func:`held_wrench`), ``estimate``
+    the estimator's of ``t``. With ``rotors`` their wrench at the thrust ratios of both poses
+    (``measurement.rotor_rows``: the ratios of ``t`` in ``RATIOS_NEXT`` on entry, of ``t_next`` on return),
+    computed on ``measurement.actuator_plant``, the plant without actuator dynamics, as the analysis computes
+    it."""
+    m, acc, rotor_rows = measurement.params, measurement.acc, measurement.rotor_rows
+    actuator_plant, actuator_state = measurement.actuator_plant, measurement.actuator_state
     rotation = state_rotation(x)
     rotation_next = state_rotation(plant_state.x)
     if not rotors:  # wrench actuation: the command, or the wrench lagging it
         measure_estimate(m, plant.surfaces, acc, t, t_next, x, plant_state.x, rotation, rotation_next, published,
-                         force, torque, force_held, torque_held, force_held, torque_held, estimate)
+                         commanded, held, held, estimate)
         return
     n = rotor_rows.shape[1]
     for i in range(n):
@@ -381,14 +395,12 @@ def measure_step(m: MeasureParams, plant: PlantParams, plant_state: PlantState, 
     thrust_ratio_row(m, plant_state.x, rotation_next, rotor_rows[GROUND], rotor_rows[CEILING],
                      rotor_rows[RATIOS_NEXT])
     set_rotor_command(actuator_plant, actuator_state, rotor_rows[SPEEDS], rotor_rows[TILTS], m.with_tilts)
-    force_start, torque_start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
-                                                    rotor_rows[RATIOS])
+    start = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq, rotor_rows[RATIOS])
     if m.lagging:  # the rotors move within the step: at its end, their speeds and tilts of t_next
         set_rotor_command(actuator_plant, actuator_state, plant_state.speeds, plant_state.tilts, m.with_tilts)
-    force_end, torque_end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq,
-                                                rotor_rows[RATIOS_NEXT])
-    measure_estimate(m, plant.surfaces, acc, t, t_next, x, plant_state.x, rotation, rotation_next, published, force,
-                     torque, force_start, torque_start, force_end, torque_end, estimate)
+    end = scaled_rotor_wrench(actuator_state.columns, actuator_state.speed_sq, rotor_rows[RATIOS_NEXT])
+    measure_estimate(m, plant.surfaces, acc, t, t_next, x, plant_state.x, rotation, rotation_next, published,
+                     commanded, start, end, estimate)
 
 
 @jit

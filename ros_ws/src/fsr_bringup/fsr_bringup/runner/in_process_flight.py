@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fsr_bringup.core import flight_loop
-from fsr_bringup.core.flight_measures import ROTOR_ROWS, new_accumulators, unmeasured
+from fsr_bringup.core.flight_measures import ROTOR_ROWS, Measurement, new_accumulators, unmeasured
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core import controller as control_layout
 from fsr_control.core.controller import COMMANDED_QUATERNION, REFERENCE_POSITION
@@ -273,12 +273,14 @@ class FlightSetup:
         """Steps ``first..last`` in the compiled loop, written into the arrays: ``(outcome, k, detail)`` of
         :func:`fsr_bringup.core.flight_loop.fly`."""
         a = self.arrays
+        estimator = flight_loop.LoopEstimator(self.estimation.enabled, self.estimation.rotor_state,
+                                              self.observer.params, self.observer.state)
+        trace = flight_loop.LoopTrace(a.states, a.published, a.actuators, a.control, a.estimates)
+        measurement = Measurement(unmeasured(self.plant.params), self.plant.params, self.plant.core_state,
+                                  a.rotor_rows, a.acc)
         return flight_loop.fly(
-            self.plant.params, self.plant.core_state, self.controller.params, self.controller.state,
-            self.estimation.enabled, self.estimation.rotor_state, self.observer.params, self.observer.state, first,
-            last, self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, a.states, a.published,
-            a.actuators, a.control, a.estimates, unmeasured(self.plant.params), self.plant.params,
-            self.plant.core_state, a.rotor_rows, a.acc)
+            self.plant.params, self.plant.core_state, self.controller.params, self.controller.state, estimator, first,
+            last, self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, trace, measurement)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""

@@ -21,6 +21,7 @@ import math
 
 from fsr_sim.core.jit import jit
 from fsr_sim.core.plant import PlantState
+from fsr_sim.core.rigid_body import state_position, state_quaternion
 
 IN_CONTROL, ATTITUDE_LOST, POSITION_LOST = 0, 1, 2
 
@@ -49,10 +50,12 @@ def control_loss(bounds: tuple, x, position_d, quaternion_c, held: bool) -> int:
     ``position_d`` (3,) [m] and the commanded attitude ``quaternion_c`` (4,: ``[x, y, z, w]``), as their messages
     carry them; ``held``: a surface holds the vehicle (its attitude is not checked)."""
     cos_attitude, position_bound = bounds
-    if not held and thrust_axes_cosine(x[6], x[7], x[8], x[9], quaternion_c[0], quaternion_c[1], quaternion_c[2],
-                          quaternion_c[3]) < cos_attitude:
+    qx, qy, qz, qw = state_quaternion(x)
+    if not held and thrust_axes_cosine(qx, qy, qz, qw, quaternion_c[0], quaternion_c[1], quaternion_c[2],
+                                       quaternion_c[3]) < cos_attitude:
         return ATTITUDE_LOST
-    dx, dy, dz = x[0] - position_d[0], x[1] - position_d[1], x[2] - position_d[2]
+    px, py, pz = state_position(x)
+    dx, dy, dz = px - position_d[0], py - position_d[1], pz - position_d[2]
     if math.sqrt(dx * dx + dy * dy + dz * dz) > position_bound:
         return POSITION_LOST
     return IN_CONTROL

@@ -31,7 +31,7 @@ from fsr_sim.core.plant import (
     plant_time,
     stage_wrench,
 )
-from fsr_sim.core.rigid_body import GRAVITY, state_rotation
+from fsr_sim.core.rigid_body import GRAVITY, POSITION_Z, state_angular_velocity, state_rotation
 from fsr_sim.core.sensors import IMU_SIZE, measure_imu
 from fsr_sim.core.so3 import Vec3, mat_t_vec3
 from fsr_sim.core.surfaces import ceiling_rest_z, ground_rest_z
@@ -48,8 +48,8 @@ def specific_force(params: PlantParams, state: PlantState) -> Vec3:
     ax, ay, az = fx * inverse_mass, fy * inverse_mass, fz * inverse_mass  # p_ddot - g e3, world
     surfaces = params.surfaces
     pressed_down = az + GRAVITY >= 0.0  # what acts pushes the vehicle down (NED), into a ground below it
-    if ((surfaces.ground and not x[2] < ground_rest_z(surfaces) and pressed_down)
-            or (surfaces.ceiling and not x[2] > ceiling_rest_z(surfaces) and not pressed_down)):
+    if ((surfaces.ground and not x[POSITION_Z] < ground_rest_z(surfaces) and pressed_down)
+            or (surfaces.ceiling and not x[POSITION_Z] > ceiling_rest_z(surfaces) and not pressed_down)):
         ax, ay, az = 0.0, 0.0, -GRAVITY  # held still: the surface's reaction cancels the rest
     return mat_t_vec3(state_rotation(x), (ax, ay, az))
 
@@ -64,7 +64,7 @@ def publish_imu(params: PlantParams, state: PlantState, out) -> None:  # noqa: A
     x = state.x
     sx, sy, sz = specific_force(params, state)
     true = IMU_TRUE_ANGULAR_VELOCITY
-    out[true], out[true + 1], out[true + 2] = x[10], x[11], x[12]
+    out[true], out[true + 1], out[true + 2] = state_angular_velocity(x)
     out[IMU_TRUE_LINEAR_ACCELERATION] = sx
     out[IMU_TRUE_LINEAR_ACCELERATION + 1] = sy
     out[IMU_TRUE_LINEAR_ACCELERATION + 2] = sz

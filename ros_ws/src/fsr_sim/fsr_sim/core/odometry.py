@@ -21,6 +21,7 @@ Read back (:func:`read_odometry`): ``R`` from that quaternion and ``v_world = R 
 from __future__ import annotations
 
 from fsr_sim.core.jit import jit
+from fsr_sim.core.rigid_body import state_angular_velocity, state_position, state_quaternion, state_velocity
 from fsr_sim.core.so3 import mat_t_vec3, mat_vec3, rotation_rows_from_quaternion
 
 ODOM_POSITION, ODOM_QUATERNION, ODOM_VELOCITY, ODOM_ANGULAR_VELOCITY = 0, 3, 7, 10
@@ -38,19 +39,20 @@ PUBLISHED_SIZE = 44
 def publish_state(x, external: tuple, out) -> None:  # noqa: ANN001
     """The ``odom`` and ``wrench_truth`` numbers (the first 19 of the published row) of a plant state ``x`` (13,)
     with the true external wrench (force world [N], torque body [N m]); ``odom``'s also at :data:`TRUE_ODOM`."""
-    qx, qy, qz, qw = x[6], x[7], x[8], x[9]
+    qx, qy, qz, qw = state_quaternion(x)
     if qw < 0.0:
         qx, qy, qz, qw = -qx, -qy, -qz, -qw
     rotation = rotation_rows_from_quaternion(qx, qy, qz, qw)
-    vbx, vby, vbz = mat_t_vec3(rotation, (x[3], x[4], x[5]))
-    out[0], out[1], out[2] = x[0], x[1], x[2]
-    out[3], out[4], out[5], out[6] = qx, qy, qz, qw
-    out[7], out[8], out[9] = vbx, vby, vbz
-    out[10], out[11], out[12] = x[10], x[11], x[12]
+    vbx, vby, vbz = mat_t_vec3(rotation, state_velocity(x))
+    p, q, v, w = ODOM_POSITION, ODOM_QUATERNION, ODOM_VELOCITY, ODOM_ANGULAR_VELOCITY
+    out[p], out[p + 1], out[p + 2] = state_position(x)
+    out[q], out[q + 1], out[q + 2], out[q + 3] = qx, qy, qz, qw
+    out[v], out[v + 1], out[v + 2] = vbx, vby, vbz
+    out[w], out[w + 1], out[w + 2] = state_angular_velocity(x)
     force_world, torque_body = external
     fx, fy, fz = mat_t_vec3(rotation, force_world)
-    out[13], out[14], out[15] = fx, fy, fz
-    out[16], out[17], out[18] = torque_body
+    out[TRUTH_FORCE], out[TRUTH_FORCE + 1], out[TRUTH_FORCE + 2] = fx, fy, fz
+    out[TRUTH_TORQUE], out[TRUTH_TORQUE + 1], out[TRUTH_TORQUE + 2] = torque_body
     for i in range(ODOM_SIZE):  # the true odom, kept whatever the sensor stage makes of out[:ODOM_SIZE]
         out[TRUE_ODOM + i] = out[i]
 
@@ -59,6 +61,7 @@ def publish_state(x, external: tuple, out) -> None:  # noqa: ANN001
 def read_odometry(row) -> tuple:  # noqa: ANN001
     """(position world [m], rows of ``R``, velocity world [m/s], angular velocity body [rad/s]) of a published
     ``odom`` (the first 13 numbers of ``row``)."""
-    rotation = rotation_rows_from_quaternion(row[3], row[4], row[5], row[6])
-    velocity_world = mat_vec3(rotation, (row[7], row[8], row[9]))
-    return (row[0], row[1], row[2]), rotation, velocity_world, (row[10], row[11], row[12])
+    p, q, v, w = ODOM_POSITION, ODOM_QUATERNION, ODOM_VELOCITY, ODOM_ANGULAR_VELOCITY
+    rotation = rotation_rows_from_quaternion(row[q], row[q + 1], row[q + 2], row[q + 3])
+    velocity_world = mat_vec3(rotation, (row[v], row[v + 1], row[v + 2]))
+    return (row[p], row[p + 1], row[p + 2]), rotation, velocity_world, (row[w], row[w + 1], row[w + 2])

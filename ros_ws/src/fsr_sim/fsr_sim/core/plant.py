@@ -32,7 +32,21 @@ import numpy as np
 from fsr_sim.core.aerodynamics import AeroParams, aerodynamic_wrench, has_aerodynamics
 from fsr_sim.core.disturbances import external_wrench
 from fsr_sim.core.jit import jit, jit_inline
-from fsr_sim.core.rigid_body import rigid_body_rates, rk4_combine, stage_state, state_rotation
+from fsr_sim.core.rigid_body import (
+    ANGULAR_VELOCITY_X,
+    ANGULAR_VELOCITY_Y,
+    ANGULAR_VELOCITY_Z,
+    POSITION_Z,
+    VELOCITY_X,
+    VELOCITY_Y,
+    VELOCITY_Z,
+    rigid_body_rates,
+    rk4_combine,
+    stage_state,
+    state_angular_velocity,
+    state_rotation,
+    state_velocity,
+)
 from fsr_sim.core.rotors import clamped_speed, record_saturation, rotor_wrench, scaled_rotor_wrench, tilted_columns
 from fsr_sim.core.sensors import SensorParams
 from fsr_sim.core.so3 import Mat3, mat_t_vec3, mat_vec3
@@ -322,7 +336,7 @@ def stage_wrench(params: PlantParams, state: PlantState, t: float, x) -> tuple: 
     rotation = state_rotation(x)
     wrench = state.body_wrench
     if not params.wrench_actuation and has_thrust_effects(params.surfaces):
-        ground_capped, ceiling_capped = thrust_ratios(params.surfaces, x[2], rotation[2], state.ratios)
+        ground_capped, ceiling_capped = thrust_ratios(params.surfaces, x[POSITION_Z], rotation[2], state.ratios)
         status = state.status[0]
         if ground_capped:
             status.ground_capped = True
@@ -353,9 +367,10 @@ def external_wrench_at(params: PlantParams, state: PlantState, t: float, x, rota
     force, torque = external_wrench(params.disturbances, params.disturbance_knots, t, rotation)
     if has_aerodynamics(params.aero):
         wx, wy, wz = wind_velocity(state.gusts)
-        air = mat_t_vec3(rotation, (x[3] - wx, x[4] - wy, x[5] - wz))
+        vx, vy, vz = state_velocity(x)
+        air = mat_t_vec3(rotation, (vx - wx, vy - wy, vz - wz))
         (ax, ay, az), (mx, my, mz) = aerodynamic_wrench(params.aero, state.columns, state.speeds, air,
-                                                         (x[10], x[11], x[12]))
+                                                         state_angular_velocity(x))
         ax, ay, az = mat_vec3(rotation, (ax, ay, az))
         force = (force[0] + ax, force[1] + ay, force[2] + az)
         torque = (torque[0] + mx, torque[1] + my, torque[2] + mz)
@@ -400,9 +415,9 @@ def rk4_step(params: PlantParams, state: PlantState, t: float) -> None:
 @jit_inline
 def _hold_at(state: PlantState, rest_z: float) -> None:
     x = state.x
-    x[2] = rest_z
-    x[3] = x[4] = x[5] = 0.0  # held by the surface (no bounce, no sliding)
-    x[10] = x[11] = x[12] = 0.0
+    x[POSITION_Z] = rest_z
+    x[VELOCITY_X] = x[VELOCITY_Y] = x[VELOCITY_Z] = 0.0  # held by the surface (no bounce, no sliding)
+    x[ANGULAR_VELOCITY_X] = x[ANGULAR_VELOCITY_Y] = x[ANGULAR_VELOCITY_Z] = 0.0
 
 
 @jit_inline
@@ -412,18 +427,18 @@ def apply_contact(params: PlantParams, state: PlantState) -> None:
     status.in_contact = False
     if surfaces.ground:
         rest_z = ground_rest_z(surfaces)
-        if not x[2] < rest_z:
+        if not x[POSITION_Z] < rest_z:
             status.in_contact = True
-            if x[5] > status.max_impact:
-                status.max_impact = x[5]
+            if x[VELOCITY_Z] > status.max_impact:
+                status.max_impact = x[VELOCITY_Z]
             _hold_at(state, rest_z)
     if surfaces.ceiling:
         status.at_ceiling = False
         rest_z = ceiling_rest_z(surfaces)
-        if not x[2] > rest_z:
+        if not x[POSITION_Z] > rest_z:
             status.at_ceiling = True
-            if -x[5] > status.max_ceiling_impact:  # upward (negative NED z) speed
-                status.max_ceiling_impact = -x[5]
+            if -x[VELOCITY_Z] > status.max_ceiling_impact:  # upward (negative NED z) speed
+                status.max_ceiling_impact = -x[VELOCITY_Z]
             _hold_at(state, rest_z)
 
 
@@ -457,9 +472,11 @@ def divergence(params: PlantParams, state: PlantState) -> int:
     for i in range(x.shape[0]):
         if not math.isfinite(x[i]):
             return NOT_FINITE
-    if math.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]) > MAX_SPEED:
+    vx, vy, vz = state_velocity(x)
+    if math.sqrt(vx * vx + vy * vy + vz * vz) > MAX_SPEED:
         return TOO_FAST
-    if math.sqrt(x[10] * x[10] + x[11] * x[11] + x[12] * x[12]) > MAX_SPIN:
+    wx, wy, wz = state_angular_velocity(x)
+    if math.sqrt(wx * wx + wy * wy + wz * wz) > MAX_SPIN:
         return SPINNING
     status = state.status[0]
     if status.max_impact > params.crash_speed:

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import math
 
-from fsr_sim.core.jit import jit
-from fsr_sim.core.so3 import Mat3, rotation_rows_from_quaternion
+from fsr_sim.core.jit import jit, jit_inline
+from fsr_sim.core.so3 import Mat3, Vec3, rotation_rows_from_quaternion
 
 GRAVITY = 9.81  # m/s^2, along +z (down) of the NED world frame
 
@@ -26,13 +26,37 @@ ANGULAR_VELOCITY_X, ANGULAR_VELOCITY_Y, ANGULAR_VELOCITY_Z = 10, 11, 12
 STATE_SIZE = 13
 
 
+@jit_inline
+def state_position(state) -> Vec3:  # noqa: ANN001
+    """Position world NED [m] of a state (13,)."""
+    return state[POSITION_X], state[POSITION_Y], state[POSITION_Z]
+
+
+@jit_inline
+def state_velocity(state) -> Vec3:  # noqa: ANN001
+    """Velocity world NED [m/s] of a state (13,)."""
+    return state[VELOCITY_X], state[VELOCITY_Y], state[VELOCITY_Z]
+
+
+@jit_inline
+def state_quaternion(state) -> tuple[float, float, float, float]:  # noqa: ANN001
+    """The quaternion ``[x, y, z, w]`` body -> world of a state (13,)."""
+    return state[QUATERNION_X], state[QUATERNION_Y], state[QUATERNION_Z], state[QUATERNION_W]
+
+
+@jit_inline
+def state_angular_velocity(state) -> Vec3:  # noqa: ANN001
+    """Angular velocity body FRD [rad/s] of a state (13,)."""
+    return state[ANGULAR_VELOCITY_X], state[ANGULAR_VELOCITY_Y], state[ANGULAR_VELOCITY_Z]
+
+
 @jit
 def rigid_body_rates(state, mass: float, inertia, inertia_inv, force_world: tuple, torque_body: tuple,  # noqa: ANN001
                      out) -> None:  # noqa: ANN001
     """``x_dot`` of ``state`` (13,) into ``out`` (13,): mass [kg], inertia and its inverse (3, 3) [kg m^2],
     force world excluding gravity [N] and torque body [N m] (3-tuples)."""
-    qx, qy, qz, qw = state[6], state[7], state[8], state[9]
-    wx, wy, wz = state[10], state[11], state[12]
+    qx, qy, qz, qw = state_quaternion(state)
+    wx, wy, wz = state_angular_velocity(state)
     fx, fy, fz = force_world
     tx, ty, tz = torque_body
     inv_m = 1.0 / mass
@@ -42,15 +66,15 @@ def rigid_body_rates(state, mass: float, inertia, inertia_inv, force_world: tupl
     mx = tx - (wy * hz - wz * hy)  # tau - omega x I omega
     my = ty - (wz * hx - wx * hz)
     mz = tz - (wx * hy - wy * hx)
-    out[0], out[1], out[2] = state[3], state[4], state[5]
-    out[3], out[4], out[5] = fx * inv_m, fy * inv_m, GRAVITY + fz * inv_m
-    out[6] = 0.5 * (qw * wx + qy * wz - qz * wy)
-    out[7] = 0.5 * (qw * wy + qz * wx - qx * wz)
-    out[8] = 0.5 * (qw * wz + qx * wy - qy * wx)
-    out[9] = -0.5 * (qx * wx + qy * wy + qz * wz)
-    out[10] = inertia_inv[0, 0] * mx + inertia_inv[0, 1] * my + inertia_inv[0, 2] * mz
-    out[11] = inertia_inv[1, 0] * mx + inertia_inv[1, 1] * my + inertia_inv[1, 2] * mz
-    out[12] = inertia_inv[2, 0] * mx + inertia_inv[2, 1] * my + inertia_inv[2, 2] * mz
+    out[POSITION_X], out[POSITION_Y], out[POSITION_Z] = state_velocity(state)
+    out[VELOCITY_X], out[VELOCITY_Y], out[VELOCITY_Z] = fx * inv_m, fy * inv_m, GRAVITY + fz * inv_m
+    out[QUATERNION_X] = 0.5 * (qw * wx + qy * wz - qz * wy)
+    out[QUATERNION_Y] = 0.5 * (qw * wy + qz * wx - qx * wz)
+    out[QUATERNION_Z] = 0.5 * (qw * wz + qx * wy - qy * wx)
+    out[QUATERNION_W] = -0.5 * (qx * wx + qy * wy + qz * wz)
+    out[ANGULAR_VELOCITY_X] = inertia_inv[0, 0] * mx + inertia_inv[0, 1] * my + inertia_inv[0, 2] * mz
+    out[ANGULAR_VELOCITY_Y] = inertia_inv[1, 0] * mx + inertia_inv[1, 1] * my + inertia_inv[1, 2] * mz
+    out[ANGULAR_VELOCITY_Z] = inertia_inv[2, 0] * mx + inertia_inv[2, 1] * my + inertia_inv[2, 2] * mz
 
 
 @jit
@@ -66,14 +90,16 @@ def rk4_combine(state, k1, k2, k3, k4, dt: float) -> None:  # noqa: ANN001
     c = dt / 6.0
     for i in range(STATE_SIZE):
         state[i] = state[i] + c * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-    qx, qy, qz, qw = state[6], state[7], state[8], state[9]
+    qx, qy, qz, qw = state_quaternion(state)
     norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
     if qw < 0.0:
         norm = -norm
-    state[6], state[7], state[8], state[9] = qx / norm, qy / norm, qz / norm, qw / norm
+    state[QUATERNION_X], state[QUATERNION_Y] = qx / norm, qy / norm
+    state[QUATERNION_Z], state[QUATERNION_W] = qz / norm, qw / norm
 
 
 @jit
 def state_rotation(state) -> Mat3:  # noqa: ANN001
     """Rows of ``R`` (body -> world) of a state's quaternion."""
-    return rotation_rows_from_quaternion(state[6], state[7], state[8], state[9])
+    qx, qy, qz, qw = state_quaternion(state)
+    return rotation_rows_from_quaternion(qx, qy, qz, qw)

@@ -29,7 +29,7 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_sim.core.jit import jit, jit_inline
-from fsr_sim.core.odometry import ODOM_SIZE
+from fsr_sim.core.odometry import ODOM_ANGULAR_VELOCITY, ODOM_POSITION, ODOM_QUATERNION, ODOM_SIZE, ODOM_VELOCITY
 
 MASK32 = 0xFFFFFFFF
 POSITION, ATTITUDE, VELOCITY, ANGULAR_VELOCITY = 0, 3, 6, 9  # first channel of each noise group
@@ -147,10 +147,13 @@ def sense(params: OdometryParams, step: int, out, bias) -> None:  # noqa: ANN001
         return
     seed = params.seed
     for i in range(3):
-        out[i] += params.position_std * standard_normal(seed, step, POSITION + i) + bias[POSITION + i]
-        out[7 + i] += params.velocity_std * standard_normal(seed, step, VELOCITY + i) + bias[VELOCITY + i]
-        out[10 + i] += (params.angular_velocity_std * standard_normal(seed, step, ANGULAR_VELOCITY + i)
-                        + bias[ANGULAR_VELOCITY + i])
+        out[ODOM_POSITION + i] += (params.position_std * standard_normal(seed, step, POSITION + i)
+                                   + bias[POSITION + i])
+        out[ODOM_VELOCITY + i] += (params.velocity_std * standard_normal(seed, step, VELOCITY + i)
+                                   + bias[VELOCITY + i])
+        out[ODOM_ANGULAR_VELOCITY + i] += (params.angular_velocity_std
+                                           * standard_normal(seed, step, ANGULAR_VELOCITY + i)
+                                           + bias[ANGULAR_VELOCITY + i])
     nx = params.attitude_std * standard_normal(seed, step, ATTITUDE) + bias[ATTITUDE]
     ny = params.attitude_std * standard_normal(seed, step, ATTITUDE + 1) + bias[ATTITUDE + 1]
     nz = params.attitude_std * standard_normal(seed, step, ATTITUDE + 2) + bias[ATTITUDE + 2]
@@ -158,7 +161,8 @@ def sense(params: OdometryParams, step: int, out, bias) -> None:  # noqa: ANN001
     if angle > 0.0:  # q (x) Exp(n): the rotation vector n in the body frame, quaternions [x, y, z, w]
         s = math.sin(0.5 * angle) / angle
         bx, by, bz, bw = nx * s, ny * s, nz * s, math.cos(0.5 * angle)
-        ax, ay, az, aw = out[3], out[4], out[5], out[6]
+        q = ODOM_QUATERNION
+        ax, ay, az, aw = out[q], out[q + 1], out[q + 2], out[q + 3]
         qx = aw * bx + ax * bw + ay * bz - az * by
         qy = aw * by - ax * bz + ay * bw + az * bx
         qz = aw * bz + ax * by - ay * bx + az * bw
@@ -166,7 +170,7 @@ def sense(params: OdometryParams, step: int, out, bias) -> None:  # noqa: ANN001
         norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
         if qw < 0.0:  # odom's sign convention: w >= 0
             norm = -norm
-        out[3], out[4], out[5], out[6] = qx / norm, qy / norm, qz / norm, qw / norm
+        out[q], out[q + 1], out[q + 2], out[q + 3] = qx / norm, qy / norm, qz / norm, qw / norm
 
 
 @jit_inline

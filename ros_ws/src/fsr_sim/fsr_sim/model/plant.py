@@ -185,13 +185,14 @@ def new_plant_state(params: core.PlantParams, state_vector: np.ndarray) -> core.
 
 def divergence_reason(code: int, params: core.PlantParams, state: core.PlantState) -> str | None:
     """The message of a :func:`fsr_sim.core.plant.divergence` code (None: the flight goes on)."""
-    x, status = state.x.tolist(), state.status[0]
+    status = state.status[0]
     if code == core.NOT_FINITE:
         return "state is not finite (NaN or inf)"
     if code == core.TOO_FAST:
-        return f"speed {math.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]):.1f} m/s exceeds {MAX_SPEED} m/s"
+        speed = math.sqrt(sum(v * v for v in state.x[VELOCITY].tolist()))
+        return f"speed {speed:.1f} m/s exceeds {MAX_SPEED} m/s"
     if code == core.SPINNING:
-        spin = math.sqrt(x[10] * x[10] + x[11] * x[11] + x[12] * x[12])
+        spin = math.sqrt(sum(w * w for w in state.x[ANGULAR_VELOCITY].tolist()))
         return f"angular speed {spin:.1f} rad/s exceeds {MAX_SPIN} rad/s"
     if code == core.GROUND_CRASH:
         return (f"crashed into the ground at {status.max_impact:.2f} m/s "
