@@ -105,16 +105,8 @@ def analyze_recordings(
     return Analysis(metrics, summary, written, metrics_path, summary_path, flights)
 
 
-def analyze_recording(
-    recording: Recording | str | Path | RecordedFlight,
-    out_dir: str | Path,
-    namespace: str | None = None,
-    settle_time: float = DEFAULT_SETTLE_S,
-    figures: bool = True,
-    options: FigureOptions | None = None,
-    settling: str = "standard",
-    after: float | None = None,
-) -> Analysis:
-    """Analyse one recording into ``out_dir`` (:func:`analyze_recordings` with one run)."""
-    return analyze_recordings([recording], out_dir, None, namespace, settle_time, figures, options, settling,
-                              after)
+def analyze_recording(recording: Recording | str | Path | RecordedFlight, out_dir: str | Path,
+                      namespace: str | None = None, **keywords: Any) -> Analysis:
+    """Analyse one recording into ``out_dir``: :func:`analyze_recordings` with one run (the same keywords:
+    ``settle_time``, ``figures``, ``options``, ``settling``, ``after``)."""
+    return analyze_recordings([recording], out_dir, None, namespace, **keywords)
