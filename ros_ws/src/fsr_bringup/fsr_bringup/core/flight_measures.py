@@ -48,7 +48,7 @@ from fsr_control.core.controller import (
     ROTOR_SPEEDS,
     SHORTFALL,
 )
-from fsr_sim.core.jit import jit, jit_inline
+from fsr_sim.core.jit import jit, jit_inline, zeroed_record
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.core.plant import PlantParams, PlantState, period_mean_lagged, set_rotor_command
 from fsr_sim.core.rigid_body import (
@@ -147,7 +147,7 @@ def unmeasured(plant: PlantParams) -> MeasureParams:
 
 def new_accumulators() -> np.ndarray:
     """Zeroed accumulators (a 1-element :data:`ACCUMULATORS` record array; :func:`reset` before a flight)."""
-    return np.zeros(1, ACCUMULATORS).view(np.recarray)
+    return zeroed_record(ACCUMULATORS)
 
 
 @jit

@@ -14,7 +14,7 @@ import numpy as np
 
 from fsr_control.core.law_terms import NO_COMPENSATION, Compensation
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, observer_update, reset_observer
-from fsr_sim.core.jit import jit_inline
+from fsr_sim.core.jit import jit_inline, zeroed_record
 from fsr_sim.core.so3 import (
     Mat3,
     Vec3,
@@ -43,7 +43,7 @@ COMPENSATION_MEMORY = np.dtype([
 
 def new_compensation_memory() -> np.ndarray:
     """A zeroed :data:`COMPENSATION_MEMORY` record (1-element record array)."""
-    return np.zeros(1, COMPENSATION_MEMORY).view(np.recarray)
+    return zeroed_record(COMPENSATION_MEMORY)
 
 
 class CompensationParams(NamedTuple):

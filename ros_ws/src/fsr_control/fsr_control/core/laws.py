@@ -41,7 +41,7 @@ from fsr_control.core.indi_law import INDI_MEMORY, IndiParams, indi_allocated, i
 from fsr_control.core.law_terms import NO_COMPENSATION, Compensation, linear_feedback
 from fsr_control.core.reference import ReferenceSample
 from fsr_control.core.voliro_law import VoliroParams, voliro_law
-from fsr_sim.core.jit import jit_inline
+from fsr_sim.core.jit import jit_inline, zeroed_record
 from fsr_sim.core.so3 import Mat3, Vec3
 
 __all__ = ["NO_COMPENSATION", "Compensation", "LawMemory", "LawParams", "control_law", "law_allocated",
@@ -76,7 +76,7 @@ MEMORY_TYPES = {"geometric": GEOMETRIC_MEMORY, "bridge": BRIDGE_MEMORY, "indi": 
 
 def new_law_memory() -> LawMemory:
     """Every law's memory, zeroed (nothing seen yet)."""
-    return LawMemory(**{name: np.zeros(1, record).view(np.recarray) for name, record in MEMORY_TYPES.items()})
+    return LawMemory(**{name: zeroed_record(record) for name, record in MEMORY_TYPES.items()})
 
 
 def reset_law_memory(memory: LawMemory) -> None:

@@ -103,6 +103,7 @@ def cache_folder(base: Path) -> Path:
 CACHE_FOLDER = cache_folder(cache_base())
 
 import numba  # noqa: E402
+import numpy  # noqa: E402
 from numba.core import caching  # noqa: E402
 
 
@@ -137,3 +138,10 @@ jit_inline = functools.partial(jit, inline="always")
 the plant's RK4 step 3.0 -> 1.5 us, the whole loop 8 -> 3.6 us per step)."""
 
 prange = numba.prange
+
+
+def zeroed_record(dtype: numpy.dtype) -> numpy.ndarray:
+    """A zeroed 1-element record array of ``dtype``: how the core keeps named state between steps (the plant's
+    status, the sensors', the laws' and a sweep's memory). Its fields are read and written in place as
+    ``record[0].field``, compiled and under CPython alike (a record array's element has attributes)."""
+    return numpy.zeros(1, dtype).view(numpy.recarray)

@@ -31,7 +31,7 @@ import numpy as np
 
 from fsr_sim.core.aerodynamics import AeroParams, aerodynamic_wrench, has_aerodynamics
 from fsr_sim.core.disturbances import external_wrench
-from fsr_sim.core.jit import jit, jit_inline
+from fsr_sim.core.jit import jit, jit_inline, zeroed_record
 from fsr_sim.core.rigid_body import (
     ANGULAR_VELOCITY_X,
     ANGULAR_VELOCITY_Y,
@@ -77,7 +77,7 @@ PLANT_STATUS = np.dtype([
 def new_plant_status() -> np.ndarray:
     """A zeroed :data:`PLANT_STATUS` record (a 1-element record array: ``status[0].field`` reads and writes the
     fields compiled and under CPython alike)."""
-    return np.zeros(1, PLANT_STATUS).view(np.recarray)
+    return zeroed_record(PLANT_STATUS)
 
 
 class PlantParams(NamedTuple):
@@ -454,13 +454,12 @@ def plant_step(params: PlantParams, state: PlantState) -> None:
         if state.gusts.shape[0]:
             advance_gusts(params.turbulence, state.gust_states, state.gusts,
                           int(status.step_index) * params.substeps + sub)
-    if status.ground_capped or status.ceiling_capped:
-        if status.ground_capped:
-            status.ground_cap_steps += 1
-        if status.ceiling_capped:
-            status.ceiling_cap_steps += 1
-        status.ground_capped = False
-        status.ceiling_capped = False
+    if status.ground_capped:
+        status.ground_cap_steps += 1
+    if status.ceiling_capped:
+        status.ceiling_cap_steps += 1
+    status.ground_capped = False
+    status.ceiling_capped = False
     status.step_index += 1
 
 

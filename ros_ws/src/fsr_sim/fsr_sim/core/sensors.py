@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_sim.core.jit import jit, jit_inline
+from fsr_sim.core.jit import jit, jit_inline, zeroed_record
 from fsr_sim.core.odometry import ODOM_ANGULAR_VELOCITY, ODOM_POSITION, ODOM_QUATERNION, ODOM_SIZE, ODOM_VELOCITY
 
 MASK32 = 0xFFFFFFFF
@@ -97,7 +97,7 @@ class SensorMemory(NamedTuple):
 
 def new_sensor_memory(params: SensorParams) -> SensorMemory:
     """Both stages' memory at the start of a flight (no state measured yet: :func:`reset_sensor_memory`)."""
-    memory = SensorMemory(np.zeros(1, SENSOR_MEMORY).view(np.recarray),
+    memory = SensorMemory(zeroed_record(SENSOR_MEMORY),
                           np.zeros((params.odometry.delay + 1, ODOM_SIZE)),
                           np.zeros((params.imu.delay + 1, IMU_SIZE)))
     reset_sensor_memory(memory)
