@@ -106,6 +106,32 @@ def law_matrices(vehicle: Vehicle, gains: dict[str, np.ndarray], names: tuple[st
     return np.ascontiguousarray([np.asarray(matrix, dtype=float).reshape(3, 3) for matrix in matrices])
 
 
+def diagonal_gains(**diagonals: tuple[float, float, float]) -> dict[str, np.ndarray]:
+    """Gain name -> the (3, 3) diagonal matrix of its values about x, y and z (a law's report gains)."""
+    return {name: np.diag(values) for name, values in diagonals.items()}
+
+
+def actuation_error(law: str, fully_actuated: bool, vehicle: Vehicle) -> str | None:
+    """Why ``law`` cannot fly ``vehicle`` (``fully_actuated``: the law commands a whole body wrench, else thrust
+    along ``-z_b`` and a torque); None: it can."""
+    if fully_actuated and not vehicle.fully_actuated:
+        return (f"{law} needs a fully actuated vehicle (rotors on servos or canted); '{vehicle.name}' produces "
+                f"thrust along -z_b only (use geometric)")
+    if vehicle.fully_actuated and not fully_actuated:
+        return f"{law} is for vehicles with thrust along -z_b; '{vehicle.name}' is fully actuated (use voliro)"
+    return None
+
+
+def integrates(matrices: np.ndarray, k_i: int, integral_limit: float) -> bool:
+    """Whether a law with ``matrices`` (:func:`law_matrices`) integrates its position error: its integral gain
+    ``matrices[k_i]`` is not zero. Raises ValueError when it is and ``integral_limit`` (the bound [N] on the
+    integral's force) is not positive."""
+    integral = bool(np.any(matrices[k_i] != 0.0))
+    if integral and not integral_limit > 0.0:
+        raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
+    return integral
+
+
 def pack_bridge(enabled: bool, period: float, delay_steps: int) -> BridgeParams:
     """The IMU bridge's parameters (:mod:`fsr_control.core.imu_bridge`): ``enabled`` where ``odom`` is a
     measurement, the control ``period`` [s] it integrates the IMU over and the steps ``delay_steps`` odom's samples

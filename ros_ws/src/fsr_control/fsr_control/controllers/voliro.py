@@ -28,16 +28,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.controllers.common import CompiledLaw, actuation_error, diagonal_gains, law_matrices
 from fsr_control.core import laws, voliro_law
 from fsr_sim.model.vehicle import Vehicle
 
-DEFAULT_GAINS = {  # the report's exercise-5 gains (docs/model.md §3.7), used when a scenario gives none
-    "k_p": np.diag((50.0, 50.0, 100.0)),
-    "k_d": np.diag((10.0, 10.0, 50.0)),
-    "k_r": np.diag((100.0, 100.0, 100.0)),
-    "k_w": np.diag((10.0, 10.0, 50.0)),
-}
+# The report's exercise-5 gains (docs/model.md §3.7), used when a scenario gives none.
+DEFAULT_GAINS = diagonal_gains(k_p=(50.0, 50.0, 100.0), k_d=(10.0, 10.0, 50.0), k_r=(100.0, 100.0, 100.0),
+                               k_w=(10.0, 10.0, 50.0))
 ANGULAR_FEEDFORWARDS = ("consistent", "report")
 
 
@@ -69,9 +66,9 @@ class VoliroController(CompiledLaw):
     """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforward: str = "consistent") -> None:
-        if not vehicle.fully_actuated:
-            raise ValueError(f"the voliro controller needs a fully actuated vehicle (rotors on servos or canted); "
-                             f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
+        mismatch = actuation_error("the voliro controller", True, vehicle)
+        if mismatch:
+            raise ValueError(mismatch)
         own = pack_voliro(vehicle, gains, angular_feedforward)
         super().__init__(laws.law_params(laws.VOLIRO, own))
         self.report_feedforward = angular_feedforward == "report"
