@@ -81,25 +81,7 @@ def pack_geometric(vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: 
                    acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0, imu: bool = False,
                    period: float = 0.0, odometry_measured: bool = False,
                    delay_steps: int = 0) -> geometric_law.GeometricParams:
-    """The core's parameters of the geometric law (module docstring): ``gains`` ``k_p``, ``k_v``, ``k_r``,
-    ``k_w`` and optionally ``k_i`` (3, 3), the ``feedforward`` of its rates, the cutoff [Hz] of the low-pass on
-    the measured acceleration (0: none) and the bound [N] on the integral's force; with ``imu`` the law flies on
-    the IMU: the gyro's rate and, where ``odom`` is a measurement (``odometry_measured``, its samples
-    ``delay_steps`` late), the IMU-bridged estimate at the control ``period`` [s]."""
-    if feedforward not in FEEDFORWARDS:
-        raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
-    matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
-    integral = integrates(matrices, geometric_law.K_I, integral_limit)
-    bridge = imu and odometry_measured
-    if bridge and not period > 0.0:
-        raise ValueError(f"the IMU-bridged estimate needs a control period > 0 s, got {period}")
-    return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
-                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz),
-                                         bool(imu), pack_bridge(bridge, period, delay_steps if bridge else 0))
-
-
-class GeometricController(CompiledLaw):
-    """The geometric law of the module docstring on the nominal ``vehicle`` (fixed rotors).
+    """The core's parameters of the geometric law (module docstring).
 
     Parameters
     ----------
@@ -119,6 +101,25 @@ class GeometricController(CompiledLaw):
         Fly on the IMU (module docstring, "State"): ``compute(..., imu=...)`` then takes its angular velocity
         and specific force (6,); with ``odometry_measured`` the estimate bridges ``odom``'s ``delay_steps`` at
         the control ``period`` [s].
+    """
+    mismatch = actuation_error("the geometric controller", False, vehicle)
+    if mismatch:
+        raise ValueError(mismatch)
+    if feedforward not in FEEDFORWARDS:
+        raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
+    matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
+    integral = integrates(matrices, geometric_law.K_I, integral_limit)
+    bridge = imu and odometry_measured
+    if bridge and not period > 0.0:
+        raise ValueError(f"the IMU-bridged estimate needs a control period > 0 s, got {period}")
+    return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
+                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz),
+                                         bool(imu), pack_bridge(bridge, period, delay_steps if bridge else 0))
+
+
+class GeometricController(CompiledLaw):
+    """The geometric law of the module docstring on the nominal ``vehicle`` (fixed rotors), with the parameters
+    of :func:`pack_geometric`.
 
     ``compute(reference, position, rotation, velocity_world, angular_velocity_body, compensation=None)``
     returns the body wrench ``[0, 0, -u_T]`` [N], ``tau_b`` [N m] and ``rotation_commanded = R_d``. With a
@@ -133,9 +134,6 @@ class GeometricController(CompiledLaw):
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: str = MEASURED_FEEDFORWARD,
                  acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0, imu: bool = False,
                  period: float = 0.0, odometry_measured: bool = False, delay_steps: int = 0) -> None:
-        mismatch = actuation_error("the geometric controller", False, vehicle)
-        if mismatch:
-            raise ValueError(mismatch)
         own = pack_geometric(vehicle, gains, feedforward, acceleration_filter_hz, integral_limit, imu, period,
                              odometry_measured, delay_steps)
         super().__init__(laws.law_params(laws.GEOMETRIC, own))
