@@ -24,9 +24,10 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from fsr_bringup.live.endpoint import LiveEndpoint
 from fsr_bringup.runner.domains import DomainLease
@@ -147,6 +148,46 @@ def sigterm_interrupts() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+@dataclass(frozen=True)
+class Failure:
+    """How a command's long run (:func:`long_run`) ends on an exception of ``errors``: exit ``code`` and
+    ``<prog>: message(error)`` on stderr, after the run's clean-up where ``clean_up``."""
+
+    errors: type[BaseException] | tuple[type[BaseException], ...]
+    code: int
+    message: Callable[[Any], str] = str
+    clean_up: bool = True
+
+
+@dataclass
+class RunOutcome:
+    exit_code: int | None = None  # the code the command returns after a failure; None: the run went through
+
+
+@contextlib.contextmanager
+def long_run(console: Console, failures: tuple[Failure, ...],
+             clean_up: Callable[[], None] = lambda: None) -> Iterator[RunOutcome]:
+    """A command's long run, with the progress line of ``console``: SIGTERM stops it as Ctrl-C does
+    (:func:`sigterm_interrupts`) and the progress line is ended however it ends. An exception of one of
+    ``failures`` (the first that matches) ends it as that failure says, setting the outcome's ``exit_code``;
+    any other propagates."""
+    outcome = RunOutcome()
+    try:
+        with sigterm_interrupts():
+            yield outcome
+    except BaseException as error:
+        console.end_progress()
+        failure = next((failure for failure in failures if isinstance(error, failure.errors)), None)
+        if failure is None:
+            raise
+        if failure.clean_up:
+            clean_up()
+        print(f"{console.prog}: {failure.message(error)}", file=sys.stderr)
+        outcome.exit_code = failure.code
+    else:
+        console.end_progress()
 
 
 @dataclass(frozen=True)
