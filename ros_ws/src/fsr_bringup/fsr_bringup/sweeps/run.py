@@ -138,16 +138,28 @@ def _local_results(batches: list[Batch], workers: int) -> Iterator[BatchResult]:
             raise
 
 
-def _cluster_results(batches: list[Batch], address: str) -> Iterator[BatchResult]:
+def cluster_client(address: str, error: type[Exception] = SweepError, option: str = "cluster") -> Any:
+    """A Dask client of the scheduler at ``address``; ``error``, its message led by ``option``, when
+    dask[distributed] is not installed or the scheduler cannot be reached."""
     try:
         from distributed import Client
-        from distributed import as_completed as dask_completed
     except ImportError:  # pragma: no cover - a pinned dependency
-        raise SweepError("cluster: dask[distributed] is not installed (pip install 'dask[distributed]')") from None
+        raise error(f"{option}: dask[distributed] is not installed (pip install 'dask[distributed]')") from None
     try:
-        client = Client(address, timeout=30, set_as_default=False)
-    except OSError as error:
-        raise SweepError(f"cluster: cannot reach the Dask scheduler at {address}: {error}") from None
+        return Client(address, timeout=30, set_as_default=False)
+    except OSError as failure:
+        raise error(f"{option}: cannot reach the Dask scheduler at {address}: {failure}") from None
+
+
+def cluster_threads(client: Any) -> int:
+    """The number of worker threads of the Dask cluster of ``client`` (the batches' parallelism there)."""
+    return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+
+
+def _cluster_results(batches: list[Batch], address: str) -> Iterator[BatchResult]:
+    client = cluster_client(address)
+    from distributed import as_completed as dask_completed
+
     try:
         futures = client.map(fly_batch, batches, pure=False, retries=2)
         for future in dask_completed(futures, loop=client.loop):
@@ -161,7 +173,7 @@ def cluster_workers(address: str) -> int:
     from distributed import Client
 
     with Client(address, timeout=30, set_as_default=False) as client:
-        return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+        return cluster_threads(client)
 
 
 def sweep(

@@ -36,7 +36,7 @@ from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_bringup.sweeps.axes import SampledKey, flight_scenario, sampled_key
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
-from fsr_bringup.sweeps.run import _base_scenario
+from fsr_bringup.sweeps.run import _base_scenario, cluster_client, cluster_threads
 from fsr_bringup.tuning.conditions import condition_values, scenario_seed_keys
 from fsr_bringup.tuning.objective import DEFAULT_PENALTY, Objective, lost, parse_objective
 from fsr_bringup.tuning.space import Range, TunedKey, TuneError, key_size, parse_param, tuned_key
@@ -212,15 +212,8 @@ class Flyer:
         self.pool: ProcessPoolExecutor | None = None
         self.client: Any = None
         if cluster:
-            try:
-                from distributed import Client
-            except ImportError:  # pragma: no cover - a pinned dependency
-                raise TuneError("--cluster: dask[distributed] is not installed") from None
-            try:
-                self.client = Client(cluster, timeout=30, set_as_default=False)
-            except OSError as error:
-                raise TuneError(f"--cluster: cannot reach the Dask scheduler at {cluster}: {error}") from None
-            self.workers = max(1, sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values()))
+            self.client = cluster_client(cluster, TuneError, "--cluster")
+            self.workers = cluster_threads(self.client)
         elif self.workers > 1:  # fork: the workers inherit the loaded modules and compiled core
             self.pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=get_context("fork"))
 
