@@ -60,7 +60,7 @@ from fsr_control.config.trajectory_config import (
 )
 from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.controllers.catalog import LAWS
-from fsr_control.controllers.common import actuation_error
+from fsr_control.controllers.common import check_actuation
 from fsr_control.design.gain_design import INTEGRAL_LIMIT_SHARE
 from fsr_control.planning.feasibility import (
     DEFAULT_FEASIBILITY,
@@ -191,9 +191,7 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
     default_type = "voliro" if vehicle.fully_actuated else "geometric"
     controller_type = controller.string("type", default_type, choices=tuple(LAWS))
     law = LAWS[controller_type]
-    mismatch = actuation_error(controller_type, law.fully_actuated, vehicle)
-    if mismatch:
-        raise controller.error("type", mismatch)
+    check_actuation(controller_type, law.fully_actuated, vehicle, lambda reason: controller.error("type", reason))
     if law.fully_actuated and actuation == "wrench":
         raise controller.error("type", f"{controller_type} allocates its 6-D wrench to the rotors: it needs "
                                        "'actuation: rotors'")

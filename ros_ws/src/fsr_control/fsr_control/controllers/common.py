@@ -9,6 +9,7 @@ packs a law's gains and nominal model once and calls it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -111,15 +112,15 @@ def diagonal_gains(**diagonals: tuple[float, float, float]) -> dict[str, np.ndar
     return {name: np.diag(values) for name, values in diagonals.items()}
 
 
-def actuation_error(law: str, fully_actuated: bool, vehicle: Vehicle) -> str | None:
-    """Why ``law`` cannot fly ``vehicle`` (``fully_actuated``: the law commands a whole body wrench, else thrust
-    along ``-z_b`` and a torque); None: it can."""
+def check_actuation(law: str, fully_actuated: bool, vehicle: Vehicle,
+                    error: Callable[[str], Exception] = ValueError) -> None:
+    """Raises ``error(reason)`` where ``law`` cannot fly ``vehicle`` (``fully_actuated``: the law commands a whole
+    body wrench, else thrust along ``-z_b`` and a torque)."""
     if fully_actuated and not vehicle.fully_actuated:
-        return (f"{law} needs a fully actuated vehicle (rotors on servos or canted); '{vehicle.name}' produces "
-                f"thrust along -z_b only (use geometric)")
+        raise error(f"{law} needs a fully actuated vehicle (rotors on servos or canted); '{vehicle.name}' produces "
+                    f"thrust along -z_b only (use geometric)")
     if vehicle.fully_actuated and not fully_actuated:
-        return f"{law} is for vehicles with thrust along -z_b; '{vehicle.name}' is fully actuated (use voliro)"
-    return None
+        raise error(f"{law} is for vehicles with thrust along -z_b; '{vehicle.name}' is fully actuated (use voliro)")
 
 
 def integrates(matrices: np.ndarray, k_i: int, integral_limit: float) -> bool:

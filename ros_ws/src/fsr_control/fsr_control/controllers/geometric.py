@@ -60,7 +60,7 @@ import numpy as np
 
 from fsr_control.controllers.common import (
     CompiledLaw,
-    actuation_error,
+    check_actuation,
     diagonal_gains,
     integrates,
     law_matrices,
@@ -102,9 +102,7 @@ def pack_geometric(vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: 
         and specific force (6,); with ``odometry_measured`` the estimate bridges ``odom``'s ``delay_steps`` at
         the control ``period`` [s].
     """
-    mismatch = actuation_error("the geometric controller", False, vehicle)
-    if mismatch:
-        raise ValueError(mismatch)
+    check_actuation("the geometric controller", False, vehicle)
     if feedforward not in FEEDFORWARDS:
         raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
     matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, actuation_error, diagonal_gains, law_matrices
+from fsr_control.controllers.common import CompiledLaw, check_actuation, diagonal_gains, law_matrices
 from fsr_control.core import laws, voliro_law
 from fsr_sim.model.vehicle import Vehicle
 
@@ -51,9 +51,7 @@ def pack_voliro(vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforw
     angular_feedforward : {"consistent", "report"}
         The feed-forward of ``w`` (module docstring).
     """
-    mismatch = actuation_error("the voliro controller", True, vehicle)
-    if mismatch:
-        raise ValueError(mismatch)
+    check_actuation("the voliro controller", True, vehicle)
     if angular_feedforward not in ANGULAR_FEEDFORWARDS:
         raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
     return voliro_law.VoliroParams(float(vehicle.mass), law_matrices(vehicle, gains, voliro_law.MATRICES[1:]),
