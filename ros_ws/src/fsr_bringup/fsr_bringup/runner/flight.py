@@ -27,7 +27,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from fsr_bringup.live.endpoint import LiveEndpoint
 from fsr_bringup.runner.domains import DomainLease
@@ -83,25 +83,23 @@ class Console:
         self.last_plain = time.monotonic()
 
     def echo(self, name: str, line: str) -> None:
-        if self.quiet:
-            return
-        with self.lock:
-            if self.tty and self.progress_line:
-                sys.stdout.write("\r\033[K")
-            sys.stdout.write(f"[{name}] {line}\n")
-            if self.tty and self.progress_line:
-                sys.stdout.write(self.progress_line)
-            sys.stdout.flush()
+        if not self.quiet:
+            self._above_progress(sys.stdout, f"[{name}] {line}\n")
 
     def notice(self, text: str) -> None:
         """A line of fsr-fly's own on stderr, shown even with ``--quiet`` (e.g. nodes not discovered yet)."""
+        self._above_progress(sys.stderr, f"{self.prog}: {text}\n")
+
+    def _above_progress(self, stream: TextIO, text: str) -> None:
+        """``text`` on ``stream``; on a terminal the progress line is cleared first and written again after it."""
         with self.lock:
-            if self.tty and self.progress_line:
+            shown = self.tty and self.progress_line
+            if shown:
                 sys.stdout.write("\r\033[K")
                 sys.stdout.flush()
-            sys.stderr.write(f"{self.prog}: {text}\n")
-            sys.stderr.flush()
-            if self.tty and self.progress_line:
+            stream.write(text)
+            stream.flush()
+            if shown:
                 sys.stdout.write(self.progress_line)
                 sys.stdout.flush()
 
