@@ -135,19 +135,6 @@ class Console:
                 self.progress_line = ""
 
 
-@contextlib.contextmanager
-def sigterm_interrupts() -> Iterator[None]:
-    """SIGTERM raises KeyboardInterrupt inside the block, as Ctrl-C does (a command then stops the same way)."""
-    def terminate(signum: int, _frame: object) -> None:
-        raise KeyboardInterrupt(signal.Signals(signum).name)
-
-    previous = signal.signal(signal.SIGTERM, terminate)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 @dataclass(frozen=True)
 class Failure:
     """How a command's long run (:func:`long_run`) ends on an exception of ``errors``: exit ``code`` and
@@ -167,16 +154,22 @@ class RunOutcome:
 @contextlib.contextmanager
 def long_run(console: Console, failures: tuple[Failure, ...],
              clean_up: Callable[[], None] = lambda: None) -> Iterator[RunOutcome]:
-    """A command's long run, with the progress line of ``console``: SIGTERM stops it as Ctrl-C does
-    (:func:`sigterm_interrupts`) and the progress line is ended however it ends. An exception of one of
-    ``failures`` (the first that matches) ends it as that failure says, setting the outcome's ``exit_code``;
+    """A command's long run, the progress line of ``console`` ended however it ends. SIGTERM raises
+    KeyboardInterrupt inside it, as Ctrl-C does (the command then stops the same way). An exception of one of
+    ``failures`` (the first that matches) ends the run as that failure says, setting the outcome's ``exit_code``;
     any other propagates."""
+    def terminate(signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
     outcome = RunOutcome()
+    previous = signal.signal(signal.SIGTERM, terminate)
     try:
-        with sigterm_interrupts():
+        try:
             yield outcome
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+            console.end_progress()
     except BaseException as error:
-        console.end_progress()
         failure = next((failure for failure in failures if isinstance(error, failure.errors)), None)
         if failure is None:
             raise
@@ -184,8 +177,6 @@ def long_run(console: Console, failures: tuple[Failure, ...],
             clean_up()
         print(f"{console.prog}: {failure.message(error)}", file=sys.stderr)
         outcome.exit_code = failure.code
-    else:
-        console.end_progress()
 
 
 @dataclass(frozen=True)
