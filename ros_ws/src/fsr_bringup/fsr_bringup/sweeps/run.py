@@ -79,12 +79,19 @@ class SweepPlan:
         return [Batch(s.data, s.source, str(s.base_dir), rest[i:i + size], band) for i in range(0, len(rest), size)]
 
 
-def _base_scenario(scenario: str | Path | dict[str, Any] | Scenario, values: dict[str, Any]) -> Scenario:
+def _base_scenario(scenario: str | Path | dict[str, Any] | Scenario, fixed: dict[str, Any] | None,
+                   duration: float | None) -> tuple[Scenario, dict[str, Any]]:
+    """``scenario`` with the ``fixed`` values (``{dotted key: value}``) and the ``duration`` [s], checked
+    (ConfigError naming an invalid value), and those values."""
+    values = {**(fixed or {}), **({} if duration is None else {"duration": float(duration)})}
     if isinstance(scenario, Scenario):
-        return scenario_from_mapping(scenario.data, scenario.source, scenario.base_dir, values=values)
-    if isinstance(scenario, dict):
-        return scenario_from_mapping(scenario, values=values)
-    return load_scenario(scenario, values=values)
+        base = scenario_from_mapping(scenario.data, scenario.source, scenario.base_dir, values=values)
+    elif isinstance(scenario, dict):
+        base = scenario_from_mapping(scenario, values=values)
+    else:
+        base = load_scenario(scenario, values=values)
+    check_scenario(base)
+    return base, values
 
 
 def plan_sweep(scenario: str | Path | dict[str, Any] | Scenario, grid: dict[str, Any] | list[GridAxis] | None = None,
@@ -94,11 +101,7 @@ def plan_sweep(scenario: str | Path | dict[str, Any] | Scenario, grid: dict[str,
     """Check a sweep before anything flies: the scenario with its fixed ``set`` values and ``duration`` (any
     invalid value: ConfigError naming it), the swept keys (:class:`SweepError` naming the key: not a numeric
     leaf, unknown - with a "did you mean" -, swept twice, a bad distribution) and the flights."""
-    values = dict(set or {})
-    if duration is not None:
-        values["duration"] = float(duration)
-    base = _base_scenario(scenario, values)
-    check_scenario(base)
+    base, _ = _base_scenario(scenario, set, duration)
     axes = [grid_axis(k, v) for k, v in grid.items()] if isinstance(grid, dict) else list(grid or [])
     drawn = [sampled_key(k, v) for k, v in sample.items()] if isinstance(sample, dict) else list(sample or [])
     drawn = check_axes(base, axes, drawn)

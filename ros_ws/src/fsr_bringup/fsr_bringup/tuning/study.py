@@ -158,11 +158,7 @@ def plan_tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str
         raise TuneError(f"--seeds: must be >= 1, got {seeds}")
     if holdout < 0:
         raise TuneError(f"--holdout: must be >= 0, got {holdout}")
-    values = dict(set or {})
-    if duration is not None:
-        values["duration"] = float(duration)
-    base = _base_scenario(scenario, values)
-    check_scenario(base)
+    base, values = _base_scenario(scenario, set, duration)
     items = [parse_param(text) for text in params] if isinstance(params, list) else [
         parse_param(f"{key}={spec if isinstance(spec, str) else ','.join(map(str, spec))}")
         for key, spec in params.items()]
