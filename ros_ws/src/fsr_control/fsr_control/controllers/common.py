@@ -22,6 +22,7 @@ from fsr_control.core.law_terms import INERTIA
 from fsr_control.core.reference import HORIZON_WIDTH, ReferenceSample
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.core.so3 import Vec3, matrix_rows
+from fsr_sim.model.so3 import vector3
 from fsr_sim.model.vehicle import Vehicle
 
 Compensation = tuple[Vec3, Vec3, Vec3, Vec3]
@@ -175,8 +176,8 @@ class CompiledLaw:
         if horizon is None or np.shape(horizon) != (steps, HORIZON_WIDTH):
             raise ValueError(f"this law reads the reference {steps} samples ahead: horizon must have shape "
                              f"({steps}, {HORIZON_WIDTH}), got {None if horizon is None else np.shape(horizon)}")
-        state = (_vector(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), _vector(velocity_world),
-                 _vector(angular_velocity_body))
+        state = (vector3(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), vector3(velocity_world),
+                 vector3(angular_velocity_body))
         status, force, torque, rotation_commanded = laws.control_law(
             self.params, self.memory, np.ascontiguousarray(horizon, dtype=float), float(reference.time),
             reference_sample(reference), *state, compensation_of(compensation), _array(imu, 6), _array(speeds, 0),
@@ -191,16 +192,11 @@ def _array(values: np.ndarray | None, size: int) -> np.ndarray:
     return np.zeros(size) if values is None else np.ascontiguousarray(values, dtype=float)
 
 
-def _vector(values: np.ndarray) -> tuple[float, float, float]:
-    x, y, z = np.asarray(values, dtype=float).tolist()
-    return x, y, z
-
-
 def reference_sample(reference: Reference) -> ReferenceSample:
     """The core's :class:`~fsr_control.core.reference.ReferenceSample` of a :class:`Reference`."""
     return ReferenceSample(
-        _vector(reference.position), _vector(reference.velocity), _vector(reference.acceleration),
-        _vector(reference.jerk), _vector(reference.snap), matrix_rows(np.ascontiguousarray(reference.rotation)),
-        _vector(reference.angular_velocity), _vector(reference.angular_acceleration), float(reference.yaw),
+        vector3(reference.position), vector3(reference.velocity), vector3(reference.acceleration),
+        vector3(reference.jerk), vector3(reference.snap), matrix_rows(np.ascontiguousarray(reference.rotation)),
+        vector3(reference.angular_velocity), vector3(reference.angular_acceleration), float(reference.yaw),
         float(reference.yaw_rate), float(reference.yaw_acceleration),
     )
