@@ -126,7 +126,12 @@ def rotor_command_arrays(msg: JointState, rotor_count: int) -> tuple[np.ndarray,
     tilts = None
     if tilt_joint(0) in index:
         tilts = _joint_values(msg, index, [tilt_joint(i) for i in range(rotor_count)], "position")
-    if not np.all(np.isfinite(speeds)) or (tilts is not None and not np.all(np.isfinite(tilts))):
+    return finite_rotor_command(speeds, tilts)
+
+
+def finite_rotor_command(speeds: np.ndarray, tilts: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(speeds, tilts)`` as they are; ValueError if any value is NaN or inf."""
+    if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
         raise ValueError(f"{ROTOR_CMD.name} holds NaN or inf")
     return speeds, tilts
 
