@@ -105,8 +105,7 @@ def main(argv: list[str] | None = None) -> int:
                       workers=args.workers, cluster=args.cluster, out=out, resume=args.resume, progress=progress)
     if run.exit_code is not None:
         return run.exit_code
-    command = command_line("fsr-tune", argv)
-    written = write_outputs(result, out, command)
+    written = write_outputs(result, out, command_line("fsr-tune", argv))
     plan = result.plan
     print(f"fsr-tune: {len(result.trials)} trials of {plan.scenario.name} ({result.method}) in {result.wall_s:.1f} s, "
           f"{result.flights} flights: best {plan.objective.label} = {result.best_objective:.4g} (trial "
