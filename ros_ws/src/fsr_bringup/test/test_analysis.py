@@ -237,6 +237,16 @@ def test_the_block_of_shared_memory_the_workers_read_is_freed_when_the_figures_a
             SharedMemory(name=name)
 
 
+def test_the_workers_draw_every_built_in_figure_in_the_order_slowest_first() -> None:
+    """The drawing order names each built-in figure once (a renamed or a new figure would otherwise be drawn
+    last, whatever it costs); figures it does not name come after it."""
+    from fsr_bringup.analysis.figure_jobs import SLOWEST_FIRST, drawing_rank
+    from fsr_bringup.analysis.figures import FIGURES
+
+    assert sorted(SLOWEST_FIRST) == sorted(FIGURES)
+    assert sorted(["mass", "mine", "pose"], key=drawing_rank) == ["pose", "mass", "mine"]
+
+
 def test_run_labels_leave_out_the_time_stamp_of_a_run_name() -> None:
     from fsr_bringup.analysis.run import run_labels
 

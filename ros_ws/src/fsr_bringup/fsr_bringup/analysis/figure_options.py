@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 
 FORMATS = ("png", "pdf", "svg")
+NO_ANALYSIS = "--no-analysis"  # fsr-fly's option for no figures and no metrics (its entry point reads it first)
 ANIMATION_FORMATS = ("mp4", "gif")
 MACRO_BLOCK_PX = 16  # H.264 macro block: frame sides a multiple of it are encoded without rescaling
 GIF_FPS_MAX = 50.0  # GIF delays are whole 1/100 s and players stretch those under 2/100 s

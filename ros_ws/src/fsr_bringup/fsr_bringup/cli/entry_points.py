@@ -11,6 +11,7 @@ import threading
 from typing import NoReturn
 
 from fsr_bringup.analysis.figure_jobs import prepare_workers
+from fsr_bringup.analysis.figure_options import NO_ANALYSIS
 
 HELP = frozenset(("-h", "--help"))
 
@@ -33,9 +34,10 @@ def end_process(code: int) -> NoReturn:
 
 def fly() -> NoReturn:
     """``fsr-fly``: :func:`fsr_bringup.cli.fly_cli.main`, with the figures' fork server started first (unless the
-    arguments say no analysis or ask for help: a guess from the words, ``main`` decides)."""
+    arguments say :data:`NO_ANALYSIS` or ask for help: a guess from the words before they are parsed, ``main``
+    decides; a wrong guess costs an idle process until the command ends)."""
     arguments = sys.argv[1:]
-    if "--no-analysis" not in arguments and not HELP.intersection(arguments):
+    if NO_ANALYSIS not in arguments and not HELP.intersection(arguments):
         prepare_workers()
     from fsr_bringup.cli.fly_cli import main
 

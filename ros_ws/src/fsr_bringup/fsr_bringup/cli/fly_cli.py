@@ -27,6 +27,7 @@ from pathlib import Path
 
 import yaml
 
+from fsr_bringup.analysis.figure_options import NO_ANALYSIS
 from fsr_bringup.cli.analyze_cli import add_figure_arguments, figure_options
 from fsr_bringup.live.endpoint import add_live_arguments, endpoint_of, reserve
 from fsr_bringup.runner.domains import acquire_domain, fixed_domain
@@ -78,7 +79,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--startup-timeout", type=float, metavar="S",
         help="how long the simulator waits for the other nodes (default 20 s; 300 s with --nodes)",
     )
-    parser.add_argument("--no-analysis", action="store_true", help="skip figures and metrics")
+    parser.add_argument(NO_ANALYSIS, action="store_true", help="skip figures and metrics")
     parser.add_argument("--record-topics", metavar="LIST", type=argument_type(recording_selection),
                         help="record only these topics, comma-separated (e.g. odom,reference,clock: a long flight "
                              "in a smaller file); sim_status is always recorded; the analysis skips what is "

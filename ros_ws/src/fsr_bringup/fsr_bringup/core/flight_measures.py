@@ -48,6 +48,7 @@ from fsr_control.core.controller import (
     ROTOR_SPEEDS,
     SHORTFALL,
 )
+from fsr_estimation.core.smoothing import low_pass_step
 from fsr_sim.core.jit import jit, jit_inline, zeroed_record
 from fsr_sim.core.odometry import TRUTH_FORCE, TRUTH_TORQUE
 from fsr_sim.core.plant import PlantParams, PlantState, period_mean_lagged, set_rotor_command
@@ -291,7 +292,7 @@ def measure_truth(m: MeasureParams, acc, t: float, truth: tuple, estimate) -> No
         a.estimate_late += 1
     if last:
         a.truth_last_samples += 1
-    gain, decay = m.smoothing_gain, 1.0 - m.smoothing_gain
+    gain = m.smoothing_gain
     smoothed_estimate, smoothed_truth = a.smoothed_estimate, a.smoothed_truth
     for c in range(6):
         error = estimate[c] - truth[c]
@@ -301,9 +302,9 @@ def measure_truth(m: MeasureParams, acc, t: float, truth: tuple, estimate) -> No
         a.final_band[c] = band
         if j == 0:
             smoothed_estimate[c], smoothed_truth[c] = estimate[c], truth[c]
-        else:  # g x + (1 - g) y, as scipy's lfilter
-            smoothed_estimate[c] = gain * estimate[c] + decay * smoothed_estimate[c]
-            smoothed_truth[c] = gain * truth[c] + decay * smoothed_truth[c]
+        else:
+            smoothed_estimate[c] = low_pass_step(gain, estimate[c], smoothed_estimate[c])
+            smoothed_truth[c] = low_pass_step(gain, truth[c], smoothed_truth[c])
         band = m.tolerance * abs(smoothed_truth[c])
         if abs(smoothed_estimate[c] - smoothed_truth[c]) > band:
             a.smoothed_last_outside[c] = j

@@ -14,20 +14,7 @@ from __future__ import annotations
 
 import json
 
-from fsr_sim.contract import (
-    BODY_FRAME,
-    MAP_FRAME,
-    MARKERS,
-    ODOM,
-    REFERENCE,
-    ROTOR_CMD,
-    ROTOR_STATE,
-    TF,
-    WORLD_FRAME,
-    WRENCH_ESTIMATE,
-    WRENCH_TRUTH,
-    resolve,
-)
+from fsr_sim import contract
 
 AXES = ("x", "y", "z")
 COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f")
@@ -47,32 +34,33 @@ def _plot(title: str, series: list[dict]) -> dict:
 
 def layout() -> dict:
     """The layout document (Foxglove's JSON layout format)."""
-    odom, reference = resolve(ODOM.name), resolve(REFERENCE.name)
-    truth, estimate, rotors = resolve(WRENCH_TRUTH.name), resolve(WRENCH_ESTIMATE.name), resolve(ROTOR_CMD.name)
+    odom, reference, truth, estimate, rotors, actual, markers = (contract.resolve(topic.name) for topic in (
+        contract.ODOM, contract.REFERENCE, contract.WRENCH_TRUTH, contract.WRENCH_ESTIMATE, contract.ROTOR_CMD,
+        contract.ROTOR_STATE, contract.MARKERS))
     position = [_series(f"{odom}.pose.pose.position.{a}", f"p_{a}", COLOURS[i]) for i, a in enumerate(AXES)]
     position += [_series(f"{reference}.points[0].transforms[0].translation.{a}", f"p_{a},d", COLOURS[3 + i])
                  for i, a in enumerate(AXES)]
     force = [_series(f"{estimate}.wrench.force.{a}", f"f_e,{a} estimate", COLOURS[i]) for i, a in enumerate(AXES)]
     force += [_series(f"{truth}.wrench.force.{a}", f"f_e,{a} true", COLOURS[3 + i]) for i, a in enumerate(AXES)]
     speeds = [_series(f"{rotors}.velocity[{i}]", f"w_{i + 1}", COLOURS[i]) for i in range(ROTORS_PLOTTED)]
-    actual = resolve(ROTOR_STATE.name)
     speeds += [_series(f"{actual}.velocity[{i}]", f"w_{i + 1} measured", COLOURS[i], dashed=True)
                for i in range(ROTORS_PLOTTED)]
     scene = {
         "cameraState": {"perspective": True, "distance": 8, "phi": 60, "thetaOffset": 45, "target": [0, 0, 0],
                         "targetOffset": [0, 0, 0], "targetOrientation": [0, 0, 0, 1], "fovy": 45, "near": 0.05,
                         "far": 5000},
-        "followMode": "follow-position", "followTf": MAP_FRAME,
+        "followMode": "follow-position", "followTf": contract.MAP_FRAME,
         "scene": {"transforms": {"showLabel": True, "axisScale": 0.3}},
-        "transforms": {f"frame:{BODY_FRAME}": {"visible": True}},
-        "topics": {resolve(MARKERS.name): {"visible": True}, TF.name: {"visible": True}},
-        "layers": {"grid": {"layerId": "foxglove.Grid", "frameId": MAP_FRAME, "visible": True, "size": 20,
+        "transforms": {f"frame:{contract.BODY_FRAME}": {"visible": True}},
+        "topics": {markers: {"visible": True}, contract.TF.name: {"visible": True}},
+        "layers": {"grid": {"layerId": "foxglove.Grid", "frameId": contract.MAP_FRAME, "visible": True, "size": 20,
                             "divisions": 20, "lineWidth": 1, "color": "#248eff", "position": [0, 0, 0],
                             "rotation": [0, 0, 0], "order": 1}},
         "publish": {"type": "point"},
     }
-    config = {"3D!fsr": scene, "Plot!position": _plot(f"position and reference [m] ({WORLD_FRAME})", position),
-              "Plot!force": _plot(f"external force [N] ({BODY_FRAME}): estimate and truth", force),
+    config = {"3D!fsr": scene,
+              "Plot!position": _plot(f"position and reference [m] ({contract.WORLD_FRAME})", position),
+              "Plot!force": _plot(f"external force [N] ({contract.BODY_FRAME}): estimate and truth", force),
               "Plot!rotors": _plot("rotor speeds [rad/s]: commanded, measured", speeds)}
     plots = {"direction": "column", "first": "Plot!position",
              "second": {"direction": "column", "first": "Plot!force", "second": "Plot!rotors", "splitPercentage": 50},

@@ -33,6 +33,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
+from fsr_estimation.core.smoothing import low_pass_columns
 from fsr_estimation.estimator.filter_design import check_filter_parameters
 from fsr_estimation.estimator.momentum import observer_input
 from fsr_estimation.estimator.observer import ObserverModel, filter_observer_input
@@ -117,23 +118,13 @@ def smoothing_gain(sample_time: float, time_constant: float = SMOOTHING_TIME_CON
 
 
 def low_pass(values: np.ndarray, gain: float) -> np.ndarray:
-    """``y_k = g x_k + (1 - g) y_(k-1)``, ``y_0 = x_0``, along axis 0 (the order of operations of the sweep's
-    running filter, so both agree to the bit): ``scipy.signal.lfilter([g], [1, g - 1], values, zi=(1 - g) x_0)``'s
-    arithmetic, without importing scipy.signal (about 0.5 s, the most of an analysis' start)."""
+    """``y_0 = x_0``, ``y_k = g x_k + (1 - g) y_(k-1)`` along axis 0: the sweep's running filter, the same compiled
+    function (:mod:`fsr_estimation.core.smoothing`), so both agree to the bit."""
     values = np.asarray(values, dtype=float)
-    decay = 1.0 - gain
-    out = np.empty_like(values)
-    columns, filtered = values.reshape(len(values), -1), out.reshape(len(values), -1)
-    for c in range(columns.shape[1]):
-        samples = columns[:, c].tolist()
-        state = decay * samples[0] if samples else 0.0  # the filter's initial state (1 - g) x_0
-        column = []
-        for value in samples:
-            y = gain * value + state
-            column.append(y)
-            state = decay * y
-        filtered[:, c] = column
-    return out
+    columns = np.ascontiguousarray(values.reshape(len(values), -1))
+    out = np.empty_like(columns)
+    low_pass_columns(columns, float(gain), out)
+    return out.reshape(values.shape)
 
 
 def settling_time_smoothed(time: ArrayLike, estimate: ArrayLike, truth: ArrayLike,
