@@ -33,6 +33,7 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
+from fsr_bringup.api import fixed_values, load_checked
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_bringup.sweeps.axes import (
     GridAxis,
@@ -47,7 +48,7 @@ from fsr_bringup.sweeps.axes import (
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS, RANKABLE_METRICS
 from fsr_bringup.sweeps.pareto import pareto_front, parse_pareto
-from fsr_sim.config.scenario import Scenario, load_scenario, scenario_from_mapping
+from fsr_sim.config.scenario import Scenario
 from fsr_sim.config.validation import ConfigError
 
 MAX_BATCH = 64  # flights per batch at most (a lost worker costs at most this many flights again)
@@ -79,21 +80,6 @@ class SweepPlan:
         return [Batch(s.data, s.source, str(s.base_dir), rest[i:i + size], band) for i in range(0, len(rest), size)]
 
 
-def _base_scenario(scenario: str | Path | dict[str, Any] | Scenario, fixed: dict[str, Any] | None,
-                   duration: float | None) -> tuple[Scenario, dict[str, Any]]:
-    """``scenario`` with the ``fixed`` values (``{dotted key: value}``) and the ``duration`` [s], checked
-    (ConfigError naming an invalid value), and those values."""
-    values = {**(fixed or {}), **({} if duration is None else {"duration": float(duration)})}
-    if isinstance(scenario, Scenario):
-        base = scenario_from_mapping(scenario.data, scenario.source, scenario.base_dir, values=values)
-    elif isinstance(scenario, dict):
-        base = scenario_from_mapping(scenario, values=values)
-    else:
-        base = load_scenario(scenario, values=values)
-    check_scenario(base)
-    return base, values
-
-
 def plan_sweep(scenario: str | Path | dict[str, Any] | Scenario, grid: dict[str, Any] | list[GridAxis] | None = None,
                sample: dict[str, Any] | list[SampledKey] | None = None, n: int | None = None, seed: int = 0,
                duration: float | None = None, set: dict[str, Any] | None = None,  # noqa: A002
@@ -101,7 +87,7 @@ def plan_sweep(scenario: str | Path | dict[str, Any] | Scenario, grid: dict[str,
     """Check a sweep before anything flies: the scenario with its fixed ``set`` values and ``duration`` (any
     invalid value: ConfigError naming it), the swept keys (:class:`SweepError` naming the key: not a numeric
     leaf, unknown - with a "did you mean" -, swept twice, a bad distribution) and the flights."""
-    base, _ = _base_scenario(scenario, set, duration)
+    base = load_checked(scenario, fixed_values(set, duration)).scenario
     axes = [grid_axis(k, v) for k, v in grid.items()] if isinstance(grid, dict) else list(grid or [])
     drawn = [sampled_key(k, v) for k, v in sample.items()] if isinstance(sample, dict) else list(sample or [])
     drawn = check_axes(base, axes, drawn)

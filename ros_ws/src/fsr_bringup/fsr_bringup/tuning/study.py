@@ -32,11 +32,12 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
+from fsr_bringup.api import fixed_values, load_checked
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_bringup.sweeps.axes import SampledKey, flight_scenario, sampled_key
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
-from fsr_bringup.sweeps.run import _base_scenario, cluster_client, cluster_threads
+from fsr_bringup.sweeps.run import cluster_client, cluster_threads
 from fsr_bringup.tuning.conditions import condition_values, scenario_seed_keys
 from fsr_bringup.tuning.objective import DEFAULT_PENALTY, Objective, lost, parse_objective
 from fsr_bringup.tuning.space import Range, TunedKey, TuneError, key_size, parse_param, tuned_key
@@ -158,7 +159,8 @@ def plan_tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str
         raise TuneError(f"--seeds: must be >= 1, got {seeds}")
     if holdout < 0:
         raise TuneError(f"--holdout: must be >= 0, got {holdout}")
-    base, values = _base_scenario(scenario, set, duration)
+    values = fixed_values(set, duration)
+    base = load_checked(scenario, values).scenario
     items = [parse_param(text) for text in params] if isinstance(params, list) else [
         parse_param(f"{key}={spec if isinstance(spec, str) else ','.join(map(str, spec))}")
         for key, spec in params.items()]
