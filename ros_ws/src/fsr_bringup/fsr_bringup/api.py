@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fsr_bringup.runner.in_process_flight import FlightRun, fly_in_process
-from fsr_bringup.runner.scenario_check import check_scenario
+from fsr_bringup.runner.scenario_check import CheckedScenario, check_scenario
 from fsr_sim.config.scenario import Scenario, load_scenario, scenario_from_mapping
 from fsr_sim.contract import recording_selection
 
@@ -70,16 +70,7 @@ def simulate(
     fsr_sim.config.validation.ConfigError
         A ``ValueError`` naming the key and the reason, for any invalid value (nothing is flown).
     """
-    values = dict(set or {})
-    if duration is not None:
-        values["duration"] = float(duration)
-    if isinstance(scenario, Scenario):
-        loaded = scenario_from_mapping(scenario.data, scenario.source, scenario.base_dir, values=values)
-    elif isinstance(scenario, dict):
-        loaded = scenario_from_mapping(scenario, values=values)
-    else:
-        loaded = load_scenario(scenario, values=values)
-    checked = check_scenario(loaded)
+    checked = load_checked(scenario, fixed_values(set, duration))
     for warning in checked.warnings:
         warnings.warn(f"{checked.simulation.name}: {warning}", UserWarning, stacklevel=2)
     if record is not None:
@@ -87,3 +78,18 @@ def simulate(
     topics = None if record_topics is None else recording_selection(record_topics)
     return fly_in_process(checked.scenario, None if record is None else Path(record), stop=stop, progress=progress,
                           record_topics=topics, live=live)
+
+
+def fixed_values(values: dict[str, Any] | None, duration: float | None) -> dict[str, Any]:
+    """``{dotted key: value}`` every flight has (``fsr-fly --set``'s), with the ``duration`` [s] where given."""
+    return {**(values or {}), **({} if duration is None else {"duration": float(duration)})}
+
+
+def load_checked(scenario: str | Path | dict[str, Any] | Scenario, values: dict[str, Any]) -> CheckedScenario:
+    """:func:`~fsr_bringup.runner.scenario_check.check_scenario` of ``scenario`` (as :func:`simulate` takes it: a
+    built-in name, a YAML path, a mapping or a Scenario) with ``values`` (:func:`fixed_values`) over it."""
+    if isinstance(scenario, Scenario):
+        return check_scenario(scenario_from_mapping(scenario.data, scenario.source, scenario.base_dir, values=values))
+    if isinstance(scenario, dict):
+        return check_scenario(scenario_from_mapping(scenario, values=values))
+    return check_scenario(load_scenario(scenario, values=values))

@@ -36,6 +36,7 @@ from fsr_control.planning.trajectory import Reference, Trajectory
 from fsr_sim.core.so3 import Mat3, Vec3, matrix_rows
 from fsr_sim.model.plant import pack_aerodynamics
 from fsr_sim.model.rotors import SaturationReport, rotor_axes, rotor_columns
+from fsr_sim.model.so3 import vector3
 from fsr_sim.model.vehicle import Vehicle
 
 ROLL_PITCH_TOLERANCE = 1e-4  # rad: a goal for a fixed-rotor vehicle must be level (yaw only)
@@ -242,8 +243,8 @@ class FlightController:
         def array(values: np.ndarray | None) -> np.ndarray | None:
             return None if values is None else np.ascontiguousarray(values, dtype=float)
 
-        row = self.command_row(float(stamp_s), _vector(position), matrix_rows(np.ascontiguousarray(rotation, float)),
-                               _vector(velocity_world), _vector(angular_velocity_body), array(imu), array(speeds),
+        row = self.command_row(float(stamp_s), vector3(position), matrix_rows(np.ascontiguousarray(rotation, float)),
+                               vector3(velocity_world), vector3(angular_velocity_body), array(imu), array(speeds),
                                array(tilts))
         return ControlOutput.from_row(float(stamp_s), row, self.rotors, self.tilting)
 
@@ -283,8 +284,3 @@ class FlightController:
             return
         self.trajectory.replan(position, rotation, now, duration)
         self._pack()
-
-
-def _vector(values: np.ndarray) -> Vec3:
-    x, y, z = np.asarray(values, dtype=float).tolist()
-    return x, y, z

@@ -167,7 +167,7 @@ def animate(flight: object, out: Path, options: AnimationOptions) -> int:
     import time
 
     from fsr_bringup.analysis.animation import write_animation
-    from fsr_bringup.runner.flight import Console, sigterm_interrupts
+    from fsr_bringup.runner.flight import Console, Failure, long_run
 
     console = Console(prog="fsr-analyze")
     start = time.perf_counter()
@@ -180,22 +180,15 @@ def animate(flight: object, out: Path, options: AnimationOptions) -> int:
         shown[0] = now
         console.count_progress("frames", done, total, now - start)
 
-    try:
-        with sigterm_interrupts():
-            written = write_animation(flight, out, options, progress)
-    except KeyboardInterrupt:
-        console.end_progress()
-        print(f"fsr-analyze: interrupted: no animation written (the analysis is in {out})", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except ValueError as error:
-        console.end_progress()
-        print(f"fsr-analyze: error: {error}", file=sys.stderr)
-        return EXIT_CONFIG_ERROR
-    except OSError as error:
-        console.end_progress()
-        print(f"fsr-analyze: error: cannot write the animation in {out}: {error.strerror or error}", file=sys.stderr)
-        return EXIT_FAILURE
-    console.end_progress()
+    failures = (Failure(KeyboardInterrupt, EXIT_INTERRUPTED,
+                        lambda _: f"interrupted: no animation written (the analysis is in {out})"),
+                Failure(ValueError, EXIT_CONFIG_ERROR, lambda error: f"error: {error}"),
+                Failure(OSError, EXIT_FAILURE,
+                        lambda error: f"error: cannot write the animation in {out}: {error.strerror or error}"))
+    with long_run(console, failures) as run:
+        written = write_animation(flight, out, options, progress)
+    if run.exit_code is not None:
+        return run.exit_code
     for note in written.notes:
         print(f"fsr-analyze: animation: {note}")
     pace = "real time" if options.speed == 1 else f"{options.speed:g}x real time"

@@ -22,16 +22,15 @@ diverges is a row with its reason; the sweep goes on.
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 import time
 from pathlib import Path
 
-from fsr_bringup.runner.flight import Console, sigterm_interrupts
+from fsr_bringup.runner.flight import Console, Failure, long_run
 from fsr_bringup.sweeps.axes import SweepError, parse_grid, parse_sample
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, RANKABLE_METRICS
 from fsr_bringup.sweeps.pareto import parse_pareto
-from fsr_sim.cli.arguments import ArgumentParser, argument_type
+from fsr_sim.cli.arguments import ArgumentParser, argument_type, command_line
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
@@ -157,36 +156,21 @@ def main(argv: list[str] | None = None) -> int:
     def progress(done: int, total: int, wall: float) -> None:
         console.count_progress("flights", done, total, wall)
 
-    try:
+    created: list[Path] = []
+    failures = (Failure((SweepError, ConfigError), EXIT_CONFIG_ERROR),
+                Failure(KeyboardInterrupt, EXIT_INTERRUPTED, lambda _: "interrupted: nothing written"),
+                Failure((OSError, RuntimeError), EXIT_FAILURE, lambda error: f"the sweep failed: {error}"))
+    with long_run(console, failures, lambda: remove_if_empty(created)) as run:
         fixed = _overrides(args.overrides)
         out = args.out or default_output(args.scenario)
         created = usable_output(out)
-    except (SweepError, ConfigError) as error:
-        print(f"fsr-sweep: {error}", file=sys.stderr)
-        return EXIT_CONFIG_ERROR
-    try:
-        with sigterm_interrupts():
-            table = sweep(args.scenario, grid={a.key: list(a.values) for a in args.grid},
-                          sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, n=args.n,
-                          seed=args.seed, duration=args.duration, workers=args.workers, cluster=args.cluster,
-                          set=fixed, band=args.band, progress=progress, pareto=args.pareto)
-    except (SweepError, ConfigError) as error:
-        console.end_progress()
-        remove_if_empty(created)
-        print(f"fsr-sweep: {error}", file=sys.stderr)
-        return EXIT_CONFIG_ERROR
-    except KeyboardInterrupt:
-        console.end_progress()
-        remove_if_empty(created)
-        print("fsr-sweep: interrupted: nothing written", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except (OSError, RuntimeError) as error:
-        console.end_progress()
-        remove_if_empty(created)
-        print(f"fsr-sweep: the sweep failed: {error}", file=sys.stderr)
-        return EXIT_FAILURE
-    console.end_progress()
-    command = "fsr-sweep " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
+        table = sweep(args.scenario, grid={a.key: list(a.values) for a in args.grid},
+                      sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, n=args.n,
+                      seed=args.seed, duration=args.duration, workers=args.workers, cluster=args.cluster,
+                      set=fixed, band=args.band, progress=progress, pareto=args.pareto)
+    if run.exit_code is not None:
+        return run.exit_code
+    command = command_line("fsr-sweep", argv)
     written = write_tables(table, out)
     (out / "summary.md").write_text(summary_markdown(table, args.metric, command, args.pareto), encoding="utf-8")
     written += [out / "summary.md", *write_figures(table, out, args.metric, args.pareto)]

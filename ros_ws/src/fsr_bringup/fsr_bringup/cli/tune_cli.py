@@ -18,16 +18,15 @@ against the scenario's own parameters, also on ``--holdout`` conditions never se
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from pathlib import Path
 
-from fsr_bringup.runner.flight import Console, sigterm_interrupts
+from fsr_bringup.runner.flight import Console, Failure, long_run
 from fsr_bringup.sweeps.axes import parse_sample
 from fsr_bringup.tuning.objective import DEFAULT_PENALTY, STATISTICS
 from fsr_bringup.tuning.space import TuneError, parse_param
 from fsr_bringup.tuning.study import DEFAULT_BUDGET, DEFAULT_HOLDOUT, DEFAULT_SEEDS, METHODS
-from fsr_sim.cli.arguments import ArgumentParser, argument_type
+from fsr_sim.cli.arguments import ArgumentParser, argument_type, command_line
 from fsr_sim.config.validation import ConfigError, builtin_names
 from fsr_sim.contract import EXIT_CONFIG_ERROR, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
@@ -86,37 +85,27 @@ def main(argv: list[str] | None = None) -> int:
 
     console = Console(prog="fsr-tune")
     created: list[Path] = []
+    failures = (Failure((TuneError, ConfigError, ValueError), EXIT_CONFIG_ERROR),
+                Failure(KeyboardInterrupt, EXIT_INTERRUPTED, lambda _: f"interrupted before a trial completed: the "
+                        f"study in {out} continues with --resume", clean_up=False),
+                Failure((OSError, RuntimeError), EXIT_FAILURE, lambda error: f"the study failed: {error}",
+                        clean_up=False))
 
     def progress(done: int, total: int, wall: float, best: float) -> None:
         console.count_progress("trials", done, total, wall)
 
-    try:
+    with long_run(console, failures, lambda: remove_if_empty(created)) as run:
         fixed = _overrides(args.overrides)
         out = args.out or default_output(args.scenario, "tune")
         created = usable_output(out)
-        with sigterm_interrupts():
-            result = tune(args.scenario, [f"{key}={','.join(items)}" for key, items in args.param], seeds=args.seeds,
-                          objective=args.objective, budget=args.budget, method=args.method,
-                          sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, set=fixed,
-                          duration=args.duration, holdout=args.holdout, seed=args.seed, penalty=args.penalty,
-                          workers=args.workers, cluster=args.cluster, out=out, resume=args.resume, progress=progress)
-    except (TuneError, ConfigError, ValueError) as error:
-        console.end_progress()
-        remove_if_empty(created)
-        print(f"fsr-tune: {error}", file=sys.stderr)
-        return EXIT_CONFIG_ERROR
-    except KeyboardInterrupt:
-        console.end_progress()
-        print(f"fsr-tune: interrupted before a trial completed: the study in {out} continues with --resume",
-              file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except (OSError, RuntimeError) as error:
-        console.end_progress()
-        print(f"fsr-tune: the study failed: {error}", file=sys.stderr)
-        return EXIT_FAILURE
-    console.end_progress()
-    command = "fsr-tune " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
-    written = write_outputs(result, out, command)
+        result = tune(args.scenario, [f"{key}={','.join(items)}" for key, items in args.param], seeds=args.seeds,
+                      objective=args.objective, budget=args.budget, method=args.method,
+                      sample={s.key: (s.distribution, s.first, s.second) for s in args.sample}, set=fixed,
+                      duration=args.duration, holdout=args.holdout, seed=args.seed, penalty=args.penalty,
+                      workers=args.workers, cluster=args.cluster, out=out, resume=args.resume, progress=progress)
+    if run.exit_code is not None:
+        return run.exit_code
+    written = write_outputs(result, out, command_line("fsr-tune", argv))
     plan = result.plan
     print(f"fsr-tune: {len(result.trials)} trials of {plan.scenario.name} ({result.method}) in {result.wall_s:.1f} s, "
           f"{result.flights} flights: best {plan.objective.label} = {result.best_objective:.4g} (trial "

@@ -175,11 +175,8 @@ def stamp_ns(data: bytes) -> int:
 
 def status_time_ns(data: bytes) -> int | None:
     """``sim_time`` [ns] of a ``sim_status`` message (std_msgs/String CDR: uint32 length, then JSON text)."""
-    try:
-        (length,) = struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)
-    except (IndexError, struct.error):
-        return None
-    status = SimStatus.from_json(data[8 : 8 + length].rstrip(b"\0"))
+    text = status_text(data)
+    status = None if text is None else SimStatus.from_json(text)
     return None if status is None else status.stamp_ns
 
 

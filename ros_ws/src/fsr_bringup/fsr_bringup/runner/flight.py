@@ -24,9 +24,10 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, TextIO
 
 from fsr_bringup.live.endpoint import LiveEndpoint
 from fsr_bringup.runner.domains import DomainLease
@@ -82,25 +83,23 @@ class Console:
         self.last_plain = time.monotonic()
 
     def echo(self, name: str, line: str) -> None:
-        if self.quiet:
-            return
-        with self.lock:
-            if self.tty and self.progress_line:
-                sys.stdout.write("\r\033[K")
-            sys.stdout.write(f"[{name}] {line}\n")
-            if self.tty and self.progress_line:
-                sys.stdout.write(self.progress_line)
-            sys.stdout.flush()
+        if not self.quiet:
+            self._above_progress(sys.stdout, f"[{name}] {line}\n")
 
     def notice(self, text: str) -> None:
         """A line of fsr-fly's own on stderr, shown even with ``--quiet`` (e.g. nodes not discovered yet)."""
+        self._above_progress(sys.stderr, f"{self.prog}: {text}\n")
+
+    def _above_progress(self, stream: TextIO, text: str) -> None:
+        """``text`` on ``stream``; on a terminal the progress line is cleared first and written again after it."""
         with self.lock:
-            if self.tty and self.progress_line:
+            shown = self.tty and self.progress_line
+            if shown:
                 sys.stdout.write("\r\033[K")
                 sys.stdout.flush()
-            sys.stderr.write(f"{self.prog}: {text}\n")
-            sys.stderr.flush()
-            if self.tty and self.progress_line:
+            stream.write(text)
+            stream.flush()
+            if shown:
                 sys.stdout.write(self.progress_line)
                 sys.stdout.flush()
 
@@ -136,17 +135,48 @@ class Console:
                 self.progress_line = ""
 
 
+@dataclass(frozen=True)
+class Failure:
+    """How a command's long run (:func:`long_run`) ends on an exception of ``errors``: exit ``code`` and
+    ``<prog>: message(error)`` on stderr, after the run's clean-up where ``clean_up``."""
+
+    errors: type[BaseException] | tuple[type[BaseException], ...]
+    code: int
+    message: Callable[[Any], str] = str
+    clean_up: bool = True
+
+
+@dataclass
+class RunOutcome:
+    exit_code: int | None = None  # the code the command returns after a failure; None: the run went through
+
+
 @contextlib.contextmanager
-def sigterm_interrupts() -> Iterator[None]:
-    """SIGTERM raises KeyboardInterrupt inside the block, as Ctrl-C does (a command then stops the same way)."""
+def long_run(console: Console, failures: tuple[Failure, ...],
+             clean_up: Callable[[], None] = lambda: None) -> Iterator[RunOutcome]:
+    """A command's long run, the progress line of ``console`` ended however it ends. SIGTERM raises
+    KeyboardInterrupt inside it, as Ctrl-C does (the command then stops the same way). An exception of one of
+    ``failures`` (the first that matches) ends the run as that failure says, setting the outcome's ``exit_code``;
+    any other propagates."""
     def terminate(signum: int, _frame: object) -> None:
         raise KeyboardInterrupt(signal.Signals(signum).name)
 
+    outcome = RunOutcome()
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+        try:
+            yield outcome
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+            console.end_progress()
+    except BaseException as error:
+        failure = next((failure for failure in failures if isinstance(error, failure.errors)), None)
+        if failure is None:
+            raise
+        if failure.clean_up:
+            clean_up()
+        print(f"{console.prog}: {failure.message(error)}", file=sys.stderr)
+        outcome.exit_code = failure.code
 
 
 @dataclass(frozen=True)

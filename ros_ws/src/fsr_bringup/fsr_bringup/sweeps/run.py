@@ -33,6 +33,7 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
+from fsr_bringup.api import fixed_values, load_checked
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_bringup.sweeps.axes import (
     GridAxis,
@@ -47,7 +48,7 @@ from fsr_bringup.sweeps.axes import (
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M, METRIC_COLUMNS, RANKABLE_METRICS
 from fsr_bringup.sweeps.pareto import pareto_front, parse_pareto
-from fsr_sim.config.scenario import Scenario, load_scenario, scenario_from_mapping
+from fsr_sim.config.scenario import Scenario
 from fsr_sim.config.validation import ConfigError
 
 MAX_BATCH = 64  # flights per batch at most (a lost worker costs at most this many flights again)
@@ -79,14 +80,6 @@ class SweepPlan:
         return [Batch(s.data, s.source, str(s.base_dir), rest[i:i + size], band) for i in range(0, len(rest), size)]
 
 
-def _base_scenario(scenario: str | Path | dict[str, Any] | Scenario, values: dict[str, Any]) -> Scenario:
-    if isinstance(scenario, Scenario):
-        return scenario_from_mapping(scenario.data, scenario.source, scenario.base_dir, values=values)
-    if isinstance(scenario, dict):
-        return scenario_from_mapping(scenario, values=values)
-    return load_scenario(scenario, values=values)
-
-
 def plan_sweep(scenario: str | Path | dict[str, Any] | Scenario, grid: dict[str, Any] | list[GridAxis] | None = None,
                sample: dict[str, Any] | list[SampledKey] | None = None, n: int | None = None, seed: int = 0,
                duration: float | None = None, set: dict[str, Any] | None = None,  # noqa: A002
@@ -94,11 +87,7 @@ def plan_sweep(scenario: str | Path | dict[str, Any] | Scenario, grid: dict[str,
     """Check a sweep before anything flies: the scenario with its fixed ``set`` values and ``duration`` (any
     invalid value: ConfigError naming it), the swept keys (:class:`SweepError` naming the key: not a numeric
     leaf, unknown - with a "did you mean" -, swept twice, a bad distribution) and the flights."""
-    values = dict(set or {})
-    if duration is not None:
-        values["duration"] = float(duration)
-    base = _base_scenario(scenario, values)
-    check_scenario(base)
+    base = load_checked(scenario, fixed_values(set, duration)).scenario
     axes = [grid_axis(k, v) for k, v in grid.items()] if isinstance(grid, dict) else list(grid or [])
     drawn = [sampled_key(k, v) for k, v in sample.items()] if isinstance(sample, dict) else list(sample or [])
     drawn = check_axes(base, axes, drawn)
@@ -138,16 +127,28 @@ def _local_results(batches: list[Batch], workers: int) -> Iterator[BatchResult]:
             raise
 
 
-def _cluster_results(batches: list[Batch], address: str) -> Iterator[BatchResult]:
+def cluster_client(address: str, error: type[Exception] = SweepError, option: str = "cluster") -> Any:
+    """A Dask client of the scheduler at ``address``; ``error``, its message led by ``option``, when
+    dask[distributed] is not installed or the scheduler cannot be reached."""
     try:
         from distributed import Client
-        from distributed import as_completed as dask_completed
     except ImportError:  # pragma: no cover - a pinned dependency
-        raise SweepError("cluster: dask[distributed] is not installed (pip install 'dask[distributed]')") from None
+        raise error(f"{option}: dask[distributed] is not installed (pip install 'dask[distributed]')") from None
     try:
-        client = Client(address, timeout=30, set_as_default=False)
-    except OSError as error:
-        raise SweepError(f"cluster: cannot reach the Dask scheduler at {address}: {error}") from None
+        return Client(address, timeout=30, set_as_default=False)
+    except OSError as failure:
+        raise error(f"{option}: cannot reach the Dask scheduler at {address}: {failure}") from None
+
+
+def cluster_threads(client: Any) -> int:
+    """The number of worker threads of the Dask cluster of ``client`` (the batches' parallelism there)."""
+    return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+
+
+def _cluster_results(batches: list[Batch], address: str) -> Iterator[BatchResult]:
+    client = cluster_client(address)
+    from distributed import as_completed as dask_completed
+
     try:
         futures = client.map(fly_batch, batches, pure=False, retries=2)
         for future in dask_completed(futures, loop=client.loop):
@@ -161,7 +162,7 @@ def cluster_workers(address: str) -> int:
     from distributed import Client
 
     with Client(address, timeout=30, set_as_default=False) as client:
-        return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+        return cluster_threads(client)
 
 
 def sweep(

@@ -32,11 +32,12 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
+from fsr_bringup.api import fixed_values, load_checked
 from fsr_bringup.runner.scenario_check import check_scenario
 from fsr_bringup.sweeps.axes import SampledKey, flight_scenario, sampled_key
 from fsr_bringup.sweeps.batch import Batch, BatchResult, fly_batch
 from fsr_bringup.sweeps.metrics import DEFAULT_BAND_M
-from fsr_bringup.sweeps.run import _base_scenario
+from fsr_bringup.sweeps.run import cluster_client, cluster_threads
 from fsr_bringup.tuning.conditions import condition_values, scenario_seed_keys
 from fsr_bringup.tuning.objective import DEFAULT_PENALTY, Objective, lost, parse_objective
 from fsr_bringup.tuning.space import Range, TunedKey, TuneError, key_size, parse_param, tuned_key
@@ -158,11 +159,8 @@ def plan_tune(scenario: str | Path | dict[str, Any] | Scenario, params: dict[str
         raise TuneError(f"--seeds: must be >= 1, got {seeds}")
     if holdout < 0:
         raise TuneError(f"--holdout: must be >= 0, got {holdout}")
-    values = dict(set or {})
-    if duration is not None:
-        values["duration"] = float(duration)
-    base = _base_scenario(scenario, values)
-    check_scenario(base)
+    values = fixed_values(set, duration)
+    base = load_checked(scenario, values).scenario
     items = [parse_param(text) for text in params] if isinstance(params, list) else [
         parse_param(f"{key}={spec if isinstance(spec, str) else ','.join(map(str, spec))}")
         for key, spec in params.items()]
@@ -212,15 +210,8 @@ class Flyer:
         self.pool: ProcessPoolExecutor | None = None
         self.client: Any = None
         if cluster:
-            try:
-                from distributed import Client
-            except ImportError:  # pragma: no cover - a pinned dependency
-                raise TuneError("--cluster: dask[distributed] is not installed") from None
-            try:
-                self.client = Client(cluster, timeout=30, set_as_default=False)
-            except OSError as error:
-                raise TuneError(f"--cluster: cannot reach the Dask scheduler at {cluster}: {error}") from None
-            self.workers = max(1, sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values()))
+            self.client = cluster_client(cluster, TuneError, "--cluster")
+            self.workers = cluster_threads(self.client)
         elif self.workers > 1:  # fork: the workers inherit the loaded modules and compiled core
             self.pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=get_context("fork"))
 

@@ -60,6 +60,7 @@ from fsr_control.config.trajectory_config import (
 )
 from fsr_control.controllers import geometric, indi, voliro
 from fsr_control.controllers.catalog import LAWS
+from fsr_control.controllers.common import check_actuation
 from fsr_control.design.gain_design import INTEGRAL_LIMIT_SHARE
 from fsr_control.planning.feasibility import (
     DEFAULT_FEASIBILITY,
@@ -190,12 +191,7 @@ def controller_settings(scenario: Scenario, vehicle: Vehicle, sim: SimulationCon
     default_type = "voliro" if vehicle.fully_actuated else "geometric"
     controller_type = controller.string("type", default_type, choices=tuple(LAWS))
     law = LAWS[controller_type]
-    if law.fully_actuated and not vehicle.fully_actuated:
-        raise controller.error("type", f"{controller_type} needs a fully actuated vehicle (rotors on servos or "
-                                       f"canted); '{vehicle.name}' produces thrust along -z_b only (use geometric)")
-    if vehicle.fully_actuated and not law.fully_actuated:
-        raise controller.error("type", f"{controller_type} is for vehicles with thrust along -z_b; '{vehicle.name}' "
-                                       "is fully actuated (use voliro)")
+    check_actuation(controller_type, law.fully_actuated, vehicle, lambda reason: controller.error("type", reason))
     if law.fully_actuated and actuation == "wrench":
         raise controller.error("type", f"{controller_type} allocates its 6-D wrench to the rotors: it needs "
                                        "'actuation: rotors'")

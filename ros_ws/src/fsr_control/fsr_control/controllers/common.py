@@ -9,6 +9,7 @@ packs a law's gains and nominal model once and calls it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -21,6 +22,7 @@ from fsr_control.core.law_terms import INERTIA
 from fsr_control.core.reference import HORIZON_WIDTH, ReferenceSample
 from fsr_control.planning.trajectory import Reference
 from fsr_sim.core.so3 import Vec3, matrix_rows
+from fsr_sim.model.so3 import vector3
 from fsr_sim.model.vehicle import Vehicle
 
 Compensation = tuple[Vec3, Vec3, Vec3, Vec3]
@@ -106,6 +108,32 @@ def law_matrices(vehicle: Vehicle, gains: dict[str, np.ndarray], names: tuple[st
     return np.ascontiguousarray([np.asarray(matrix, dtype=float).reshape(3, 3) for matrix in matrices])
 
 
+def diagonal_gains(**diagonals: tuple[float, float, float]) -> dict[str, np.ndarray]:
+    """Gain name -> the (3, 3) diagonal matrix of its values about x, y and z (a law's report gains)."""
+    return {name: np.diag(values) for name, values in diagonals.items()}
+
+
+def check_actuation(law: str, fully_actuated: bool, vehicle: Vehicle,
+                    error: Callable[[str], Exception] = ValueError) -> None:
+    """Raises ``error(reason)`` where ``law`` cannot fly ``vehicle`` (``fully_actuated``: the law commands a whole
+    body wrench, else thrust along ``-z_b`` and a torque)."""
+    if fully_actuated and not vehicle.fully_actuated:
+        raise error(f"{law} needs a fully actuated vehicle (rotors on servos or canted); '{vehicle.name}' produces "
+                    f"thrust along -z_b only (use geometric)")
+    if vehicle.fully_actuated and not fully_actuated:
+        raise error(f"{law} is for vehicles with thrust along -z_b; '{vehicle.name}' is fully actuated (use voliro)")
+
+
+def integrates(matrices: np.ndarray, k_i: int, integral_limit: float) -> bool:
+    """Whether a law with ``matrices`` (:func:`law_matrices`) integrates its position error: its integral gain
+    ``matrices[k_i]`` is not zero. Raises ValueError when it is and ``integral_limit`` (the bound [N] on the
+    integral's force) is not positive."""
+    integral = bool(np.any(matrices[k_i] != 0.0))
+    if integral and not integral_limit > 0.0:
+        raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
+    return integral
+
+
 def pack_bridge(enabled: bool, period: float, delay_steps: int) -> BridgeParams:
     """The IMU bridge's parameters (:mod:`fsr_control.core.imu_bridge`): ``enabled`` where ``odom`` is a
     measurement, the control ``period`` [s] it integrates the IMU over and the steps ``delay_steps`` odom's samples
@@ -148,8 +176,8 @@ class CompiledLaw:
         if horizon is None or np.shape(horizon) != (steps, HORIZON_WIDTH):
             raise ValueError(f"this law reads the reference {steps} samples ahead: horizon must have shape "
                              f"({steps}, {HORIZON_WIDTH}), got {None if horizon is None else np.shape(horizon)}")
-        state = (_vector(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), _vector(velocity_world),
-                 _vector(angular_velocity_body))
+        state = (vector3(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), vector3(velocity_world),
+                 vector3(angular_velocity_body))
         status, force, torque, rotation_commanded = laws.control_law(
             self.params, self.memory, np.ascontiguousarray(horizon, dtype=float), float(reference.time),
             reference_sample(reference), *state, compensation_of(compensation), _array(imu, 6), _array(speeds, 0),
@@ -164,16 +192,11 @@ def _array(values: np.ndarray | None, size: int) -> np.ndarray:
     return np.zeros(size) if values is None else np.ascontiguousarray(values, dtype=float)
 
 
-def _vector(values: np.ndarray) -> tuple[float, float, float]:
-    x, y, z = np.asarray(values, dtype=float).tolist()
-    return x, y, z
-
-
 def reference_sample(reference: Reference) -> ReferenceSample:
     """The core's :class:`~fsr_control.core.reference.ReferenceSample` of a :class:`Reference`."""
     return ReferenceSample(
-        _vector(reference.position), _vector(reference.velocity), _vector(reference.acceleration),
-        _vector(reference.jerk), _vector(reference.snap), matrix_rows(np.ascontiguousarray(reference.rotation)),
-        _vector(reference.angular_velocity), _vector(reference.angular_acceleration), float(reference.yaw),
+        vector3(reference.position), vector3(reference.velocity), vector3(reference.acceleration),
+        vector3(reference.jerk), vector3(reference.snap), matrix_rows(np.ascontiguousarray(reference.rotation)),
+        vector3(reference.angular_velocity), vector3(reference.angular_acceleration), float(reference.yaw),
         float(reference.yaw_rate), float(reference.yaw_acceleration),
     )

@@ -58,16 +58,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, law_matrices, pack_bridge
+from fsr_control.controllers.common import (
+    CompiledLaw,
+    check_actuation,
+    diagonal_gains,
+    integrates,
+    law_matrices,
+    pack_bridge,
+)
 from fsr_control.core import geometric_law, laws
 from fsr_sim.model.vehicle import Vehicle
 
-DEFAULT_GAINS = {  # the report's exercise-4 gains (docs/model.md §3.6), used when a scenario gives none
-    "k_p": np.diag((20.0, 20.0, 100.0)),
-    "k_v": np.diag((20.0, 20.0, 100.0)),
-    "k_r": np.diag((10.0, 10.0, 100.0)),
-    "k_w": np.diag((10.0, 10.0, 100.0)),
-}
+# The report's exercise-4 gains (docs/model.md §3.6), used when a scenario gives none.
+DEFAULT_GAINS = diagonal_gains(k_p=(20.0, 20.0, 100.0), k_v=(20.0, 20.0, 100.0), k_r=(10.0, 10.0, 100.0),
+                               k_w=(10.0, 10.0, 100.0))
 OPTIONAL_GAINS = ("k_i",)  # zero unless given (the report's law has no integral)
 FEEDFORWARDS = ("measured", "reference")  # not a topic name: controller.feedforward's values
 MEASURED_FEEDFORWARD, REFERENCE_FEEDFORWARD = FEEDFORWARDS
@@ -77,27 +81,7 @@ def pack_geometric(vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: 
                    acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0, imu: bool = False,
                    period: float = 0.0, odometry_measured: bool = False,
                    delay_steps: int = 0) -> geometric_law.GeometricParams:
-    """The core's parameters of the geometric law (module docstring): ``gains`` ``k_p``, ``k_v``, ``k_r``,
-    ``k_w`` and optionally ``k_i`` (3, 3), the ``feedforward`` of its rates, the cutoff [Hz] of the low-pass on
-    the measured acceleration (0: none) and the bound [N] on the integral's force; with ``imu`` the law flies on
-    the IMU: the gyro's rate and, where ``odom`` is a measurement (``odometry_measured``, its samples
-    ``delay_steps`` late), the IMU-bridged estimate at the control ``period`` [s]."""
-    if feedforward not in FEEDFORWARDS:
-        raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
-    matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
-    integral = bool(np.any(matrices[geometric_law.K_I] != 0.0))
-    if integral and not integral_limit > 0.0:
-        raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
-    bridge = imu and odometry_measured
-    if bridge and not period > 0.0:
-        raise ValueError(f"the IMU-bridged estimate needs a control period > 0 s, got {period}")
-    return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
-                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz),
-                                         bool(imu), pack_bridge(bridge, period, delay_steps if bridge else 0))
-
-
-class GeometricController(CompiledLaw):
-    """The geometric law of the module docstring on the nominal ``vehicle`` (fixed rotors).
+    """The core's parameters of the geometric law (module docstring).
 
     Parameters
     ----------
@@ -117,6 +101,23 @@ class GeometricController(CompiledLaw):
         Fly on the IMU (module docstring, "State"): ``compute(..., imu=...)`` then takes its angular velocity
         and specific force (6,); with ``odometry_measured`` the estimate bridges ``odom``'s ``delay_steps`` at
         the control ``period`` [s].
+    """
+    check_actuation("the geometric controller", False, vehicle)
+    if feedforward not in FEEDFORWARDS:
+        raise ValueError(f"feedforward must be one of {FEEDFORWARDS}, got '{feedforward}'")
+    matrices = law_matrices(vehicle, gains, geometric_law.MATRICES[1:], OPTIONAL_GAINS)
+    integral = integrates(matrices, geometric_law.K_I, integral_limit)
+    bridge = imu and odometry_measured
+    if bridge and not period > 0.0:
+        raise ValueError(f"the IMU-bridged estimate needs a control period > 0 s, got {period}")
+    return geometric_law.GeometricParams(float(vehicle.mass), matrices, integral, float(integral_limit),
+                                         feedforward == REFERENCE_FEEDFORWARD, float(acceleration_filter_hz),
+                                         bool(imu), pack_bridge(bridge, period, delay_steps if bridge else 0))
+
+
+class GeometricController(CompiledLaw):
+    """The geometric law of the module docstring on the nominal ``vehicle`` (fixed rotors), with the parameters
+    of :func:`pack_geometric`.
 
     ``compute(reference, position, rotation, velocity_world, angular_velocity_body, compensation=None)``
     returns the body wrench ``[0, 0, -u_T]`` [N], ``tau_b`` [N m] and ``rotation_commanded = R_d``. With a
@@ -131,9 +132,6 @@ class GeometricController(CompiledLaw):
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], feedforward: str = MEASURED_FEEDFORWARD,
                  acceleration_filter_hz: float = 0.0, integral_limit: float = 0.0, imu: bool = False,
                  period: float = 0.0, odometry_measured: bool = False, delay_steps: int = 0) -> None:
-        if vehicle.fully_actuated:
-            raise ValueError(f"the geometric controller is for vehicles that produce thrust along -z_b and a torque; "
-                             f"'{vehicle.name}' is fully actuated (use voliro)")
         own = pack_geometric(vehicle, gains, feedforward, acceleration_filter_hz, integral_limit, imu, period,
                              odometry_measured, delay_steps)
         super().__init__(laws.law_params(laws.GEOMETRIC, own))

@@ -58,7 +58,7 @@ import math
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, law_matrices, pack_bridge
+from fsr_control.controllers.common import CompiledLaw, integrates, law_matrices, pack_bridge
 from fsr_control.controllers.geometric import OPTIONAL_GAINS
 from fsr_control.core import indi_law, laws
 from fsr_control.design.gain_design import design_gains
@@ -122,9 +122,7 @@ def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, 
     if vehicle.fully_actuated or vehicle.has_servos:
         raise ValueError(f"INDI is for fixed rotors that produce thrust along -z_b; '{vehicle.name}' is not")
     matrices = law_matrices(vehicle, gains, indi_law.MATRICES[1:], OPTIONAL_GAINS)
-    integral = bool(np.any(matrices[indi_law.MATRICES.index("k_i")] != 0.0))
-    if integral and not integral_limit > 0.0:
-        raise ValueError(f"an integral gain k_i needs an integral_limit > 0 N, got {integral_limit}")
+    integral = integrates(matrices, indi_law.MATRICES.index("k_i"), integral_limit)
     return indi_law.IndiParams(float(vehicle.mass), matrices, integral, float(integral_limit),
                                filter_coefficients(filter_hz, period),
                                np.ascontiguousarray(wrench_from_rotor_speed_sq(vehicle)), float(vehicle.c_f),

@@ -28,23 +28,30 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsr_control.controllers.common import CompiledLaw, law_matrices
+from fsr_control.controllers.common import CompiledLaw, check_actuation, diagonal_gains, law_matrices
 from fsr_control.core import laws, voliro_law
 from fsr_sim.model.vehicle import Vehicle
 
-DEFAULT_GAINS = {  # the report's exercise-5 gains (docs/model.md §3.7), used when a scenario gives none
-    "k_p": np.diag((50.0, 50.0, 100.0)),
-    "k_d": np.diag((10.0, 10.0, 50.0)),
-    "k_r": np.diag((100.0, 100.0, 100.0)),
-    "k_w": np.diag((10.0, 10.0, 50.0)),
-}
+# The report's exercise-5 gains (docs/model.md §3.7), used when a scenario gives none.
+DEFAULT_GAINS = diagonal_gains(k_p=(50.0, 50.0, 100.0), k_d=(10.0, 10.0, 50.0), k_r=(100.0, 100.0, 100.0),
+                               k_w=(10.0, 10.0, 50.0))
 ANGULAR_FEEDFORWARDS = ("consistent", "report")
 
 
 def pack_voliro(vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforward: str = "consistent"
                 ) -> voliro_law.VoliroParams:
-    """The core's parameters of the Voliro law: ``gains`` ``k_p``, ``k_d``, ``k_r``, ``k_w`` (3, 3) and the
-    ``angular_feedforward`` (module docstring)."""
+    """The core's parameters of the Voliro law (module docstring).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Nominal model: mass [kg] and inertia [kg m^2] (must be fully actuated).
+    gains : dict
+        ``k_p``, ``k_d`` [1/s^2, 1/s], ``k_r``, ``k_w`` [1/s^2, 1/s]: (3, 3) arrays (acceleration gains).
+    angular_feedforward : {"consistent", "report"}
+        The feed-forward of ``w`` (module docstring).
+    """
+    check_actuation("the voliro controller", True, vehicle)
     if angular_feedforward not in ANGULAR_FEEDFORWARDS:
         raise ValueError(f"angular_feedforward must be one of {ANGULAR_FEEDFORWARDS}, got '{angular_feedforward}'")
     return voliro_law.VoliroParams(float(vehicle.mass), law_matrices(vehicle, gains, voliro_law.MATRICES[1:]),
@@ -52,16 +59,8 @@ def pack_voliro(vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforw
 
 
 class VoliroController(CompiledLaw):
-    """The Voliro law of the module docstring on the nominal ``vehicle`` (tilting rotors).
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        Nominal model: mass [kg] and inertia [kg m^2] (must have tilting rotors).
-    gains : dict
-        ``k_p``, ``k_d`` [1/s^2, 1/s], ``k_r``, ``k_w`` [1/s^2, 1/s]: (3, 3) arrays (acceleration gains).
-    angular_feedforward : {"consistent", "report"}
-        The feed-forward of ``w`` (module docstring).
+    """The Voliro law of the module docstring on the nominal ``vehicle`` (tilting or canted rotors), with the
+    parameters of :func:`pack_voliro`.
 
     ``compute(...)`` returns the body wrench ``B^-1 (-b + [v; w])``; with a ``compensation`` (the whole 6-D
     wrench): ``force_body = R_b^T (m (v - g e3) - f_hat)`` with ``f_hat`` [N] world NED, ``torque_body =
@@ -69,9 +68,4 @@ class VoliroController(CompiledLaw):
     """
 
     def __init__(self, vehicle: Vehicle, gains: dict[str, np.ndarray], angular_feedforward: str = "consistent") -> None:
-        if not vehicle.fully_actuated:
-            raise ValueError(f"the voliro controller needs a fully actuated vehicle (rotors on servos or canted); "
-                             f"'{vehicle.name}' produces thrust along -z_b only (use geometric)")
-        own = pack_voliro(vehicle, gains, angular_feedforward)
-        super().__init__(laws.law_params(laws.VOLIRO, own))
-        self.report_feedforward = angular_feedforward == "report"
+        super().__init__(laws.law_params(laws.VOLIRO, pack_voliro(vehicle, gains, angular_feedforward)))

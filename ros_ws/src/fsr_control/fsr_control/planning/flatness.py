@@ -26,11 +26,7 @@ import numpy as np
 
 from fsr_control.core import flatness as core
 from fsr_sim.core.rigid_body import GRAVITY
-
-
-def _vector(values: tuple[float, float, float] | np.ndarray) -> tuple[float, float, float]:
-    x, y, z = np.asarray(values, dtype=float).tolist()
-    return x, y, z
+from fsr_sim.model.so3 import vector3
 
 
 def attitude_from_thrust_vector(
@@ -49,7 +45,7 @@ def attitude_from_thrust_vector(
     Raises ValueError when ``n`` vanishes (free fall) or is horizontal along the heading.
     """
     status, rotation, omega, omega_dot = core.attitude_from_thrust_vector(
-        _vector(n), _vector(n_dot), _vector(n_ddot), float(yaw), float(yaw_rate), float(yaw_acceleration))
+        vector3(n), vector3(n_dot), vector3(n_ddot), float(yaw), float(yaw_rate), float(yaw_acceleration))
     if status != core.ATTITUDE_OK:
         raise ValueError(core.ATTITUDE_ERRORS[status])
     return np.array(rotation), np.array(omega), np.array(omega_dot)

@@ -15,7 +15,7 @@ reading ``ROS parameter: <name>: <reason>``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -98,15 +98,8 @@ def node_settings(values: dict[str, Any]) -> EstimatorNodeSettings:
             if value is None:
                 raise ConfigError(name, "is required when no scenario is given", PARAMETER_SOURCE)
         base = EstimatorConfig(enabled=True, mass=mass, inertia=inertia, c0=DEFAULT_C0, r=DEFAULT_R)
-    config = EstimatorConfig(
-        enabled=base.enabled,
-        mass=base.mass if mass is None else mass,
-        inertia=base.inertia if inertia is None else inertia,
-        c0=base.c0 if c0 is None else c0,
-        r=base.r if r is None else r,
-        input=base.input,
-        rotor_state=base.rotor_state,
-    )
+    overrides = {"mass": mass, "inertia": inertia, "c0": c0, "r": r}  # the parameters given win
+    config = replace(base, **{name: value for name, value in overrides.items() if value is not None})
     if period is not None:
         try:
             check_filter_parameters(config.c0, config.r, period)

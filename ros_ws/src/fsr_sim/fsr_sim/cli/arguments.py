@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import shlex
+import sys
 import textwrap
 from collections.abc import Callable
 from typing import Any, NoReturn
@@ -18,6 +20,11 @@ def plain_description(doc: str) -> str:
         first = first.split("``: ", 1)[1]
     first = first.replace("``", "").replace(":mod:", "").replace("`", "")
     return textwrap.fill(first[:1].upper() + first[1:], 100)
+
+
+def command_line(prog: str, argv: list[str] | None) -> str:
+    """The command ``prog`` with its arguments ``argv`` (None: this process's), quoted as a shell would take it."""
+    return " ".join(shlex.quote(word) for word in [prog, *(sys.argv[1:] if argv is None else argv)])
 
 
 def argument_type(parse: Callable[[str], Any]) -> Callable[[str], Any]:

@@ -158,11 +158,15 @@ class Section:
     def error(self, name: str, reason: str) -> ConfigError:
         return ConfigError(self.key(name), reason, self.source)
 
-    def missing(self, name: str) -> ConfigError:
-        """'is required', pointing at a likely typo among the keys that are not known here."""
-        typos = difflib.get_close_matches(name, [str(k) for k in self.data if k not in self._read], n=1)
-        hint = f" (found unknown key '{typos[0]}': a typo?)" if typos else ""
-        return self.error(name, f"is required{hint}")
+    def required(self, name: str, default: Any = None) -> Any:
+        """The raw value of ``name`` (``default`` where it is absent); none: 'is required', pointing at a likely typo
+        among the keys that are not known here."""
+        value = self.raw(name, default)
+        if value is None:
+            typos = difflib.get_close_matches(name, [str(k) for k in self.data if k not in self._read], n=1)
+            hint = f" (found unknown key '{typos[0]}': a typo?)" if typos else ""
+            raise self.error(name, f"is required{hint}")
+        return value
 
     def has(self, name: str) -> bool:
         self._read.add(name)
@@ -185,9 +189,7 @@ class Section:
         maximum: float | None = None,
         strictly_positive: bool = False,
     ) -> float:
-        value = self.raw(name, default)
-        if value is None:
-            raise self.missing(name)
+        value = self.required(name, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(name, f"must be a number, got {value!r}")
         value = float(value)
@@ -203,9 +205,7 @@ class Section:
 
     def integer(self, name: str, default: int | None = None, *, minimum: int | None = None,
                 maximum: int | None = None) -> int:
-        value = self.raw(name, default)
-        if value is None:
-            raise self.missing(name)
+        value = self.required(name, default)
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.error(name, f"must be an integer, got {value!r}")
         if minimum is not None and value < minimum:
@@ -221,9 +221,7 @@ class Section:
         return value
 
     def string(self, name: str, default: str | None = None, *, choices: tuple[str, ...] | None = None) -> str:
-        value = self.raw(name, default)
-        if value is None:
-            raise self.missing(name)
+        value = self.required(name, default)
         if not isinstance(value, str):
             raise self.error(name, f"must be a string, got {value!r}")
         if choices is not None and value not in choices:
@@ -231,9 +229,7 @@ class Section:
         return value
 
     def vector(self, name: str, size: int, default: Any = None) -> np.ndarray:
-        value = self.raw(name, default)
-        if value is None:
-            raise self.missing(name)
+        value = self.required(name, default)
         return checked_array(value, (size,), self.key(name), self.source)
 
     def reject_unknown(self, known: Iterable[str] | None = None) -> None:

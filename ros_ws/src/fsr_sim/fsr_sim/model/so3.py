@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from fsr_sim.core.so3 import (
+    Vec3,
     attitude_error3,
     matrix_rows,
     quaternion_from_rotation_rows,
@@ -27,6 +28,12 @@ def _as_vector3(value: ArrayLike, name: str) -> FloatArray:
     if array.shape[-1:] != (3,):
         raise ValueError(f"Expected {name} with shape (..., 3), got array of shape {array.shape}")
     return array
+
+
+def vector3(values: ArrayLike) -> Vec3:
+    """A 3-vector as the compiled core takes it (:data:`~fsr_sim.core.so3.Vec3`: a tuple of Python floats)."""
+    x, y, z = np.asarray(values, dtype=float).tolist()
+    return x, y, z
 
 
 def skew(vector: ArrayLike) -> FloatArray:

@@ -16,9 +16,9 @@ import math
 
 import numpy as np
 
-from fsr_sim.contract import ROTOR_CMD, WRENCH_CMD, joint_names
+from fsr_sim.contract import WRENCH_CMD, joint_names
 from fsr_sim.ros import cdr_read
-from fsr_sim.ros.conversions import rotor_command_arrays
+from fsr_sim.ros.conversions import finite_rotor_command, rotor_command_arrays
 
 
 class RotorCommandReader:
@@ -48,7 +48,7 @@ class RotorCommandReader:
             from sensor_msgs.msg import JointState
 
             return self.read(deserialize_message(data, JointState))
-        return _finite(speeds, tilts)
+        return finite_rotor_command(speeds, tilts)
 
     def read_stamped(self, data: bytes) -> tuple[int, np.ndarray, np.ndarray | None]:
         """:meth:`read_raw` with the header's stamp [ns] (``rotor_state`` as the controller and estimator take it)."""
@@ -64,14 +64,7 @@ class RotorCommandReader:
             tilts = np.array(msg.position[n : 2 * n], dtype=float)
         else:
             return rotor_command_arrays(msg, n)  # any order; raises ValueError naming what is missing
-        return _finite(speeds, tilts)
-
-
-def _finite(speeds: np.ndarray, tilts: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
-    """``(speeds, tilts)`` as they are; ValueError if any value is NaN or inf."""
-    if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
-        raise ValueError(f"{ROTOR_CMD.name} holds NaN or inf")
-    return speeds, tilts
+        return finite_rotor_command(speeds, tilts)
 
 
 def wrench_command(msg: object) -> np.ndarray:

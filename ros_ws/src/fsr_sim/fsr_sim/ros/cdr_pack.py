@@ -55,12 +55,16 @@ class Template:
     def boolean(self, value: bool) -> None:
         self.buffer += bytes((1 if value else 0,))
 
+    def zeros(self, alignment: int, size: int) -> int:
+        """``size`` zero bytes aligned to ``alignment`` (a field filled in at each message): their offset."""
+        self.align(alignment)
+        offset = self.offset
+        self.buffer += bytes(size)
+        return offset
+
     def floats(self, count: int) -> int:
         """``count`` float32 (e.g. a ``std_msgs/ColorRGBA``): the offset of the first."""
-        self.align(4)
-        offset = self.offset
-        self.buffer += bytes(4 * count)
-        return offset
+        return self.zeros(4, 4 * count)
 
     def string(self, text: str) -> None:
         data = text.encode("utf-8")
@@ -74,10 +78,7 @@ class Template:
 
     def stamp(self) -> int:
         """``builtin_interfaces/Time`` (int32 sec, uint32 nanosec): its offset."""
-        self.align(4)
-        offset = self.offset
-        self.buffer += bytes(8)
-        return offset
+        return self.zeros(4, 8)
 
     def header(self, frame_id: str) -> int:
         """``std_msgs/Header``: the stamp's offset."""
@@ -87,10 +88,7 @@ class Template:
 
     def doubles(self, count: int) -> int:
         """``count`` float64 (a fixed array, or a nested message of doubles): the offset of the first."""
-        self.align(8)
-        offset = self.offset
-        self.buffer += bytes(8 * count)
-        return offset
+        return self.zeros(8, 8 * count)
 
     def double_sequence(self, count: int) -> int:
         """``float64[]`` of ``count`` elements: the offset of the first element."""

@@ -122,20 +122,27 @@ def rotor_command(stamp_ns: int, speeds: np.ndarray, tilts: np.ndarray | None = 
 def rotor_command_arrays(msg: JointState, rotor_count: int) -> tuple[np.ndarray, np.ndarray | None]:
     """(speeds [rad/s], tilts [rad] or None) from a rotor JointState; ValueError naming what is wrong."""
     index = {name: i for i, name in enumerate(msg.name)}
-    speeds = np.empty(rotor_count)
-    for i in range(rotor_count):
-        j = index.get(rotor_joint(i))
-        if j is None or j >= len(msg.velocity):
-            raise ValueError(f"{ROTOR_CMD.name} has no velocity for '{rotor_joint(i)}' (names: {list(msg.name)})")
-        speeds[i] = msg.velocity[j]
+    speeds = _joint_values(msg, index, [rotor_joint(i) for i in range(rotor_count)], "velocity")
     tilts = None
     if tilt_joint(0) in index:
-        tilts = np.empty(rotor_count)
-        for i in range(rotor_count):
-            j = index.get(tilt_joint(i))
-            if j is None or j >= len(msg.position):
-                raise ValueError(f"{ROTOR_CMD.name} has no position for '{tilt_joint(i)}'")
-            tilts[i] = msg.position[j]
-    if not np.all(np.isfinite(speeds)) or (tilts is not None and not np.all(np.isfinite(tilts))):
+        tilts = _joint_values(msg, index, [tilt_joint(i) for i in range(rotor_count)], "position")
+    return finite_rotor_command(speeds, tilts)
+
+
+def finite_rotor_command(speeds: np.ndarray, tilts: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(speeds, tilts)`` as they are; ValueError if any value is NaN or inf."""
+    if not np.isfinite(speeds).all() or (tilts is not None and not np.isfinite(tilts).all()):
         raise ValueError(f"{ROTOR_CMD.name} holds NaN or inf")
     return speeds, tilts
+
+
+def _joint_values(msg: JointState, index: dict[str, int], joints: list[str], field: str) -> np.ndarray:
+    """The ``field`` (velocity or position) of each of ``joints``, by ``index`` (name -> place in ``msg``)."""
+    values = getattr(msg, field)
+    out = np.empty(len(joints))
+    for i, joint in enumerate(joints):
+        j = index.get(joint)
+        if j is None or j >= len(values):
+            raise ValueError(f"{ROTOR_CMD.name} has no {field} for '{joint}' (names: {list(msg.name)})")
+        out[i] = values[j]
+    return out
