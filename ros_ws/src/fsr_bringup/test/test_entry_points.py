@@ -72,3 +72,21 @@ def test_the_fork_servers_warm_up_draws_in_memory_only(tmp_path: Path, monkeypat
     monkeypatch.chdir(tmp_path)
     warm_up()
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("arguments", "started"), [
+    (["ex4_geometric", "--in-process"], True),
+    (["ex4_geometric", "--in-process", "--no-analysis"], False),
+    (["--help"], False),
+])
+def test_fsr_fly_starts_the_figures_fork_server_first_unless_told_there_is_no_analysis(
+        arguments: list[str], started: bool, monkeypatch) -> None:
+    from fsr_bringup.cli import entry_points, fly_cli
+
+    calls = []
+    monkeypatch.setattr(entry_points, "prepare_workers", lambda: calls.append("prepare"))
+    monkeypatch.setattr(fly_cli, "main", lambda: 0)
+    monkeypatch.setattr(entry_points, "end_process", lambda code: calls.append(code))
+    monkeypatch.setattr(sys, "argv", ["fsr-fly", *arguments])
+    entry_points.fly()
+    assert calls == (["prepare", 0] if started else [0])
