@@ -24,6 +24,11 @@ def end_process(code: int) -> NoReturn:
     if threading.active_count() > 1:
         sys.exit(code)
     atexit._run_exitfuncs()  # what the normal exit runs too: logging's flush, multiprocessing's clean-up
+    exit_now(code)
+
+
+def exit_now(code: int) -> NoReturn:
+    """Flush the standard streams and end the process with ``code`` at once: no more exit handlers, no teardown."""
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
