@@ -92,3 +92,15 @@ def test_smoothed_settling_is_the_standard_one_through_the_low_pass_and_sees_thr
     smoothed = settling_time_smoothed(TIME, noisy, level)
     assert np.all((smoothed > 1.9) & (smoothed < 3.0)), smoothed  # the ramp's end, a few tenths later
     np.testing.assert_array_equal(settling_time(TIME, noisy, level, "smoothed"), smoothed)
+
+
+def test_the_low_pass_takes_read_only_and_strided_logs_as_it_takes_their_copies():
+    from fsr_estimation.estimator.metrics import low_pass
+
+    values = np.random.default_rng(2).normal(size=(40, 4))
+    expected = low_pass(values.copy(), 0.3)
+    read_only = values.copy()
+    read_only.flags.writeable = False
+    np.testing.assert_array_equal(low_pass(read_only, 0.3), expected)
+    np.testing.assert_array_equal(low_pass(np.asfortranarray(values), 0.3), expected)
+    np.testing.assert_array_equal(low_pass(values[:, 1], 0.3), expected[:, 1])

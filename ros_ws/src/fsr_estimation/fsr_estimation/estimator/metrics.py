@@ -121,7 +121,8 @@ def low_pass(values: np.ndarray, gain: float) -> np.ndarray:
     """``y_0 = x_0``, ``y_k = g x_k + (1 - g) y_(k-1)`` along axis 0: the sweep's running filter, the same compiled
     function (:mod:`fsr_estimation.core.smoothing`), so both agree to the bit."""
     values = np.asarray(values, dtype=float)
-    columns = np.ascontiguousarray(values.reshape(len(values), -1))
+    # contiguous and writable: the one signature compiled ahead (a read-only view, e.g. of shared memory, is copied)
+    columns = np.require(values.reshape(len(values), -1), requirements=("C", "W"))
     out = np.empty_like(columns)
     low_pass_columns(columns, float(gain), out)
     return out.reshape(values.shape)
