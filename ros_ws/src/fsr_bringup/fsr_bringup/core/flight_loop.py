@@ -52,6 +52,7 @@ from fsr_control.core.controller import (
     controller_tick,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
+from fsr_control.core.law_terms import Measured, VehicleState
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
 from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.jit import jit, jit_inline
@@ -109,8 +110,9 @@ def closed_loop_tick(controller: ControllerParams, controller_state: ControllerS
     commanded wrench (on a failure the estimator is not called)."""
     position, rotation, velocity_world, angular_velocity = read_odometry(odometry)
     imu = odometry[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6]
-    status = controller_tick(controller, controller_state, t, position, rotation, velocity_world, angular_velocity,
-                             imu, speeds, tilts, row)
+    status = controller_tick(controller, controller_state, t,
+                             VehicleState(position, rotation, velocity_world, angular_velocity),
+                             Measured(imu, speeds, tilts), row)
     force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
     torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
     if status == ATTITUDE_OK and estimator.enabled:
