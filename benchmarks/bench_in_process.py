@@ -26,6 +26,7 @@ from fsr_bringup.core import flight_loop
 from fsr_bringup.runner.in_process_flight import fly_in_process
 from fsr_control.config.controller_config import controller_config
 from fsr_control.core.controller import controller_tick
+from fsr_control.core.law_terms import Measured, VehicleState
 from fsr_control.flight_controller import FlightController
 from fsr_estimation.core import observer_step
 from fsr_estimation.estimator.observer import MomentumObserver
@@ -51,9 +52,10 @@ PART_STEPS = 20_000
 @numba.njit  # not cached: a benchmark writes nothing next to its source
 def _ticks(params, state, row, rotors, out, n):  # noqa: ANN001, ANN202
     position, rotation, velocity, omega = read_odometry(row)
-    imu = row[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6]
+    vehicle = VehicleState(position, rotation, velocity, omega)
+    measured = Measured(row[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6], rotors, rotors)
     for k in range(n):
-        controller_tick(params, state, k * 1e-3, position, rotation, velocity, omega, imu, rotors, rotors, out)
+        controller_tick(params, state, k * 1e-3, vehicle, measured, out)
 
 
 @numba.njit

@@ -268,9 +268,9 @@ def test_the_analysis_effective_truth_is_the_loops(scenario, fixed):
     trace = flight_loop.LoopTrace(a.states, a.published, a.actuators, a.control, a.estimates)
     measurement = core.Measurement(loop.measures, loop.actuator_params, loop.actuator_state, a.rotor_rows, acc)
     outcome, k, _ = flight_loop.fly(
-        loop.plant_params, loop.plant_state, loop.controller_params, loop.controller_state, estimator, 0,
-        setup.steps, setup.steps, setup.period_ns, loop.control_bounds, flight_loop.RECORD | flight_loop.MEASURE,
-        trace, measurement)
+        flight_loop.LoopPlant(loop.plant_params, loop.plant_state),
+        flight_loop.LoopController(loop.controller_params, loop.controller_state), estimator, 0, setup.steps,
+        setup.steps, setup.period_ns, loop.control_bounds, flight_loop.RECORD | flight_loop.MEASURE, trace, measurement)
     assert outcome == flight_loop.FINISHED and k == setup.steps
     flight = recorded_flight_of_run(setup.run(k + 1, "finished", "", 0.0))
     truth = effective_wrench(flight)

@@ -28,7 +28,7 @@ from fsr_control.controllers.catalog import LAWS
 from fsr_control.controllers.common import CompiledLaw, WrenchCommand
 from fsr_control.core import controller as core
 from fsr_control.core import laws
-from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, memory_size
+from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, new_aero_memory
 from fsr_control.core.flatness import ATTITUDE_ERRORS, ATTITUDE_OK
 from fsr_control.core.reference import CHANNELS, DERIVATIVES, HORIZON_WIDTH
 from fsr_control.planning.feasibility import LegAdjustment
@@ -156,7 +156,7 @@ class FlightController:
         self.state = core.ControllerState(self.law.memory, self.actuator.state, compensation[1],
                                           np.zeros((DERIVATIVES, CHANNELS)),
                                           np.zeros((self.law.params.horizon_steps, HORIZON_WIDTH)),
-                                          np.zeros(memory_size(vehicle.rotor_count)))
+                                          new_aero_memory(vehicle.rotor_count))
         self._law_and_allocation = (self.law.params, self.actuator.params, compensation[0],
                                     pack_aerodynamic_feedforward(vehicle, actuation, config.aerodynamics))
         self.params: core.ControllerParams | None = None  # packed with the trajectory's table
@@ -219,10 +219,11 @@ class FlightController:
         if self.trajectory is None:
             self._plan(np.array(position), np.array(rotation), stamp_s)
         self.last_stamp = stamp_s
-        status = core.controller_tick(self.params, self.state, stamp_s, position, rotation, velocity_world,
-                                      angular_velocity_body, self._imu if imu is None else imu,
-                                      self._rotors if speeds is None else speeds,
-                                      self._rotors if tilts is None else tilts, self.output)
+        measured = laws.Measured(self._imu if imu is None else imu, self._rotors if speeds is None else speeds,
+                                 self._rotors if tilts is None else tilts)
+        status = core.controller_tick(self.params, self.state, stamp_s,
+                                      laws.VehicleState(position, rotation, velocity_world, angular_velocity_body),
+                                      measured, self.output)
         if status != ATTITUDE_OK:
             raise ValueError(ATTITUDE_ERRORS[status])
         return self.output

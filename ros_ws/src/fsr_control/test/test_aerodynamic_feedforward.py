@@ -25,7 +25,7 @@ def test_level_cruise_meets_the_parasitic_drag_and_no_rates():
     vehicle = load_vehicle("hummingbird")
     params = pack_aerodynamic_feedforward(vehicle, "wrench", "model")  # wrench actuation: the parasitic drag only
     assert params.enabled and not params.aerodynamics.rotor
-    memory = np.zeros(aero.memory_size(vehicle.rotor_count))
+    memory = aero.new_aero_memory(vehicle.rotor_count)
     velocity = (3.0, -4.0, 0.0)
     for step in range(3):
         prediction = predict(params, memory, 0.001 * step, level_cruise(velocity))
@@ -40,10 +40,10 @@ def test_level_cruise_meets_the_parasitic_drag_and_no_rates():
 def test_the_rotors_turn_at_the_speed_of_the_references_thrust_and_the_rates_are_differences():
     vehicle = load_vehicle("hummingbird")
     params = pack_aerodynamic_feedforward(vehicle, "rotors", "model")
-    memory = np.zeros(aero.memory_size(vehicle.rotor_count))
+    memory = aero.new_aero_memory(vehicle.rotor_count)
     predict(params, memory, 0.0, level_cruise((2.0, 0.0, 0.0), (0.0, 0.0, -2.0)))  # climbing at 2 m/s^2
     hover_speed = np.sqrt(vehicle.mass * (GRAVITY + 2.0) / (4 * vehicle.c_f))
-    np.testing.assert_allclose(memory[aero.SPEEDS:], hover_speed, rtol=1e-12)
+    np.testing.assert_allclose(memory.speeds, hover_speed, rtol=1e-12)
     first = predict(params, memory, 0.0, level_cruise((2.0, 0.0, 0.0), (0.0, 0.0, -2.0)))
     second = predict(params, memory, 0.01, level_cruise((2.5, 0.0, 0.0), (0.0, 0.0, -2.0)))
     np.testing.assert_allclose(second.force_rate, (np.array(second.force) - first.force) / 0.01, rtol=1e-12)

@@ -9,6 +9,7 @@ from fsr_control.allocation import FixedRotorAllocator
 from fsr_control.config.controller_config import controller_config
 from fsr_control.controllers.indi import DEFAULT_FILTER_HZ, designed_gains, filter_coefficients, indi_lag, pack_indi
 from fsr_control.core import imu_bridge, laws
+from fsr_control.core.indi_law import LowPass
 from fsr_control.design.gain_design import design_gains
 from fsr_control.flight_controller import FlightController
 from fsr_sim.config.scenario import load_scenario, simulation_config
@@ -21,9 +22,9 @@ def indi_scenario(*overrides: str, name: str = "step_disturbance"):  # noqa: ANN
     return load_scenario(name, [*INDI, *overrides])
 
 
-def run_filter(coefficients: np.ndarray, samples: np.ndarray) -> np.ndarray:
+def run_filter(coefficients: LowPass, samples: np.ndarray) -> np.ndarray:
     """(value, rate) after each sample, started at rest on the first (as the law's memory)."""
-    phi, gamma = coefficients[:4].reshape(2, 2), coefficients[4:]
+    phi, gamma = np.array(coefficients.phi), np.array(coefficients.gamma)
     state = np.array([samples[0], 0.0])
     out = [state.copy()]
     for u in samples[1:]:
@@ -34,7 +35,7 @@ def run_filter(coefficients: np.ndarray, samples: np.ndarray) -> np.ndarray:
 
 def test_the_filter_passes_a_constant_and_differentiates_a_ramp():
     coefficients = filter_coefficients(DEFAULT_FILTER_HZ, 0.001)
-    phi, gamma = coefficients[:4].reshape(2, 2), coefficients[4:]
+    phi, gamma = np.array(coefficients.phi), np.array(coefficients.gamma)
     np.testing.assert_allclose(phi @ (1.0, 0.0) + gamma, (1.0, 0.0), atol=1e-12)  # DC gain 1, at rest
     t = np.arange(0.0, 0.5, 0.001)
     ramp = run_filter(coefficients, 2.0 * t)

@@ -52,6 +52,7 @@ from fsr_control.core.controller import (
     controller_tick,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
+from fsr_control.core.law_terms import Measured, VehicleState
 from fsr_estimation.core.observer_step import ObserverParams, ObserverState, estimate_from_state
 from fsr_sim.core.control_loss import IN_CONTROL, control_loss, held_by_surface
 from fsr_sim.core.jit import jit, jit_inline
@@ -63,6 +64,20 @@ from fsr_sim.core.rotors import measured_rotor_wrench
 
 GOING_ON, FINISHED, DIVERGED, CONTROLLER_FAILED, LOST_CONTROL = 0, 1, 2, 3, 4  # outcomes of fly
 RECORD, MEASURE = 1, 2  # what fly does with each step (flags): write its rows; measure it (a sweep's row)
+
+
+class LoopPlant(NamedTuple):
+    """The simulated vehicle of the loop (:mod:`fsr_sim.core.plant`)."""
+
+    params: PlantParams
+    state: PlantState
+
+
+class LoopController(NamedTuple):
+    """The controller of the loop (:func:`fsr_control.core.controller.controller_tick`)."""
+
+    params: ControllerParams
+    state: ControllerState
 
 
 class LoopEstimator(NamedTuple):
@@ -100,8 +115,8 @@ def hold_command(plant: PlantParams, plant_state: PlantState, mode: int, row, fo
 
 
 @jit_inline
-def closed_loop_tick(controller: ControllerParams, controller_state: ControllerState, estimator: LoopEstimator,
-                     t: float, odometry, speeds, tilts, row, estimate) -> tuple:  # noqa: ANN001
+def closed_loop_tick(controller: LoopController, estimator: LoopEstimator, t: float, odometry, speeds,  # noqa: ANN001
+                     tilts, row, estimate) -> tuple:  # noqa: ANN001
     """The controller's answer ``row`` to the published ``odometry`` of ``t`` [s] (the published row: odom and,
     with an IMU, imu) and the rotors' measured ``speeds``, ``tilts`` (``rotor_state``) and, with the estimator
     (``estimator.enabled``), its estimate of that state and the commanded wrench (``estimator.measured``: the
@@ -109,14 +124,15 @@ def closed_loop_tick(controller: ControllerParams, controller_state: ControllerS
     commanded wrench (on a failure the estimator is not called)."""
     position, rotation, velocity_world, angular_velocity = read_odometry(odometry)
     imu = odometry[IMU_ANGULAR_VELOCITY:IMU_ANGULAR_VELOCITY + 6]
-    status = controller_tick(controller, controller_state, t, position, rotation, velocity_world, angular_velocity,
-                             imu, speeds, tilts, row)
+    status = controller_tick(controller.params, controller.state, t,
+                             VehicleState(position, rotation, velocity_world, angular_velocity),
+                             Measured(imu, speeds, tilts), row)
     force = (row[FORCE], row[FORCE + 1], row[FORCE + 2])
     torque = (row[TORQUE], row[TORQUE + 1], row[TORQUE + 2])
     if status == ATTITUDE_OK and estimator.enabled:
         force_e, torque_e = force, torque
         if estimator.measured:
-            allocation = controller.allocation
+            allocation = controller.params.allocation
             force_e, torque_e = measured_rotor_wrench(allocation.allocation, allocation.c_f,
                                                       allocation.mode == TILTING, speeds, tilts)
         estimate_from_state(estimator.params, estimator.state, rotation, velocity_world, angular_velocity, force_e,
@@ -125,9 +141,9 @@ def closed_loop_tick(controller: ControllerParams, controller_state: ControllerS
 
 
 @jit
-def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParams, controller_state: ControllerState,
-        estimator: LoopEstimator, first: int, last: int, step_count: int, period_ns: int, control_bounds: tuple,
-        what: int, trace: LoopTrace, measurement: Measurement) -> tuple:
+def fly(simulated: LoopPlant, controller: LoopController, estimator: LoopEstimator, first: int, last: int,
+        step_count: int, period_ns: int, control_bounds: tuple, what: int, trace: LoopTrace,
+        measurement: Measurement) -> tuple:
     """Steps ``first..last`` (``last <= step_count``), each written and/or measured as ``what`` says
     (:data:`RECORD` | :data:`MEASURE`).
 
@@ -142,8 +158,9 @@ def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParam
     ``LOST_CONTROL`` with the :func:`fsr_sim.core.control_loss.control_loss` code of state ``k`` (``k < step_count``:
     the simulator node does not check the final state either) against its answer, within ``control_bounds``
     (:meth:`fsr_sim.model.control_loss.ControlBounds.pack`): row ``k`` is complete."""
+    plant, plant_state = simulated.params, simulated.state
     record = (what & RECORD) != 0
-    mode = controller.allocation.mode
+    mode = controller.params.allocation.mode
     states, published, actuators, control, estimates = trace
     measures, acc, rotor_rows = measurement.params, measurement.acc, measurement.rotor_rows
     with_estimator = estimator.enabled
@@ -165,7 +182,7 @@ def fly(plant: PlantParams, plant_state: PlantState, controller: ControllerParam
         for i in range(plant_state.x.shape[0]):
             x[i] = plant_state.x[i]
         row = control[now]
-        status, force, torque = closed_loop_tick(controller, controller_state, estimator, t, published[now],
+        status, force, torque = closed_loop_tick(controller, estimator, t, published[now],
                                                  actuators[now, :n], actuators[now, n:], row, estimates[now])
         if status != ATTITUDE_OK:
             return CONTROLLER_FAILED, k, status

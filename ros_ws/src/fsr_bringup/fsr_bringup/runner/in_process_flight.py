@@ -279,8 +279,9 @@ class FlightSetup:
         measurement = Measurement(unmeasured(self.plant.params), self.plant.params, self.plant.core_state,
                                   a.rotor_rows, a.acc)
         return flight_loop.fly(
-            self.plant.params, self.plant.core_state, self.controller.params, self.controller.state, estimator, first,
-            last, self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, trace, measurement)
+            flight_loop.LoopPlant(self.plant.params, self.plant.core_state),
+            flight_loop.LoopController(self.controller.params, self.controller.state), estimator, first, last,
+            self.steps, self.period_ns, self.control_bounds, flight_loop.RECORD, trace, measurement)
 
     def flown(self, outcome: int, k: int) -> int:
         """How many states ``fly`` has recorded when it returned ``(outcome, k)`` (rows ``0..flown-1``)."""

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from fsr_bringup.core import flight_measures as core
-from fsr_bringup.core.flight_loop import FINISHED, MEASURE, LoopEstimator, LoopTrace, fly
+from fsr_bringup.core.flight_loop import FINISHED, MEASURE, LoopController, LoopEstimator, LoopPlant, LoopTrace, fly
 from fsr_bringup.sweeps.metrics import accumulated_row, measure_params
 from fsr_control.core import controller as control_layout
 from fsr_sim.config.scenario import plant_from_config
@@ -109,9 +109,9 @@ def fly_accumulated(flight: LoopFlight) -> tuple[int, int, np.ndarray]:
     trace = LoopTrace(scratch.states, scratch.published, scratch.actuators, scratch.control, scratch.estimates)
     measurement = core.Measurement(flight.measures, flight.actuator_params, flight.actuator_state, scratch.rotor_rows,
                                    scratch.acc)
-    outcome, k, _ = fly(flight.plant_params, flight.plant_state, flight.controller_params, flight.controller_state,
-                        estimator, 0, flight.steps, flight.steps, flight.period_ns, flight.control_bounds, MEASURE,
-                        trace, measurement)
+    outcome, k, _ = fly(LoopPlant(flight.plant_params, flight.plant_state),
+                        LoopController(flight.controller_params, flight.controller_state), estimator, 0, flight.steps,
+                        flight.steps, flight.period_ns, flight.control_bounds, MEASURE, trace, measurement)
     return outcome, k, scratch.acc
 
 

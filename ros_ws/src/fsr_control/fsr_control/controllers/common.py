@@ -176,12 +176,12 @@ class CompiledLaw:
         if horizon is None or np.shape(horizon) != (steps, HORIZON_WIDTH):
             raise ValueError(f"this law reads the reference {steps} samples ahead: horizon must have shape "
                              f"({steps}, {HORIZON_WIDTH}), got {None if horizon is None else np.shape(horizon)}")
-        state = (vector3(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)), vector3(velocity_world),
-                 vector3(angular_velocity_body))
+        state = laws.VehicleState(vector3(position), matrix_rows(np.ascontiguousarray(rotation, dtype=float)),
+                                  vector3(velocity_world), vector3(angular_velocity_body))
         status, force, torque, rotation_commanded = laws.control_law(
             self.params, self.memory, np.ascontiguousarray(horizon, dtype=float), float(reference.time),
-            reference_sample(reference), *state, compensation_of(compensation), _array(imu, 6), _array(speeds, 0),
-            _array(tilts, 0))
+            reference_sample(reference), state, compensation_of(compensation),
+            laws.Measured(_array(imu, 6), _array(speeds, 0), _array(tilts, 0)))
         if status != ATTITUDE_OK:
             raise ValueError(ATTITUDE_ERRORS[status])
         return WrenchCommand(np.array(force), np.array(torque), np.array(rotation_commanded))

@@ -94,8 +94,8 @@ def designed_gains(vehicle: Vehicle) -> dict[str, np.ndarray]:
     return gains
 
 
-def filter_coefficients(cutoff_hz: float, period: float) -> np.ndarray:
-    """``(Phi row by row, Gamma)`` (6,) of the second-order low-pass of cutoff ``cutoff_hz`` [Hz] held over
+def filter_coefficients(cutoff_hz: float, period: float) -> indi_law.LowPass:
+    """``Phi`` and ``Gamma`` of the second-order low-pass of cutoff ``cutoff_hz`` [Hz] held over
     ``period`` [s] (module docstring). Raises ValueError for a cutoff or a period that is not positive, or a
     cutoff at or above the Nyquist frequency ``1 / (2 period)``."""
     if not (cutoff_hz > 0.0 and period > 0.0):
@@ -110,7 +110,9 @@ def filter_coefficients(cutoff_hz: float, period: float) -> np.ndarray:
     b = np.array([0.0, w_n * w_n])
     phi = expm(a * period)
     gamma = np.linalg.solve(a, (phi - np.eye(2)) @ b)
-    return np.ascontiguousarray([phi[0, 0], phi[0, 1], phi[1, 0], phi[1, 1], gamma[0], gamma[1]])
+    (phi_00, phi_01), (phi_10, phi_11) = phi.tolist()
+    gamma_0, gamma_1 = gamma.tolist()
+    return indi_law.LowPass(((phi_00, phi_01), (phi_10, phi_11)), (gamma_0, gamma_1))
 
 
 def pack_indi(vehicle: Vehicle, gains: dict[str, np.ndarray], filter_hz: float, period: float, rotor_state: bool,

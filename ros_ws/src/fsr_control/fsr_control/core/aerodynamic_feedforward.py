@@ -24,7 +24,7 @@ from fsr_control.core.flatness import ATTITUDE_OK, attitude_from_thrust_vector
 from fsr_control.core.law_terms import Compensation
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.aerodynamics import AeroParams, aerodynamic_wrench
-from fsr_sim.core.jit import jit
+from fsr_sim.core.jit import jit, zeroed_record
 from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.core.so3 import dot3, mat_t_vec3
 
@@ -37,22 +37,36 @@ class AeroFeedforward(NamedTuple):
     thrust_coefficient_sum: float  # n c_f [N s^2]
 
 
-# memory: how many samples came before (0, 1, 2: at most), the last one's time [s], its force [N], force
-# difference [N/s] and second difference [N/s^2] (world), then the n rotor speeds [rad/s] of the prediction
-SAMPLES, PREVIOUS_TIME, FORCE, FORCE_RATE, FORCE_ACCELERATION, SPEEDS = 0, 1, 2, 5, 8, 11
+AERO_MEMORY = np.dtype([
+    ("samples", np.int64),  # how many samples came before (0, 1, 2: at most)
+    ("previous_time", np.float64),  # the last one's time [s]
+    ("force", np.float64, (3,)),  # its force [N], world NED
+    ("force_rate", np.float64, (3,)),  # its first backward difference [N/s]
+    ("force_acceleration", np.float64, (3,)),  # its second [N/s^2]
+], align=True)
+"""What the feed-forward keeps of its last sample (:attr:`AeroMemory.last`)."""
 
 
-def memory_size(rotor_count: int) -> int:
-    return SPEEDS + rotor_count
+class AeroMemory(NamedTuple):
+    """The feed-forward's memory (``ControllerState.aerodynamics``)."""
+
+    last: np.ndarray  # 1-element AERO_MEMORY record: the last sample
+    speeds: np.ndarray  # (n,) scratch: the rotor speeds of the prediction [rad/s]
+
+
+def new_aero_memory(rotor_count: int) -> AeroMemory:
+    """The feed-forward's memory for ``rotor_count`` rotors, zeroed (no sample yet)."""
+    return AeroMemory(zeroed_record(AERO_MEMORY), np.zeros(rotor_count))
 
 
 @jit
-def _vector(memory, at: int) -> tuple:  # noqa: ANN001
-    return memory[at], memory[at + 1], memory[at + 2]
+def _vector(values) -> tuple:  # noqa: ANN001
+    return values[0], values[1], values[2]
 
 
 @jit
-def aerodynamic_feedforward(params: AeroFeedforward, memory, t: float, reference: ReferenceSample) -> Compensation:  # noqa: ANN001
+def aerodynamic_feedforward(params: AeroFeedforward, memory: AeroMemory, t: float,
+                            reference: ReferenceSample) -> Compensation:
     """The model's aerodynamic wrench on the reference at ``t`` [s] (module docstring); the differences are zero
     until there are two, three samples; a stamp that does not advance gets the last answer's force and rates."""
     m, a, j, q = params.mass, reference.acceleration, reference.jerk, reference.snap
@@ -62,23 +76,23 @@ def aerodynamic_feedforward(params: AeroFeedforward, memory, t: float, reference
         reference.yaw_rate, reference.yaw_acceleration)
     if status != ATTITUDE_OK:  # free fall: no thrust, no rotor speed
         rotation, omega = reference.rotation, reference.angular_velocity
-    n = params.columns.shape[0]
-    speeds = memory[SPEEDS:SPEEDS + n]
+    speeds = memory.speeds
     speeds[:] = math.sqrt(math.sqrt(dot3(thrust_vector, thrust_vector)) / params.thrust_coefficient_sum)
     force_body, torque = aerodynamic_wrench(params.aerodynamics, params.columns, speeds,
                                             mat_t_vec3(rotation, reference.velocity), omega)
-    samples = memory[SAMPLES]
-    if samples > 0.0 and not t > memory[PREVIOUS_TIME]:
-        return Compensation(True, _vector(memory, FORCE), torque, _vector(memory, FORCE_RATE),
-                            _vector(memory, FORCE_ACCELERATION))
-    dt = t - memory[PREVIOUS_TIME]
+    last = memory.last[0]
+    samples = last.samples
+    if samples > 0 and not t > last.previous_time:
+        return Compensation(True, _vector(last.force), torque, _vector(last.force_rate),
+                            _vector(last.force_acceleration))
+    dt = t - last.previous_time
+    forces, rates, accelerations = last.force, last.force_rate, last.force_acceleration
     for i in range(3):
         force = rotation[i][0] * force_body[0] + rotation[i][1] * force_body[1] + rotation[i][2] * force_body[2]
-        rate = (force - memory[FORCE + i]) / dt if samples >= 1.0 else 0.0
-        memory[FORCE_ACCELERATION + i] = (rate - memory[FORCE_RATE + i]) / dt if samples >= 2.0 else 0.0
-        memory[FORCE_RATE + i] = rate
-        memory[FORCE + i] = force
-    memory[SAMPLES] = min(samples + 1.0, 2.0)
-    memory[PREVIOUS_TIME] = t
-    return Compensation(True, _vector(memory, FORCE), torque, _vector(memory, FORCE_RATE),
-                        _vector(memory, FORCE_ACCELERATION))
+        rate = (force - forces[i]) / dt if samples >= 1 else 0.0
+        accelerations[i] = (rate - rates[i]) / dt if samples >= 2 else 0.0
+        rates[i] = rate
+        forces[i] = force
+    last.samples = min(samples + 1, 2)
+    last.previous_time = t
+    return Compensation(True, _vector(forces), torque, _vector(rates), _vector(accelerations))

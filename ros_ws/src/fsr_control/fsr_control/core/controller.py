@@ -9,9 +9,10 @@ slice holding its numbers in field order), then what only the Python API and the
 then the rotor speeds and tilts.
 
 Frames: position world NED [m], ``R`` body FRD -> world, velocity world [m/s], angular velocity body [rad/s].
-Besides the state (``odom``) the tick is handed what the vehicle measures of the same stamp: ``imu`` (6,), the
-IMU's angular velocity [rad/s] and specific force [m/s^2] (body FRD, ``imu``'s numbers), and the rotors' speeds
-[rad/s] and tilts [rad] (n,) (``rotor_state``'s). Only a law or an observer configured to use them reads them
+Besides the state (``odom``'s, a :class:`~fsr_control.core.law_terms.VehicleState`) the tick is handed what the
+vehicle measures of the same stamp (a :class:`~fsr_control.core.law_terms.Measured`): ``imu`` (6,), the IMU's
+angular velocity [rad/s] and specific force [m/s^2] (body FRD, ``imu``'s numbers), and the rotors' ``speeds``
+[rad/s] and ``tilts`` [rad] (n,) (``rotor_state``'s). Only a law or an observer configured to use them reads them
 (:data:`fsr_control.controllers.catalog.LAWS`' ``needs_imu`` and ``needs_rotor_state``, ``estimator.input:
 measured``); otherwise they may hold anything (the node passes zeros when it is not subscribed).
 """
@@ -22,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, aerodynamic_feedforward
+from fsr_control.core.aerodynamic_feedforward import AeroFeedforward, AeroMemory, aerodynamic_feedforward
 from fsr_control.core.allocation import TILTING, AllocationParams, AllocationState, allocate
 from fsr_control.core.compensation import (
     CompensationParams,
@@ -31,11 +32,19 @@ from fsr_control.core.compensation import (
     compensation_record,
 )
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_control.core.laws import NO_COMPENSATION, LawMemory, LawParams, control_law, law_allocated
+from fsr_control.core.laws import (
+    NO_COMPENSATION,
+    LawMemory,
+    LawParams,
+    Measured,
+    VehicleState,
+    control_law,
+    law_allocated,
+)
 from fsr_control.core.reference import TrajectoryTable, sample_horizon, sample_reference
 from fsr_sim.core.jit import jit
 from fsr_sim.core.rotors import measured_rotor_wrench
-from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, quaternion_from_rotation_rows
+from fsr_sim.core.so3 import Mat3, mat_vec3, put3, put_rows3, quaternion_from_rotation_rows
 
 # The output row. wrench_cmd: the body wrench the allocated command produces (body FRD, N and N m).
 FORCE, TORQUE = 0, 3
@@ -75,18 +84,7 @@ class ControllerState(NamedTuple):
     compensation: CompensationState
     reference: np.ndarray  # (5, 4) scratch: the active segment's channel derivatives
     horizon: np.ndarray  # (law.horizon_steps, HORIZON_WIDTH): the reference ahead (fsr_control.core.reference)
-    aerodynamics: np.ndarray  # the aerodynamic feed-forward's memory (fsr_control.core.aerodynamic_feedforward)
-
-
-@jit
-def _put3(out, at: int, v: Vec3) -> None:  # noqa: ANN001
-    out[at], out[at + 1], out[at + 2] = v[0], v[1], v[2]
-
-
-@jit
-def _put_rotation(out, at: int, rows: Mat3) -> None:  # noqa: ANN001
-    for i in range(3):
-        _put3(out, at + 3 * i, rows[i])
+    aerodynamics: AeroMemory  # the aerodynamic feed-forward's (fsr_control.core.aerodynamic_feedforward)
 
 
 @jit
@@ -95,47 +93,46 @@ def _put_quaternion(out, at: int, rows: Mat3) -> None:  # noqa: ANN001
 
 
 @jit
-def controller_tick(params: ControllerParams, state: ControllerState, t: float, position: Vec3, rotation: Mat3,
-                    velocity_world: Vec3, angular_velocity: Vec3, imu, speeds, tilts, out) -> int:  # noqa: ANN001
-    """The command for the state at ``t`` [s] into ``out`` (module docstring), with the IMU's ``imu`` (6,) and the
-    rotors' measured ``speeds``, ``tilts`` (n,) of the same stamp. Returns the law's status (``ATTITUDE_OK``, or
-    why no attitude could be commanded: ``out`` then holds only the reference)."""
+def controller_tick(params: ControllerParams, state: ControllerState, t: float, vehicle: VehicleState,
+                    measured: Measured, out) -> int:  # noqa: ANN001
+    """The command for the ``vehicle``'s state at ``t`` [s] into ``out`` (module docstring), with what it
+    ``measured`` of the same stamp (the IMU's sample and the rotors' speeds and tilts). Returns the law's status
+    (``ATTITUDE_OK``, or why no attitude could be commanded: ``out`` then holds only the reference)."""
     reference = sample_reference(params.trajectory, t, state.reference)
     rotation_d = reference.rotation
-    _put3(out, REFERENCE_POSITION, reference.position)
+    put3(out, REFERENCE_POSITION, reference.position)
     _put_quaternion(out, REFERENCE_QUATERNION, rotation_d)
-    _put3(out, REFERENCE_VELOCITY, reference.velocity)
-    _put3(out, REFERENCE_ANGULAR_VELOCITY_WORLD, mat_vec3(rotation_d, reference.angular_velocity))
-    _put3(out, REFERENCE_ACCELERATION, reference.acceleration)
-    _put3(out, REFERENCE_ANGULAR_ACCELERATION_WORLD, mat_vec3(rotation_d, reference.angular_acceleration))
-    _put3(out, REFERENCE_JERK, reference.jerk)
-    _put3(out, REFERENCE_SNAP, reference.snap)
-    _put_rotation(out, REFERENCE_ROTATION, rotation_d)
-    _put3(out, REFERENCE_ANGULAR_VELOCITY, reference.angular_velocity)
-    _put3(out, REFERENCE_ANGULAR_ACCELERATION, reference.angular_acceleration)
+    put3(out, REFERENCE_VELOCITY, reference.velocity)
+    put3(out, REFERENCE_ANGULAR_VELOCITY_WORLD, mat_vec3(rotation_d, reference.angular_velocity))
+    put3(out, REFERENCE_ACCELERATION, reference.acceleration)
+    put3(out, REFERENCE_ANGULAR_ACCELERATION_WORLD, mat_vec3(rotation_d, reference.angular_acceleration))
+    put3(out, REFERENCE_JERK, reference.jerk)
+    put3(out, REFERENCE_SNAP, reference.snap)
+    put_rows3(out, REFERENCE_ROTATION, rotation_d)
+    put3(out, REFERENCE_ANGULAR_VELOCITY, reference.angular_velocity)
+    put3(out, REFERENCE_ANGULAR_ACCELERATION, reference.angular_acceleration)
     out[REFERENCE_YAW], out[REFERENCE_YAW_RATE] = reference.yaw, reference.yaw_rate
     out[REFERENCE_YAW_ACCELERATION] = reference.yaw_acceleration
     compensation = NO_COMPENSATION
     if params.compensation.enabled:  # cancel the estimate of t_(k-1), then feed the observer this step
-        compensation = compensation_estimate(params.compensation, state.compensation, t, position[2])
+        compensation = compensation_estimate(params.compensation, state.compensation, t, vehicle.position[2])
     elif params.aerodynamics.enabled:  # the estimate holds the aerodynamics too: one or the other
         compensation = aerodynamic_feedforward(params.aerodynamics, state.aerodynamics, t, reference)
     if params.law.horizon_steps > 0:
         sample_horizon(params.trajectory, t, params.law.horizon_dt, state.reference, state.horizon)
-    status, force_d, torque_d, rotation_c = control_law(params.law, state.law, state.horizon, t, reference, position,
-                                                        rotation, velocity_world, angular_velocity, compensation,
-                                                        imu, speeds, tilts)
+    status, force_d, torque_d, rotation_c = control_law(params.law, state.law, state.horizon, t, reference, vehicle,
+                                                        compensation, measured)
     if status != ATTITUDE_OK:
         return status
-    _put3(out, DESIRED_FORCE, force_d)
-    _put3(out, DESIRED_TORQUE, torque_d)
-    _put_rotation(out, COMMANDED_ROTATION, rotation_c)
+    put3(out, DESIRED_FORCE, force_d)
+    put3(out, DESIRED_TORQUE, torque_d)
+    put_rows3(out, COMMANDED_ROTATION, rotation_c)
     _put_quaternion(out, COMMANDED_QUATERNION, rotation_c)
     n = (out.shape[0] - ROTOR_SPEEDS) // 2
     actuated = allocate(params.allocation, state.allocation, t, force_d, torque_d, out[ROTOR_SPEEDS:ROTOR_SPEEDS + n],
                         out[ROTOR_SPEEDS + n:], out[SHORTFALL:SHORTFALL + 6])
-    _put3(out, FORCE, actuated.force)
-    _put3(out, TORQUE, actuated.torque)
+    put3(out, FORCE, actuated.force)
+    put3(out, TORQUE, actuated.torque)
     out[SATURATED] = 1.0 if actuated.saturated else 0.0
     law_allocated(params.law, state.law, actuated.force, actuated.torque, out[SHORTFALL:SHORTFALL + 6])
     if params.compensation.enabled:
@@ -143,7 +140,7 @@ def controller_tick(params: ControllerParams, state: ControllerState, t: float, 
         if params.compensation.measured:
             allocation = params.allocation
             force_a, torque_a = measured_rotor_wrench(allocation.allocation, allocation.c_f,
-                                                      allocation.mode == TILTING, speeds, tilts)
-        compensation_record(params.compensation, state.compensation, rotation, velocity_world, angular_velocity,
-                            force_a, torque_a)
+                                                      allocation.mode == TILTING, measured.speeds, measured.tilts)
+        compensation_record(params.compensation, state.compensation, vehicle.rotation, vehicle.velocity_world,
+                            vehicle.angular_velocity, force_a, torque_a)
     return ATTITUDE_OK

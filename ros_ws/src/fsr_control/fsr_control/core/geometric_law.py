@@ -15,12 +15,12 @@ import numpy as np
 
 from fsr_control.core.flatness import attitude_from_thrust_vector
 from fsr_control.core.imu_bridge import BridgeParams, bridged_state
-from fsr_control.core.law_terms import INERTIA, Compensation, linear_feedback, matrix_at
+from fsr_control.core.law_terms import INERTIA, Compensation, VehicleState, linear_feedback, matrix_at
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.rigid_body import GRAVITY
 from fsr_sim.core.rotors import SHORTFALL_TOLERANCE
-from fsr_sim.core.so3 import Mat3, Vec3, attitude_error3, cross3, dot3, mat_t_mat3, mat_vec3
+from fsr_sim.core.so3 import Vec3, attitude_error3, cross3, dot3, mat_t_mat3, mat_vec3
 
 # GeometricParams.matrices: the nominal inertia [kg m^2], K_p [N/m], K_v [N s/m], K_i [N/(m s)] on the
 # integral of the position error, K_R [N m/rad], K_w [N m s/rad]
@@ -138,10 +138,11 @@ def _integral_force(params: GeometricParams, memory, t: float, e_p: Vec3) -> Vec
 
 
 @jit_inline
-def geometric_law(params: GeometricParams, memory, t: float, reference: ReferenceSample, position: Vec3,  # noqa: ANN001
-                  rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
+def geometric_law(params: GeometricParams, memory, t: float, reference: ReferenceSample,  # noqa: ANN001
+                  state: VehicleState, compensation: Compensation) -> tuple:
     """``(status, [0, 0, -u_T], tau_b, R_d)`` of the geometric law (:mod:`fsr_control.controllers.geometric`);
     ``memory`` its :data:`GEOMETRIC_MEMORY` record."""
+    position, rotation, velocity_world, angular_velocity = state
     m = params.mass
     k_p, k_v = matrix_at(params.matrices, K_P), matrix_at(params.matrices, K_V)
     inertia = matrix_at(params.matrices, INERTIA)
@@ -214,19 +215,18 @@ def geometric_law(params: GeometricParams, memory, t: float, reference: Referenc
 
 
 @jit_inline
-def flown_state(params: GeometricParams, bridge_memory, position: Vec3, rotation: Mat3, velocity_world: Vec3,  # noqa: ANN001
-                angular_velocity: Vec3, imu) -> tuple:  # noqa: ANN001
-    """``(position, R rows, velocity world, angular velocity body)`` the law flies on: ``odom``'s, or where the
-    law takes the IMU (``imu`` (6,): angular velocity [rad/s], specific force [m/s^2], body FRD) its gyro's rate
-    and, where ``odom`` is a measurement, the IMU-bridged estimate of this step
-    (:func:`fsr_control.core.imu_bridge.bridged_state`, on its :data:`~fsr_control.core.imu_bridge.BRIDGE_MEMORY`
-    record ``bridge_memory``)."""
+def flown_state(params: GeometricParams, bridge_memory, state: VehicleState, imu) -> VehicleState:  # noqa: ANN001
+    """The state the law flies on: ``odom``'s (``state``), or where the law takes the IMU (``imu`` (6,): angular
+    velocity [rad/s], specific force [m/s^2], body FRD) its gyro's rate and, where ``odom`` is a measurement, the
+    IMU-bridged estimate of this step (:func:`fsr_control.core.imu_bridge.bridged_state`, on its
+    :data:`~fsr_control.core.imu_bridge.BRIDGE_MEMORY` record ``bridge_memory``)."""
+    position, rotation, velocity_world, angular_velocity = state
     if params.bridge.enabled:
         position, rotation, velocity_world = bridged_state(params.bridge, bridge_memory, position, rotation,
                                                            velocity_world, imu)
     if params.gyro:
         angular_velocity = (imu[0], imu[1], imu[2])
-    return position, rotation, velocity_world, angular_velocity
+    return VehicleState(position, rotation, velocity_world, angular_velocity)
 
 
 @jit_inline

@@ -1,5 +1,5 @@
-"""What the control laws of the compiled core share: the compensation they are handed, their PD terms and how
-their matrices are held.
+"""What the control laws of the compiled core share: the state and the measurements they fly on, the
+compensation they are handed, their PD terms and how their matrices are held.
 
 A law's (3, 3) matrices (its nominal inertia, its gains) are one (k, 3, 3) float64 array of its parameters,
 ``matrices[INERTIA]`` the inertia first: a law's parameters hold one array however many gains it has (each
@@ -10,8 +10,28 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import numpy as np
+
 from fsr_sim.core.jit import jit
 from fsr_sim.core.so3 import Mat3, Vec3
+
+
+class VehicleState(NamedTuple):
+    """The vehicle's state a law is handed (``odom``'s)."""
+
+    position: Vec3  # world NED [m]
+    rotation: Mat3  # R: rows, body FRD -> world
+    velocity_world: Vec3  # world NED [m/s]
+    angular_velocity: Vec3  # body FRD [rad/s]
+
+
+class Measured(NamedTuple):
+    """What the vehicle measures of the same stamp as the state, read only by a law or an observer configured to
+    use it (otherwise it may hold anything)."""
+
+    imu: np.ndarray  # (6,) the IMU's angular velocity [rad/s] and specific force [m/s^2], body FRD
+    speeds: np.ndarray  # (n,) the rotors' speeds [rad/s] (rotor_state)
+    tilts: np.ndarray  # (n,) and tilts [rad]
 
 
 class Compensation(NamedTuple):

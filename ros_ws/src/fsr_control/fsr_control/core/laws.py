@@ -15,8 +15,9 @@ with an ``unused()`` placeholder, its memory's record type if it keeps any), an 
 here, and an entry in
 :data:`fsr_control.controllers.catalog.LAWS` (``docs/extending.md``).
 
-Each law takes the reference, the state (position and velocity world NED [m, m/s], ``R`` rows body FRD -> world,
-angular velocity body [rad/s]) and, with ``controller.compensation: estimate``, the estimated external wrench
+Each law takes the reference, the state (:class:`VehicleState`: position and velocity world NED [m, m/s], ``R``
+rows body FRD -> world, angular velocity body [rad/s]), a law on the vehicle's own measurements what it measured of
+the state's stamp (:class:`Measured`) and, with ``controller.compensation: estimate``, the estimated external wrench
 to cancel (:class:`Compensation`), and returns ``(status, force_body, torque_body, R_c)``: the body wrench
 [N, N m] to produce and the attitude the law steers to. Their equations and the reasons behind them are in
 :mod:`fsr_control.controllers.geometric`, :mod:`fsr_control.controllers.voliro` and
@@ -38,14 +39,14 @@ from fsr_control.core.geometric_law import (
 )
 from fsr_control.core.imu_bridge import BRIDGE_MEMORY
 from fsr_control.core.indi_law import INDI_MEMORY, IndiParams, indi_allocated, indi_law
-from fsr_control.core.law_terms import NO_COMPENSATION, Compensation, linear_feedback
+from fsr_control.core.law_terms import NO_COMPENSATION, Compensation, Measured, VehicleState, linear_feedback
 from fsr_control.core.reference import ReferenceSample
 from fsr_control.core.voliro_law import VoliroParams, voliro_law
 from fsr_sim.core.jit import jit_inline, zeroed_record
-from fsr_sim.core.so3 import Mat3, Vec3
+from fsr_sim.core.so3 import Vec3
 
-__all__ = ["NO_COMPENSATION", "Compensation", "LawMemory", "LawParams", "control_law", "law_allocated",
-           "law_params", "linear_feedback", "new_law_memory", "reset_law_memory"]
+__all__ = ["NO_COMPENSATION", "Compensation", "LawMemory", "LawParams", "Measured", "VehicleState", "control_law",
+           "law_allocated", "law_params", "linear_feedback", "new_law_memory", "reset_law_memory"]
 
 
 class LawParams(NamedTuple):
@@ -97,24 +98,18 @@ def law_params(kind: int, own: NamedTuple, horizon_steps: int = 0, horizon_dt: f
 
 
 @jit_inline
-def control_law(params: LawParams, memory, horizon, t: float, reference: ReferenceSample,  # noqa: ANN001
-                position: Vec3, rotation: Mat3, velocity_world: Vec3, angular_velocity: Vec3,
-                compensation: Compensation, imu, speeds, tilts) -> tuple:  # noqa: ANN001
+def control_law(params: LawParams, memory: LawMemory, horizon, t: float, reference: ReferenceSample,  # noqa: ANN001
+                state: VehicleState, compensation: Compensation, measured: Measured) -> tuple:
     """``(status, force_body, torque_body, R_c)`` of the law ``params.kind`` (module docstring): ``memory`` the
-    laws' (:class:`LawMemory`), ``horizon`` the reference ahead (``params.horizon_steps`` rows); ``imu`` (6,)
-    the IMU's angular velocity [rad/s] and specific force [m/s^2], ``speeds`` and ``tilts`` (n,) the rotors'
-    measured state, of the same stamp (read only by a law that needs them)."""
+    laws' (:class:`LawMemory`), ``horizon`` the reference ahead (``params.horizon_steps`` rows); ``measured``
+    what the vehicle measures of the same stamp as ``state`` (read only by a law that needs it)."""
     if params.kind == VOLIRO:
-        return voliro_law(params.voliro, reference, position, rotation, velocity_world, angular_velocity,
-                          compensation)
+        return voliro_law(params.voliro, reference, state, compensation)
     if params.kind == INDI:
-        return indi_law(params.indi, memory, t, reference, position, rotation, velocity_world, angular_velocity,
-                        imu, speeds, tilts)
+        return indi_law(params.indi, memory, t, reference, state, measured)
     # a new law: its branch here, e.g. ``if params.kind == MY_LAW: return my_law(params.my_law, horizon, ...)``
-    position, rotation, velocity_world, angular_velocity = flown_state(params.geometric, memory.bridge[0], position,
-                                                                       rotation, velocity_world, angular_velocity, imu)
-    return geometric_law(params.geometric, memory.geometric[0], t, reference, position, rotation, velocity_world,
-                         angular_velocity, compensation)
+    flown = flown_state(params.geometric, memory.bridge[0], state, measured.imu)
+    return geometric_law(params.geometric, memory.geometric[0], t, reference, flown, compensation)
 
 
 @jit_inline

@@ -42,7 +42,7 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_sim.core.jit import jit, jit_inline
-from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, yaw_rotation_rows
+from fsr_sim.core.so3 import Mat3, Vec3, mat_vec3, put3, put_rows3, yaw_rotation_rows
 
 DERIVATIVES = 5  # value, velocity, acceleration, jerk, snap
 CHANNELS = 4  # x, y, z, theta
@@ -326,13 +326,11 @@ def sample_horizon(table: TrajectoryTable, t: float, dt: float, scratch, horizon
         sample = sample_reference(table, time, scratch)
         row = horizon[i]
         row[HORIZON_TIME] = time
-        for k in range(3):
-            row[HORIZON_POSITION + k] = sample.position[k]
-            row[HORIZON_VELOCITY + k] = sample.velocity[k]
-            row[HORIZON_ACCELERATION + k] = sample.acceleration[k]
-            row[HORIZON_ANGULAR_VELOCITY + k] = sample.angular_velocity[k]
-            for j in range(3):
-                row[HORIZON_ROTATION + 3 * k + j] = sample.rotation[k][j]
+        put3(row, HORIZON_POSITION, sample.position)
+        put3(row, HORIZON_VELOCITY, sample.velocity)
+        put3(row, HORIZON_ACCELERATION, sample.acceleration)
+        put3(row, HORIZON_ANGULAR_VELOCITY, sample.angular_velocity)
+        put_rows3(row, HORIZON_ROTATION, sample.rotation)
         row[HORIZON_YAW] = sample.yaw
 
 
@@ -354,13 +352,11 @@ def sample_references(table: TrajectoryTable, rows, times, scratch, out) -> None
         channel_derivatives(table, segment, times[i], scratch)
         sample = reference_from_derivatives(table, segment, scratch)
         row = out[i]
-        for k in range(3):
-            row[SAMPLE_ACCELERATION + k] = sample.acceleration[k]
-            row[SAMPLE_JERK + k] = sample.jerk[k]
-            row[SAMPLE_SNAP + k] = sample.snap[k]
-            row[SAMPLE_ANGULAR_VELOCITY + k] = sample.angular_velocity[k]
-            row[SAMPLE_ANGULAR_ACCELERATION + k] = sample.angular_acceleration[k]
-            for j in range(3):
-                row[SAMPLE_ROTATION + 3 * k + j] = sample.rotation[k][j]
+        put3(row, SAMPLE_ACCELERATION, sample.acceleration)
+        put3(row, SAMPLE_JERK, sample.jerk)
+        put3(row, SAMPLE_SNAP, sample.snap)
+        put_rows3(row, SAMPLE_ROTATION, sample.rotation)
+        put3(row, SAMPLE_ANGULAR_VELOCITY, sample.angular_velocity)
+        put3(row, SAMPLE_ANGULAR_ACCELERATION, sample.angular_acceleration)
         row[SAMPLE_YAW], row[SAMPLE_YAW_RATE] = sample.yaw, sample.yaw_rate
         row[SAMPLE_YAW_ACCELERATION] = sample.yaw_acceleration

@@ -11,11 +11,11 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_control.core.flatness import ATTITUDE_OK
-from fsr_control.core.law_terms import INERTIA, Compensation, linear_feedback, matrix_at
+from fsr_control.core.law_terms import INERTIA, Compensation, VehicleState, linear_feedback, matrix_at
 from fsr_control.core.reference import ReferenceSample
 from fsr_sim.core.jit import jit_inline
 from fsr_sim.core.rigid_body import GRAVITY
-from fsr_sim.core.so3 import Mat3, Vec3, attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3
+from fsr_sim.core.so3 import attitude_error3, cross3, mat_t_mat3, mat_t_vec3, mat_vec3
 
 # VoliroParams.matrices: the nominal inertia [kg m^2], K_p [1/s^2], K_d [1/s], K_R [1/s^2], K_w [1/s]
 MATRICES = ("inertia", "k_p", "k_d", "k_r", "k_w")
@@ -34,10 +34,11 @@ class VoliroParams(NamedTuple):
 
 
 @jit_inline
-def voliro_law(params: VoliroParams, reference: ReferenceSample, position: Vec3, rotation: Mat3,
-               velocity_world: Vec3, angular_velocity: Vec3, compensation: Compensation) -> tuple:
+def voliro_law(params: VoliroParams, reference: ReferenceSample, state: VehicleState,
+               compensation: Compensation) -> tuple:
     """``(status, f_b, tau_b, R_d)`` of the Voliro law (:mod:`fsr_control.controllers.voliro`): the body wrench
     ``[R_b^T m (v - g e3); I_b w + w_b x I_b w_b]`` (minus the compensated wrench)."""
+    position, rotation, velocity_world, angular_velocity = state
     e_p = (position[0] - reference.position[0], position[1] - reference.position[1],
            position[2] - reference.position[2])
     e_v = (velocity_world[0] - reference.velocity[0], velocity_world[1] - reference.velocity[1],

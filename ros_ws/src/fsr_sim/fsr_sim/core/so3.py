@@ -11,7 +11,8 @@ Conventions (the one place fsr states them; ``docs/model.md``):
 * ``S(v)`` is the skew matrix with ``S(v) w = v x w`` and ``vee(S(v)) = v``.
 
 A 3-vector is a tuple of 3 floats, a 3x3 matrix a tuple of its 3 row tuples (``Vec3``, ``Mat3``):
-values that live in registers, not arrays. Whole logs use the vectorised functions of
+values that live in registers, not arrays (:func:`put3`, :func:`put_rows3` write them into a row laid out by
+index constants). Whole logs use the vectorised functions of
 :mod:`fsr_sim.model.so3`, built on these.
 """
 
@@ -231,3 +232,16 @@ def attitude_error3(rotation: Mat3, rotation_desired: Mat3) -> Vec3:
     a10 = d01 * r00 + d11 * r10 + d21 * r20
     a01 = d00 * r01 + d10 * r11 + d20 * r21
     return (0.5 * (a21 - a12), 0.5 * (a02 - a20), 0.5 * (a10 - a01))
+
+
+@jit
+def put3(out, at: int, v: Vec3) -> None:  # noqa: ANN001 - a float64 array
+    """``v`` into ``out[at], out[at + 1], out[at + 2]`` (a row laid out by index constants)."""
+    out[at], out[at + 1], out[at + 2] = v[0], v[1], v[2]
+
+
+@jit
+def put_rows3(out, at: int, rows: Mat3) -> None:  # noqa: ANN001 - a float64 array
+    """The matrix ``rows`` into ``out[at:at + 9]``, row by row."""
+    for i in range(3):
+        put3(out, at + 3 * i, rows[i])
