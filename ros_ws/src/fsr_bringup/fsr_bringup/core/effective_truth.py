@@ -45,7 +45,7 @@ from typing import NamedTuple
 import numpy as np
 
 from fsr_sim.core.jit import jit, jit_inline
-from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_vec3, mat_vec3
+from fsr_sim.core.so3 import Mat3, Vec3, cross3, mat_t_vec3, mat_vec3, matrix_rows, put3
 from fsr_sim.core.surfaces import Surfaces, in_contact
 
 LARGEST = float(np.finfo(np.float64).max)
@@ -153,17 +153,6 @@ def _vec(a, k: int) -> Vec3:  # noqa: ANN001
 
 
 @jit
-def _mat(a, k: int) -> Mat3:  # noqa: ANN001
-    return ((a[k, 0, 0], a[k, 0, 1], a[k, 0, 2]), (a[k, 1, 0], a[k, 1, 1], a[k, 1, 2]),
-            (a[k, 2, 0], a[k, 2, 1], a[k, 2, 2]))
-
-
-@jit
-def _put(out, k: int, at: int, v: Vec3) -> None:  # noqa: ANN001
-    out[k, at], out[k, at + 1], out[k, at + 2] = v[0], v[1], v[2]
-
-
-@jit
 def effective_truth_log(p: TruthParams, surfaces: Surfaces, t, rotation, velocity, omega, z,  # noqa: ANN001
                         external: tuple, commanded: tuple, start: tuple, end: tuple, out) -> None:  # noqa: ANN001
     """:func:`effective_truth` of every step of a log of ``n`` true states (``t`` (n,) [s], ``rotation``
@@ -174,22 +163,22 @@ def effective_truth_log(p: TruthParams, surfaces: Surfaces, t, rotation, velocit
     (f_ext_body, tau_ext), (force_cmd, torque_cmd), (force_start, torque_start), (force_end, torque_end) = \
         external, commanded, start, end
     for k in range(n - 1):
-        rotation_k = _mat(rotation, k)
-        parts = effective_truth(p, surfaces, t[k + 1] - t[k], rotation_k, _mat(rotation, k + 1), _vec(velocity, k),
-                                _vec(velocity, k + 1), _vec(omega, k), _vec(omega, k + 1), z[k + 1],
+        rotation_k = matrix_rows(rotation[k])
+        parts = effective_truth(p, surfaces, t[k + 1] - t[k], rotation_k, matrix_rows(rotation[k + 1]),
+                                _vec(velocity, k), _vec(velocity, k + 1), _vec(omega, k), _vec(omega, k + 1), z[k + 1],
                                 (_vec(f_ext_body, k), _vec(tau_ext, k)), (_vec(force_cmd, k), _vec(torque_cmd, k)),
                                 (_vec(force_start, k), _vec(torque_start, k)),
                                 (_vec(force_end, k), _vec(torque_end, k)))
         force_world, torque, f_ext, thrust_change, contact_force, mismatch, held = parts
-        _put(out, k, FORCE_WORLD, force_world)
-        _put(out, k, TORQUE_BODY, torque)
-        _put(out, k, EXTERNAL_FORCE, f_ext)
-        _put(out, k, THRUST_CHANGE, thrust_change)
-        _put(out, k, CONTACT_FORCE, contact_force)
-        _put(out, k, MISMATCH_FORCE, mismatch)
-        _put(out, k, FORCE_BODY, mat_t_vec3(rotation_k, force_world))
+        put3(out[k], FORCE_WORLD, force_world)
+        put3(out[k], TORQUE_BODY, torque)
+        put3(out[k], EXTERNAL_FORCE, f_ext)
+        put3(out[k], THRUST_CHANGE, thrust_change)
+        put3(out[k], CONTACT_FORCE, contact_force)
+        put3(out[k], MISMATCH_FORCE, mismatch)
+        put3(out[k], FORCE_BODY, mat_t_vec3(rotation_k, force_world))
         out[k, HELD] = 1.0 if held else 0.0
     if n > 0:
         out[n - 1, :] = math.nan
-        _put(out, n - 1, CONTACT_FORCE, (0.0, 0.0, 0.0))
+        put3(out[n - 1], CONTACT_FORCE, (0.0, 0.0, 0.0))
         out[n - 1, HELD] = 0.0
